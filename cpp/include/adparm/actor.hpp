@@ -1,0 +1,65 @@
+// Actor: the policy of eq. (20) and its gradient update law with projection (eq. 26).
+//   u_hat = -1/2 R^-1 g^T (dphi/dx)^T Wa = -1/2 R^-1 B^T Wa,   B = (dphi/dx) g   (N x m)
+//   dWa = proj{ -eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps_hjb - eta_a2 (Wa - Wc) }
+// B R^-1 B^T is the ERRATA's grad(phi) G grad(phi)^T with G = g R^-1 g^T. The law is the gradient of
+// eps_hjb^2 up to a factor 1/2 that eta_a1 absorbs. proj keeps ||Wa|| <= weight_bound: at the boundary
+// the outward radial component of the rate is removed.
+#pragma once
+
+#include "adparm/types.hpp"
+
+namespace adparm {
+
+struct ActorSettings {
+  double eta_a1 = 0.01;
+  double eta_a2 = 1.0;
+  double weight_bound = 100.0;
+};
+
+template <class Basis, int Inputs>
+class Actor {
+ public:
+  using Vector = typename Basis::Vector;
+  using InputGradient = Eigen::Matrix<double, Basis::kSize, Inputs>;
+  using Input = Eigen::Matrix<double, Inputs, 1>;
+  using InputWeight = Eigen::Matrix<double, Inputs, Inputs>;
+
+  Actor() = default;
+  explicit Actor(const ActorSettings& settings) : settings_(settings) {
+    check_non_negative(settings.eta_a1, "actor.eta_a1");
+    check_non_negative(settings.eta_a2, "actor.eta_a2");
+    check_positive(settings.weight_bound, "actor.weight_bound");
+  }
+
+  const ActorSettings& settings() const { return settings_; }
+
+  // eq. (20)
+  static Input policy(const InputGradient& B, const InputWeight& R_inverse, const Vector& Wa) {
+    return -0.5 * (R_inverse * (B.transpose() * Wa));
+  }
+
+  // eq. (26)
+  Vector weight_rate(const InputGradient& B, const InputWeight& R_inverse, const Vector& omega,
+                     double hjb_error, const Vector& Wa, const Vector& Wc) const {
+    const Vector difference = Wa - Wc;
+    const Input projected = R_inverse * (B.transpose() * difference);
+    Vector rate = (-settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
+                      (B * projected) -
+                  settings_.eta_a2 * difference;
+    return project(Wa, rate);
+  }
+
+  // proj{}: on or outside the ball ||Wa|| <= weight_bound, drop the outward radial component.
+  Vector project(const Vector& Wa, const Vector& rate) const {
+    const double norm_squared = Wa.squaredNorm();
+    const double outward = Wa.dot(rate);
+    if (norm_squared >= settings_.weight_bound * settings_.weight_bound && outward > 0.0)
+      return rate - (outward / norm_squared) * Wa;
+    return rate;
+  }
+
+ private:
+  ActorSettings settings_{};
+};
+
+}  // namespace adparm

@@ -1,0 +1,102 @@
+// Two-link arm in the general form of Section 4 (eq. 1):
+//   M(q) ddq + C(q, dq) dq + G(q) + F(dq) + tau_d(t) = tau
+//   M = [[p1 + 2 p3 cos q2, p2 + p3 cos q2], [p2 + p3 cos q2, p2]]
+//   C = p3 sin q2 [[-dq2, -(dq1 + dq2)], [dq1, 0]]
+//   G = [g1 cos q1 + g2 cos(q1 + q2), g2 cos(q1 + q2)]
+//   F = coulomb sign(dq) + viscous dq
+// The paper's instance is p = (5, 1, 1), g1 = 9.8 * 1.2, g2 = 9.8, coulomb = -0.1, viscous = 0.
+// Any other arm model offers the same members (kDof, compute, ...) and the loop takes it unchanged.
+#pragma once
+
+#include <cmath>
+
+#include "adparm/types.hpp"
+
+namespace adparm {
+
+struct TwoLinkArmParameters {
+  double p1 = 5.0;
+  double p2 = 1.0;
+  double p3 = 1.0;
+  double g1 = 9.8 * 1.2;
+  double g2 = 9.8;
+  double coulomb = -0.1;
+  double viscous = 0.0;
+
+  friend bool operator==(const TwoLinkArmParameters& a, const TwoLinkArmParameters& b) {
+    return a.p1 == b.p1 && a.p2 == b.p2 && a.p3 == b.p3 && a.g1 == b.g1 && a.g2 == b.g2 &&
+           a.coulomb == b.coulomb && a.viscous == b.viscous;
+  }
+};
+
+// Model terms at one (q, dq), computed together so that cos q2 and sin q2 are evaluated once.
+struct TwoLinkArmTerms {
+  Mat2 mass;          // M(q)
+  Mat2 mass_inverse;  // M(q)^-1 in closed form
+  Mat2 coriolis;      // C(q, dq)
+  Vec2 gravity;       // G(q)
+  Vec2 friction;      // F(dq)
+};
+
+class TwoLinkArm {
+ public:
+  static constexpr int kDof = 2;
+  using Parameters = TwoLinkArmParameters;
+  using Terms = TwoLinkArmTerms;
+
+  TwoLinkArm() = default;
+
+  // Refuses parameters for which M(q) is not positive definite for every q2:
+  // p2 > 0 and det M = p1 p2 - p2^2 - p3^2 cos^2 q2 > 0, i.e. p1 p2 - p2^2 - p3^2 > 0.
+  explicit TwoLinkArm(const Parameters& parameters, const char* name = "plant")
+      : parameters_(parameters) {
+    const std::string prefix(name);
+    const Parameters& p = parameters;
+    for (double v : {p.p1, p.p2, p.p3, p.g1, p.g2, p.coulomb, p.viscous})
+      check_finite(v, (prefix + ": parameters").c_str());
+    if (!(p.p2 > 0.0)) throw std::invalid_argument(prefix + ".p2: must be > 0");
+    if (!(p.p1 * p.p2 - p.p2 * p.p2 - p.p3 * p.p3 > 0.0))
+      throw std::invalid_argument(prefix +
+                                  ".p1, p2, p3: M(q) must be positive definite for all q "
+                                  "(need p1 p2 - p2^2 - p3^2 > 0)");
+  }
+
+  const Parameters& parameters() const { return parameters_; }
+
+  void compute(const Vec2& q, const Vec2& dq, Terms& terms) const {
+    const Parameters& p = parameters_;
+    const double c2 = std::cos(q[1]);
+    const double s2 = std::sin(q[1]);
+    const double m11 = p.p1 + 2.0 * p.p3 * c2;
+    const double m12 = p.p2 + p.p3 * c2;
+    const double m22 = p.p2;
+    terms.mass << m11, m12, m12, m22;
+    const double inverse_det = 1.0 / (m11 * m22 - m12 * m12);
+    terms.mass_inverse << m22 * inverse_det, -m12 * inverse_det, -m12 * inverse_det,
+        m11 * inverse_det;
+    const double h = p.p3 * s2;
+    terms.coriolis << -h * dq[1], -h * (dq[0] + dq[1]), h * dq[0], 0.0;
+    const double c12 = std::cos(q[0] + q[1]);
+    terms.gravity << p.g1 * std::cos(q[0]) + p.g2 * c12, p.g2 * c12;
+    terms.friction = p.coulomb * sign(dq) + p.viscous * dq;
+  }
+
+  // Joint acceleration of eq. (1) for a given torque and disturbance.
+  static Vec2 acceleration(const Terms& terms, const Vec2& dq, const Vec2& tau, const Vec2& tau_d) {
+    return terms.mass_inverse *
+           (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+  }
+
+ private:
+  Parameters parameters_{};
+};
+
+// tau_d(t) = [a1 sin t, a2 cos t] (Section 4, with a = (0.1, 0.1)).
+struct SinusoidalDisturbance {
+  Vec2 amplitude = Vec2(0.1, 0.1);
+  Vec2 operator()(double t) const {
+    return Vec2(amplitude[0] * std::sin(t), amplitude[1] * std::cos(t));
+  }
+};
+
+}  // namespace adparm

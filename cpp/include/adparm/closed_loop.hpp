@@ -1,0 +1,175 @@
+// The closed loop of Figure 1 as one ODE system for RK4 (fixed parameters here, evolving state apart):
+//   state = [q (2), dq (2), Wc (N), Wa (N), Gamma (N x N, column-major), nu (2)]
+// At each evaluation, with x = [e1; e2] (error_system.hpp):
+//   u_hat  = -1/2 R^-1 g^T (dphi/dx)^T Wa                         (eq. 20)
+//   eps    = HJB error, omega its regressor                       (eq. 21)
+//   dWc, dGamma                                                   (eqs. 23-24)
+//   dWa                                                           (eq. 26)
+//   mu     = RISE feedback, dnu                                   (eqs. 27-28)
+//   u      = u_hat + probe(t)   (applied learning input)
+//   tau    = h_hat + mu - u     (g = [0; M^-1] convention; h_hat of the believed model, eq. 5)
+//   ddq    from the plant (eq. 1) with tau and the disturbance tau_d(t).
+// The basis and the arm model are template parameters: a new one is a new type, not a new loop.
+#pragma once
+
+#include "adparm/basis.hpp"
+#include "adparm/critic.hpp"
+#include "adparm/hjb.hpp"
+#include "adparm/rise.hpp"
+#include "adparm/settings.hpp"
+
+namespace adparm {
+
+template <class Arm, class Basis>
+class ClosedLoop {
+ public:
+  static constexpr int kDof = Arm::kDof;
+  static constexpr int kBasisSize = Basis::kSize;
+  static_assert(Basis::kStateDim == 2 * kDof, "the basis must act on x = [e1; e2]");
+  // Offsets into the state vector.
+  static constexpr int kQ = 0;
+  static constexpr int kDq = kQ + kDof;
+  static constexpr int kCriticWeights = kDq + kDof;
+  static constexpr int kActorWeights = kCriticWeights + kBasisSize;
+  static constexpr int kGamma = kActorWeights + kBasisSize;
+  static constexpr int kNu = kGamma + kBasisSize * kBasisSize;
+  static constexpr int kStateSize = kNu + kDof;
+
+  using State = Eigen::Matrix<double, kStateSize, 1>;
+  using Weights = typename Basis::Vector;
+  using Covariance = typename Critic<Basis>::Covariance;
+  using CovarianceMap = Eigen::Map<Covariance>;
+  using ConstCovarianceMap = Eigen::Map<const Covariance>;
+
+  struct TimeSignals {
+    Vec2 disturbance;  // tau_d(t)
+    Vec2 probe;        // probing signal
+  };
+
+  struct Outputs {
+    TrackingErrors errors;
+    Vec2 tau;       // applied joint torque
+    Vec2 u_hat;     // actor's input, eq. (20)
+    Vec2 mu;        // RISE feedback, eq. (27)
+    Vec2 probe;     // probing signal
+    double hjb_error = 0.0;  // eq. (21)
+  };
+
+  explicit ClosedLoop(const Settings& settings)
+      : plant_(settings.plant, "plant"),
+        model_is_plant_(settings.plant == settings.model),
+        error_system_(Arm(settings.model, "model"), settings.control.alpha1, settings.task.qd),
+        cost_(settings.Q, settings.R),
+        critic_(settings.critic),
+        actor_(settings.actor),
+        disturbance_{settings.disturbance},
+        probe_(settings.probe) {
+    check_finite(settings.disturbance, "plant.disturbance");
+    check_finite(settings.control.alpha1, "control.alpha1");
+    check_finite(settings.task.q0, "task.q0");
+    check_finite(settings.task.dq0, "task.dq0");
+    check_finite(settings.task.qd, "task.qd");
+    check_size(settings.critic_weights, kBasisSize, 1, "init.critic_weights");
+    check_size(settings.actor_weights, kBasisSize, 1, "init.actor_weights");
+    check_finite(settings.critic_weights, "init.critic_weights");
+    check_finite(settings.actor_weights, "init.actor_weights");
+    const TrackingErrors initial = tracking_errors(settings.task.q0, settings.task.dq0,
+                                                   settings.task.qd, Vec2::Zero(),
+                                                   settings.control.alpha1);
+    rise_ = Rise(settings.control.rise, initial.e2);
+    initial_state_.setZero();
+    initial_state_.template segment<kDof>(kQ) = settings.task.q0;
+    initial_state_.template segment<kDof>(kDq) = settings.task.dq0;
+    initial_state_.template segment<kBasisSize>(kCriticWeights) = settings.critic_weights;
+    initial_state_.template segment<kBasisSize>(kActorWeights) = settings.actor_weights;
+    covariance(initial_state_) = critic_.initial_covariance();
+  }
+
+  const State& initial_state() const { return initial_state_; }
+  const ErrorSystem<Arm>& error_system() const { return error_system_; }
+  const QuadraticCost& cost() const { return cost_; }
+  const Critic<Basis>& critic() const { return critic_; }
+
+  static CovarianceMap covariance(State& x) { return CovarianceMap(x.data() + kGamma); }
+  static ConstCovarianceMap covariance(const State& x) {
+    return ConstCovarianceMap(x.data() + kGamma);
+  }
+
+  void time_signals(double t, TimeSignals& signals) const {
+    signals.disturbance = disturbance_(t);
+    signals.probe = probe_(t);
+  }
+
+  void derivative(const TimeSignals& signals, const State& state, State& rate,
+                  Outputs* outputs) const {
+    const Vec2 q = state.template segment<kDof>(kQ);
+    const Vec2 dq = state.template segment<kDof>(kDq);
+    const Weights critic_weights = state.template segment<kBasisSize>(kCriticWeights);
+    const Weights actor_weights = state.template segment<kBasisSize>(kActorWeights);
+    const Vec2 nu = state.template segment<kDof>(kNu);
+
+    const TrackingErrors errors =
+        tracking_errors(q, dq, error_system_.qd(), Vec2::Zero(), error_system_.alpha1());
+    const Vec4 x = errors.x();
+
+    typename Arm::Terms plant_terms, model_terms;
+    plant_.compute(q, dq, plant_terms);
+    if (model_is_plant_) {
+      model_terms = plant_terms;
+    } else {
+      error_system_.model().compute(q, dq, model_terms);
+    }
+
+    HjbEvaluation<Basis, kDof> hjb;
+    evaluate_hjb<Basis, kDof>(x, error_system_.drift(x, model_terms), model_terms.mass_inverse,
+                              cost_, critic_weights, actor_weights, hjb);
+
+    Weights critic_rate;
+    critic_.rates(hjb.omega, hjb.error, covariance(state), critic_rate,
+                  CovarianceMap(rate.data() + kGamma));  // eqs. (23)-(24)
+    rate.template segment<kBasisSize>(kCriticWeights) = critic_rate;
+    rate.template segment<kBasisSize>(kActorWeights) =
+        actor_.weight_rate(hjb.input_gradient, cost_.R_inverse(), hjb.omega, hjb.error,
+                           actor_weights, critic_weights);  // eq. (26)
+
+    const Vec2 mu = rise_.feedback(errors.e2, nu);                          // eq. (27)
+    rate.template segment<kDof>(kNu) = rise_.integral_rate(errors.e2);      // eq. (28)
+    const Vec2 u = hjb.u_hat + signals.probe;
+    const Vec2 tau = error_system_.feedforward(model_terms, dq, errors) + mu - u;
+
+    rate.template segment<kDof>(kQ) = dq;
+    rate.template segment<kDof>(kDq) = Arm::acceleration(plant_terms, dq, tau, signals.disturbance);
+
+    if (outputs != nullptr) {
+      outputs->errors = errors;
+      outputs->tau = tau;
+      outputs->u_hat = hjb.u_hat;
+      outputs->mu = mu;
+      outputs->probe = signals.probe;
+      outputs->hjb_error = hjb.error;
+    }
+  }
+
+  // Resets Gamma to gamma0 I when lambda_min(Gamma) < epsilon_T; returns whether it did.
+  bool reset_covariance_if_needed(State& state) const {
+    if (!critic_.needs_reset(covariance(state))) return false;
+    covariance(state) = critic_.initial_covariance();
+    return true;
+  }
+
+ private:
+  Arm plant_;
+  bool model_is_plant_;
+  ErrorSystem<Arm> error_system_;
+  QuadraticCost cost_;
+  Critic<Basis> critic_;
+  Actor<Basis, Arm::kDof> actor_;
+  Rise rise_;
+  SinusoidalDisturbance disturbance_;
+  ProbingSignal probe_;
+  State initial_state_;
+};
+
+using PaperClosedLoop = ClosedLoop<TwoLinkArm, PaperBasis>;
+
+}  // namespace adparm

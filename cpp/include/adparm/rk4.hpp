@@ -1,0 +1,42 @@
+// Classical fixed-step Runge-Kutta 4 for any System offering
+//   State, TimeSignals, Outputs,
+//   time_signals(t, TimeSignals&) and derivative(const TimeSignals&, const State&, State&, Outputs*).
+// Signals that depend on time only (disturbance, probing) are evaluated once per distinct time: the
+// two midpoint stages share them, and a step's end signals are the next step's start signals.
+#pragma once
+
+#include <limits>
+
+namespace adparm {
+
+template <class System>
+struct Rk4Workspace {
+  typename System::State k1, k2, k3, k4, stage;
+  typename System::TimeSignals begin, middle, end;
+  double begin_time = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Advances x from t_begin to t_end (h = t_end - t_begin). If outputs is given, it receives the
+// system's outputs at (t_begin, x) computed by the first stage.
+template <class System>
+void rk4_step(const System& system, double t_begin, double t_end, typename System::State& x,
+              Rk4Workspace<System>& w, typename System::Outputs* outputs = nullptr) {
+  const double h = t_end - t_begin;
+  if (!(w.begin_time == t_begin)) system.time_signals(t_begin, w.begin);
+  system.time_signals(t_begin + 0.5 * h, w.middle);
+  system.time_signals(t_end, w.end);
+
+  system.derivative(w.begin, x, w.k1, outputs);
+  w.stage = x + (0.5 * h) * w.k1;
+  system.derivative(w.middle, w.stage, w.k2, nullptr);
+  w.stage = x + (0.5 * h) * w.k2;
+  system.derivative(w.middle, w.stage, w.k3, nullptr);
+  w.stage = x + h * w.k3;
+  system.derivative(w.end, w.stage, w.k4, nullptr);
+  x += (h / 6.0) * (w.k1 + 2.0 * w.k2 + 2.0 * w.k3 + w.k4);
+
+  std::swap(w.begin, w.end);
+  w.begin_time = t_end;
+}
+
+}  // namespace adparm

@@ -1,0 +1,69 @@
+// The one settings struct of a closed-loop run, passed whole from Python (or built in C++ by
+// paper_settings()). Python's adparm.paper_config() holds the same values; a test keeps them equal.
+#pragma once
+
+#include <cmath>
+
+#include "adparm/actor.hpp"
+#include "adparm/arm_model.hpp"
+#include "adparm/critic.hpp"
+#include "adparm/probing.hpp"
+#include "adparm/rise.hpp"
+
+namespace adparm {
+
+struct TaskSettings {
+  Vec2 q0 = Vec2(0.1598, 0.2257);
+  Vec2 dq0 = Vec2::Zero();
+  Vec2 qd = Vec2::Zero();
+};
+
+struct ControlSettings {
+  Mat2 alpha1 = (Mat2() << 15.6, 10.6, 10.6, 10.4).finished();
+  RiseGains rise{};
+};
+
+struct SimSettings {
+  double T = 150.0;
+  double dt = 1e-3;
+  long record_every = 10;
+  double divergence_bound = 1e6;  // |q|, |dq|, |Wc|, |Wa| above this stop the run as diverged
+};
+
+struct Settings {
+  TwoLinkArmParameters plant{};
+  TwoLinkArmParameters model{};  // the arm the controller believes (feedforward h, f, g)
+  Vec2 disturbance = Vec2(0.1, 0.1);
+  TaskSettings task{};
+  Mat4 Q = Mat4::Identity();
+  Mat2 R = Mat2::Identity();
+  ControlSettings control{};
+  CriticSettings critic{};
+  ActorSettings actor{};
+  Eigen::VectorXd critic_weights;  // Wc(0), one entry per basis function
+  Eigen::VectorXd actor_weights;   // Wa(0)
+  ProbeSettings probe{};
+  SimSettings sim{};
+};
+
+// The paper's instance (Section 4) with this project's documented choices for what it leaves open.
+inline Settings paper_settings() {
+  Settings s;
+  s.Q << 40, 2, -4, 4,  //
+      2, 40, 4, -6,     //
+      -4, 4, 4, 0,      //
+      4, -6, 0, 4;
+  s.R = 0.25 * Mat2::Identity();
+  s.critic_weights = Eigen::VectorXd::Ones(8);
+  s.actor_weights = Eigen::VectorXd::Ones(8);
+  s.probe.amplitude = Vec2(2.0, 2.0);
+  s.probe.until = 100.0;
+  s.probe.frequencies.resize(4);
+  s.probe.frequencies << 1.0, 2.7, 5.3, 9.1;
+  s.probe.phases.resize(2, 4);
+  s.probe.phases.row(0).setZero();
+  s.probe.phases.row(1).setConstant(0.5 * M_PI);
+  return s;
+}
+
+}  // namespace adparm

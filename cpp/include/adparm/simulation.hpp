@@ -1,0 +1,140 @@
+// The update loop: fixed-step RK4 of the closed loop, covariance resetting between steps (eq. 24's
+// reset rule), divergence detection, and recording of every record_every-th step. The run advances
+// in chunks (advance()) so that a caller can show progress or stop between chunks; all buffers are
+// allocated once, up front, so a step does no heap allocation.
+#pragma once
+
+#include <vector>
+
+#include "adparm/closed_loop.hpp"
+#include "adparm/rk4.hpp"
+
+namespace adparm {
+
+enum class RunStatus { running, finished, diverged };
+
+// One row per recorded step; matrices are (rows x columns), row-major.
+struct Recording {
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Eigen::VectorXd t;
+  Rows q, dq, e1, e2, tau, u_hat, mu, probe, critic_weights, actor_weights;
+  Eigen::VectorXd hjb_error;
+  Eigen::Index rows = 0;
+
+  void allocate(Eigen::Index capacity, int dof, int basis_size) {
+    t.resize(capacity);
+    hjb_error.resize(capacity);
+    for (Rows* m : {&q, &dq, &e1, &e2, &tau, &u_hat, &mu, &probe}) m->resize(capacity, dof);
+    for (Rows* m : {&critic_weights, &actor_weights}) m->resize(capacity, basis_size);
+  }
+
+  void shrink_to_rows() {
+    t.conservativeResize(rows);
+    hjb_error.conservativeResize(rows);
+    for (Rows* m : {&q, &dq, &e1, &e2, &tau, &u_hat, &mu, &probe, &critic_weights, &actor_weights})
+      m->conservativeResize(rows, m->cols());
+  }
+};
+
+template <class Arm, class Basis>
+class Simulation {
+ public:
+  using System = ClosedLoop<Arm, Basis>;
+  using State = typename System::State;
+
+  explicit Simulation(const Settings& settings) : system_(settings), sim_(settings.sim) {
+    check_positive(sim_.T, "sim.T");
+    check_positive(sim_.dt, "sim.dt");
+    check_positive(sim_.divergence_bound, "sim.divergence_bound");
+    if (sim_.record_every < 1) throw std::invalid_argument("sim.record_every: must be >= 1");
+    const double steps = std::ceil(sim_.T / sim_.dt - 1e-9);
+    if (steps > 1e10) throw std::invalid_argument("sim.T / sim.dt: more than 1e10 steps");
+    steps_ = static_cast<long>(steps);
+    state_ = system_.initial_state();
+    recording_.allocate(steps_ / sim_.record_every + 2, System::kDof, System::kBasisSize);
+    record(0.0, state_);
+  }
+
+  // Advances at most max_steps steps; returns the number taken.
+  long advance(long max_steps) {
+    long taken = 0;
+    while (status_ == RunStatus::running && taken < max_steps) {
+      const double t_begin = step_ * sim_.dt;
+      const double t_end = (step_ + 1) * sim_.dt;
+      previous_state_ = state_;
+      rk4_step(system_, t_begin, t_end, state_, workspace_);
+      ++step_;
+      ++taken;
+      if (diverged(state_)) {
+        status_ = RunStatus::diverged;
+        divergence_time_ = t_end;
+        // keep the last finite state as the final row
+        if ((step_ - 1) % sim_.record_every != 0) record(t_begin, previous_state_);
+        break;
+      }
+      if (system_.reset_covariance_if_needed(state_)) reset_times_.push_back(t_end);
+      if (step_ % sim_.record_every == 0 || step_ == steps_) record(t_end, state_);
+      if (step_ == steps_) status_ = RunStatus::finished;
+    }
+    return taken;
+  }
+
+  RunStatus status() const { return status_; }
+  long steps() const { return steps_; }
+  long step() const { return step_; }
+  double divergence_time() const { return divergence_time_; }
+  const std::vector<double>& reset_times() const { return reset_times_; }
+  const State& state() const { return state_; }
+
+  // The recording so far, trimmed to the rows written.
+  Recording recording() const {
+    Recording out = recording_;
+    out.shrink_to_rows();
+    return out;
+  }
+
+ private:
+  bool diverged(const State& state) const {
+    const auto watched = state.template head<System::kGamma>();
+    return !state.allFinite() || watched.cwiseAbs().maxCoeff() > sim_.divergence_bound;
+  }
+
+  void record(double t, const State& state) {
+    typename System::Outputs outputs;
+    typename System::State rate;
+    typename System::TimeSignals signals;
+    system_.time_signals(t, signals);
+    system_.derivative(signals, state, rate, &outputs);
+    Recording& r = recording_;
+    const Eigen::Index i = r.rows++;
+    r.t[i] = t;
+    r.q.row(i) = state.template segment<System::kDof>(System::kQ).transpose();
+    r.dq.row(i) = state.template segment<System::kDof>(System::kDq).transpose();
+    r.e1.row(i) = outputs.errors.e1.transpose();
+    r.e2.row(i) = outputs.errors.e2.transpose();
+    r.tau.row(i) = outputs.tau.transpose();
+    r.u_hat.row(i) = outputs.u_hat.transpose();
+    r.mu.row(i) = outputs.mu.transpose();
+    r.probe.row(i) = outputs.probe.transpose();
+    r.critic_weights.row(i) =
+        state.template segment<System::kBasisSize>(System::kCriticWeights).transpose();
+    r.actor_weights.row(i) =
+        state.template segment<System::kBasisSize>(System::kActorWeights).transpose();
+    r.hjb_error[i] = outputs.hjb_error;
+  }
+
+  System system_;
+  SimSettings sim_;
+  long steps_ = 0;
+  long step_ = 0;
+  State state_, previous_state_;
+  Rk4Workspace<System> workspace_;
+  RunStatus status_ = RunStatus::running;
+  double divergence_time_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> reset_times_;
+  Recording recording_;
+};
+
+using PaperSimulation = Simulation<TwoLinkArm, PaperBasis>;
+
+}  // namespace adparm

@@ -1,0 +1,48 @@
+"""adparm: exact linearization, RISE and online actor-critic ADP for robot manipulators.
+
+A C++ core (adparm._core) integrates the closed loop of the paper; this package configures it,
+runs it and returns NumPy arrays.
+"""
+
+from ._core import __doc__ as _core_doc  # noqa: F401  (fails early if the extension is missing)
+from .config import (
+    ActorConfig,
+    Config,
+    ControlConfig,
+    CostConfig,
+    CriticConfig,
+    InitConfig,
+    ModelConfig,
+    PlantConfig,
+    ProbeConfig,
+    SimConfig,
+    TaskConfig,
+    load_config,
+    paper_config,
+)
+from .optimal import BASIS_NAMES, hjb_residual, optimal_weights
+from .simulation import SimulationDiverged, SimulationResult, simulate
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BASIS_NAMES",
+    "ActorConfig",
+    "Config",
+    "ControlConfig",
+    "CostConfig",
+    "CriticConfig",
+    "InitConfig",
+    "ModelConfig",
+    "PlantConfig",
+    "ProbeConfig",
+    "SimConfig",
+    "SimulationDiverged",
+    "SimulationResult",
+    "TaskConfig",
+    "hjb_residual",
+    "load_config",
+    "optimal_weights",
+    "paper_config",
+    "simulate",
+]

@@ -1,0 +1,185 @@
+"""Running the closed loop in the C++ core and the result it returns."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from .config import Config
+
+__all__ = ["SimulationDiverged", "SimulationResult", "core_settings", "simulate"]
+
+# Steps per call into C++: the GIL is released inside a chunk and Python regains control between
+# chunks (for progress reporting and Ctrl-C).
+CHUNK_STEPS = 50_000
+
+
+def core_settings(config: Config) -> _core.Settings:
+    """The C++ core's Settings struct for ``config`` (passed whole to the core)."""
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    settings = _core.Settings()
+    plant = _core.ArmParameters()
+    for key in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous"):
+        setattr(plant, key, getattr(config.plant, key))
+    model = _core.ArmParameters()
+    for key, value in config.model.resolve(config.plant).items():
+        setattr(model, key, value)
+    settings.plant = plant
+    settings.model = model
+    settings.disturbance = np.array(config.plant.disturbance)
+
+    task = _core.TaskSettings()
+    task.q0 = np.array(config.task.q0)
+    task.dq0 = np.array(config.task.dq0)
+    task.qd = np.array(config.task.qd)
+    settings.task = task
+
+    settings.Q = np.array(config.cost.Q)
+    settings.R = np.array(config.cost.R)
+
+    control = _core.ControlSettings()
+    control.alpha1 = np.array(config.control.alpha1)
+    rise = _core.RiseGains()
+    rise.ks, rise.alpha2, rise.beta1 = config.control.ks, config.control.alpha2, config.control.beta1
+    control.rise = rise
+    settings.control = control
+
+    critic = _core.CriticSettings()
+    for key in ("eta_c", "nu", "gamma0", "epsilon_T"):
+        setattr(critic, key, getattr(config.critic, key))
+    settings.critic = critic
+    actor = _core.ActorSettings()
+    for key in ("eta_a1", "eta_a2", "weight_bound"):
+        setattr(actor, key, getattr(config.actor, key))
+    settings.actor = actor
+
+    settings.critic_weights = np.array(config.init.critic_weights)
+    settings.actor_weights = np.array(config.init.actor_weights)
+
+    probe = _core.ProbeSettings()
+    probe.amplitude = np.array(config.probe.amplitude)
+    probe.until = config.probe.until
+    probe.frequencies = np.array(config.probe.frequencies)
+    probe.phases = config.probe.phase_matrix()
+    settings.probe = probe
+
+    sim = _core.SimSettings()
+    for key in ("T", "dt", "record_every", "divergence_bound"):
+        setattr(sim, key, getattr(config.sim, key))
+    settings.sim = sim
+    return settings
+
+
+_ARRAYS_2 = ("q", "dq", "e1", "e2", "tau", "u_hat", "mu", "probe")
+_ARRAYS_N = ("critic_weights", "actor_weights")
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """One closed-loop run, one row per recorded step (all arrays read-only).
+
+    t (n,) s; q, dq (n, 2) rad, rad/s; e1 = qd - q, e2 = de1 + alpha1 e1 (n, 2);
+    tau (n, 2) applied torque N m; u_hat (n, 2) actor input (eq. 20); mu (n, 2) RISE term (eq. 27);
+    probe (n, 2) probing signal; critic_weights, actor_weights (n, 8) in the order of
+    adparm.BASIS_NAMES; hjb_error (n,) eq. (21); covariance_reset_times (k,) s.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    tau: np.ndarray
+    u_hat: np.ndarray
+    mu: np.ndarray
+    probe: np.ndarray
+    critic_weights: np.ndarray
+    actor_weights: np.ndarray
+    hjb_error: np.ndarray
+    covariance_reset_times: np.ndarray
+    config: Config
+    status: str = "finished"
+    wall_time: float = field(default=float("nan"))
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
+        if n < 0:
+            raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
+        shapes = {"t": (n,), "hjb_error": (n,)}
+        shapes.update({name: (n, 2) for name in _ARRAYS_2})
+        shapes.update({name: (n, 8) for name in _ARRAYS_N})
+        for name, shape in shapes.items():
+            array = np.array(getattr(self, name), dtype=float)
+            if array.shape != shape:
+                raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
+            array.flags.writeable = False
+            object.__setattr__(self, name, array)
+        resets = np.array(self.covariance_reset_times, dtype=float).reshape(-1)
+        resets.flags.writeable = False
+        object.__setattr__(self, "covariance_reset_times", resets)
+        if self.status not in ("finished", "diverged", "running"):
+            raise ValueError(f"status: expected finished, diverged or running, got {self.status!r}")
+
+    @property
+    def covariance_resets(self) -> int:
+        """Number of resets of Gamma (eq. 24's reset rule)."""
+        return int(self.covariance_reset_times.size)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The arrays by name (copies), with status and wall_time."""
+        names = ("t", "hjb_error", *_ARRAYS_2, *_ARRAYS_N, "covariance_reset_times")
+        out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
+        out["status"] = self.status
+        out["wall_time"] = self.wall_time
+        return out
+
+    def __repr__(self) -> str:
+        return (
+            f"SimulationResult(status={self.status!r}, rows={self.t.size}, "
+            f"t_end={self.t[-1] if self.t.size else float('nan'):g}, "
+            f"covariance_resets={self.covariance_resets}, wall_time={self.wall_time:.3g})"
+        )
+
+
+class SimulationDiverged(RuntimeError):
+    """A run whose state became non-finite or left sim.divergence_bound.
+
+    ``result`` holds what was recorded up to the last finite step; ``time`` is when it diverged."""
+
+    def __init__(self, message: str, result: SimulationResult, time: float) -> None:
+        super().__init__(message)
+        self.result = result
+        self.time = time
+
+
+def simulate(config: Config) -> SimulationResult:
+    """Simulate the closed loop of ``config`` in the C++ core (fixed-step RK4).
+
+    Raises SimulationDiverged (with the partial result) if the state diverges."""
+    settings = core_settings(config)
+    run = _core.Simulation(settings)
+    start = time.perf_counter()
+    while run.status == "running":
+        run.advance(CHUNK_STEPS)
+    wall_time = time.perf_counter() - start
+    result = SimulationResult(
+        **run.recording(),
+        covariance_reset_times=np.array(run.reset_times),
+        config=config,
+        status=run.status,
+        wall_time=wall_time,
+    )
+    if run.status == "diverged":
+        raise SimulationDiverged(
+            f"simulation diverged at t = {run.divergence_time:.6g} s (state non-finite or beyond "
+            f"sim.divergence_bound = {config.sim.divergence_bound:g}); the partial result is in "
+            "the exception's .result",
+            result,
+            run.divergence_time,
+        )
+    return result
