@@ -1,0 +1,216 @@
+"""Type stubs for adparm._core, the pybind11 binding of the C++ core (python/src/core_bindings.cpp).
+
+Private: use the adparm package. Eigen members of the settings structs are copied on access, so
+assign them whole (``task.q0 = [0.1, 0.2]``); they are returned as float64 arrays. Argument errors
+in the core raise ValueError.
+"""
+
+from typing import Literal, TypeAlias
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+_FloatArray: TypeAlias = NDArray[np.float64]
+
+#: Size of the closed loop's state [q (2), dq (2), Wc (8), Wa (8), Gamma (64), nu (2)].
+STATE_SIZE: int
+
+# --- settings -----------------------------------------------------------------------------------
+
+class ArmParameters:
+    """Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous."""
+
+    p1: float
+    p2: float
+    p3: float
+    g1: float
+    g2: float
+    coulomb: float
+    viscous: float
+    def __init__(self) -> None: ...
+
+class RiseGains:
+    """RISE gains ks, alpha2, beta1 (eqs. 27-28)."""
+
+    ks: float
+    alpha2: float
+    beta1: float
+    def __init__(self) -> None: ...
+
+class CriticSettings:
+    """eta_c, nu, gamma0, epsilon_T (eqs. 23-24)."""
+
+    eta_c: float
+    nu: float
+    gamma0: float
+    epsilon_T: float
+    def __init__(self) -> None: ...
+
+class ActorSettings:
+    """eta_a1, eta_a2, weight_bound (eq. 26)."""
+
+    eta_a1: float
+    eta_a2: float
+    weight_bound: float
+    def __init__(self) -> None: ...
+
+class ProbeSettings:
+    """amplitude (2,), until, frequencies (n,), phases (2, n)."""
+
+    until: float
+    def __init__(self) -> None: ...
+    @property
+    def amplitude(self) -> _FloatArray:
+        """(2,)"""
+    @amplitude.setter
+    def amplitude(self, value: ArrayLike) -> None: ...
+    @property
+    def frequencies(self) -> _FloatArray:
+        """(n,) rad/s"""
+    @frequencies.setter
+    def frequencies(self, value: ArrayLike) -> None: ...
+    @property
+    def phases(self) -> _FloatArray:
+        """(2, n) rad"""
+    @phases.setter
+    def phases(self, value: ArrayLike) -> None: ...
+
+class TaskSettings:
+    """q0 (2,), dq0 (2,), qd (2,)."""
+
+    def __init__(self) -> None: ...
+    @property
+    def q0(self) -> _FloatArray: ...
+    @q0.setter
+    def q0(self, value: ArrayLike) -> None: ...
+    @property
+    def dq0(self) -> _FloatArray: ...
+    @dq0.setter
+    def dq0(self, value: ArrayLike) -> None: ...
+    @property
+    def qd(self) -> _FloatArray: ...
+    @qd.setter
+    def qd(self, value: ArrayLike) -> None: ...
+
+class ControlSettings:
+    """alpha1 (2, 2) and the RISE gains."""
+
+    rise: RiseGains
+    def __init__(self) -> None: ...
+    @property
+    def alpha1(self) -> _FloatArray:
+        """(2, 2)"""
+    @alpha1.setter
+    def alpha1(self, value: ArrayLike) -> None: ...
+
+class SimSettings:
+    """T, dt, record_every, divergence_bound."""
+
+    T: float
+    dt: float
+    record_every: int
+    divergence_bound: float
+    def __init__(self) -> None: ...
+
+class Settings:
+    """All settings of one run. Eigen members are copied on access: assign them whole.
+    Q (4, 4), R (2, 2), disturbance (2,), critic_weights and actor_weights (8,)."""
+
+    plant: ArmParameters
+    model: ArmParameters
+    task: TaskSettings
+    control: ControlSettings
+    critic: CriticSettings
+    actor: ActorSettings
+    probe: ProbeSettings
+    sim: SimSettings
+    def __init__(self) -> None: ...
+    @property
+    def disturbance(self) -> _FloatArray:
+        """(2,)"""
+    @disturbance.setter
+    def disturbance(self, value: ArrayLike) -> None: ...
+    @property
+    def Q(self) -> _FloatArray:
+        """(4, 4)"""
+    @Q.setter
+    def Q(self, value: ArrayLike) -> None: ...
+    @property
+    def R(self) -> _FloatArray:
+        """(2, 2)"""
+    @R.setter
+    def R(self, value: ArrayLike) -> None: ...
+    @property
+    def critic_weights(self) -> _FloatArray:
+        """(8,)"""
+    @critic_weights.setter
+    def critic_weights(self, value: ArrayLike) -> None: ...
+    @property
+    def actor_weights(self) -> _FloatArray:
+        """(8,)"""
+    @actor_weights.setter
+    def actor_weights(self, value: ArrayLike) -> None: ...
+
+def paper_settings() -> Settings:
+    """The C++ core's copy of the paper preset."""
+
+# --- arm, basis, HJB ------------------------------------------------------------------------------
+
+def arm_terms(parameters: ArmParameters, q: ArrayLike, dq: ArrayLike) -> dict[str, _FloatArray]:
+    """Model terms at q (2,), dq (2,): dict of M, M_inv, C (2, 2) and G, F (2,)."""
+
+def simulate_open_loop(
+    parameters: ArmParameters,
+    disturbance: ArrayLike,
+    initial_state: ArrayLike,
+    dt: float,
+    steps: int,
+    compensate_gravity: bool,
+) -> _FloatArray:
+    """RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4)."""
+
+def basis(x: ArrayLike) -> tuple[_FloatArray, _FloatArray]:
+    """The paper basis at x (4,): phi (8,) and its Jacobian (8, 4)."""
+
+def hjb_residual(
+    settings: Settings, x: ArrayLike, critic_weights: ArrayLike, actor_weights: ArrayLike
+) -> _FloatArray:
+    """HJB error of eq. (21) at each row of x (n, 4) for weights (8,); returns (n,)."""
+
+# --- closed loop ----------------------------------------------------------------------------------
+
+def closed_loop_derivative(
+    settings: Settings, t: float, state: ArrayLike
+) -> tuple[_FloatArray, dict[str, _FloatArray | float]]:
+    """Right-hand side at t of state (86,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major),
+    nu (2)]; returns (rate (86,), outputs dict of e1, e2, tau, u_hat, mu, probe (2,) and
+    hjb_error (float))."""
+
+def initial_state(settings: Settings) -> _FloatArray:
+    """The closed loop's initial state (86,)."""
+
+class Simulation:
+    """The closed-loop run; advance(n) takes up to n RK4 steps."""
+
+    def __init__(self, settings: Settings) -> None: ...
+    def advance(self, max_steps: int) -> int:
+        """Take at most max_steps steps (GIL released); returns the number taken."""
+    @property
+    def status(self) -> Literal["running", "finished", "diverged"]: ...
+    @property
+    def steps(self) -> int:
+        """Total number of steps of the run."""
+    @property
+    def step(self) -> int:
+        """Steps taken so far."""
+    @property
+    def divergence_time(self) -> float:
+        """Time of divergence (s), NaN unless status is "diverged"."""
+    @property
+    def reset_times(self) -> list[float]:
+        """Times (s) of the covariance resets so far."""
+    @property
+    def state(self) -> _FloatArray:
+        """Current closed-loop state (86,)."""
+    def recording(self) -> dict[str, _FloatArray]:
+        """Recorded rows so far: dict of arrays t (n,), q ... (n, 2), weights (n, 8)."""

@@ -1,0 +1,39 @@
+"""Shared helpers: random instances whose optimal weights are known (ERRATA conditions)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import adparm
+
+
+def random_optimal_config(rng: np.random.Generator) -> adparm.Config:
+    """A config satisfying K = -Q12 > 0, Q11 = K alpha1 + alpha1^T K, Q22 = R^-1, Q > 0,
+    on a random arm with M(q) > 0 (used both as plant and model)."""
+    while True:
+        A = rng.normal(size=(2, 2))
+        K = A @ A.T + 0.5 * np.eye(2)
+        alpha1 = rng.uniform(1.0, 20.0) * np.eye(2) + rng.normal(scale=1.0, size=(2, 2))
+        B = rng.normal(size=(2, 2))
+        R = B @ B.T + 0.1 * np.eye(2)
+        Q = np.block([[K @ alpha1 + alpha1.T @ K, -K], [-K, np.linalg.inv(R)]])
+        Q = 0.5 * (Q + Q.T)
+        if np.linalg.eigvalsh(Q).min() > 1e-3:
+            break
+    p2 = rng.uniform(0.3, 3.0)
+    p3 = rng.uniform(0.05, 2.0)
+    p1 = p2 + p3**2 / p2 + rng.uniform(0.1, 5.0)
+    return adparm.paper_config().updated(
+        {
+            "plant": {"p1": p1, "p2": p2, "p3": p3, "g1": rng.uniform(0, 20), "g2": rng.uniform(0, 10)},
+            "cost": {"Q": Q, "R": R},
+            "control": {"alpha1": alpha1},
+            "task": {"qd": [rng.uniform(-1, 1), 0.0]},
+        }
+    )
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20261125)

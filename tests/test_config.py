@@ -1,0 +1,147 @@
+"""Configuration: the paper preset, TOML loading, and refusal of bad input naming the field."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import adparm
+from adparm import _core
+from adparm.simulation import core_settings
+
+
+def test_python_preset_equals_the_cores_copy() -> None:
+    ours = core_settings(adparm.paper_config())
+    core = _core.paper_settings()
+    for section, keys in {
+        "plant": ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous"),
+        "critic": ("eta_c", "nu", "gamma0", "epsilon_T"),
+        "actor": ("eta_a1", "eta_a2", "weight_bound"),
+        "sim": ("T", "dt", "record_every", "divergence_bound"),
+    }.items():
+        for key in keys:
+            assert getattr(getattr(ours, section), key) == getattr(getattr(core, section), key), key
+    for key in ("ks", "alpha2", "beta1"):
+        assert getattr(ours.control.rise, key) == getattr(core.control.rise, key), key
+    for name in ("Q", "R", "disturbance", "critic_weights", "actor_weights"):
+        np.testing.assert_array_equal(getattr(ours, name), getattr(core, name), err_msg=name)
+    np.testing.assert_array_equal(ours.control.alpha1, core.control.alpha1)
+    for name in ("q0", "dq0", "qd"):
+        np.testing.assert_array_equal(getattr(ours.task, name), getattr(core.task, name))
+    for name in ("amplitude", "until", "frequencies", "phases"):
+        np.testing.assert_array_equal(getattr(ours.probe, name), getattr(core.probe, name))
+
+
+def test_paper_values() -> None:
+    c = adparm.paper_config()
+    assert (c.plant.p1, c.plant.p2, c.plant.p3) == (5.0, 1.0, 1.0)
+    assert c.plant.g1 == pytest.approx(11.76) and c.plant.g2 == 9.8
+    assert c.plant.coulomb == -0.1 and c.plant.disturbance == (0.1, 0.1)
+    assert c.task.q0 == (0.1598, 0.2257) and c.task.qd == (0.0, 0.0)
+    assert c.cost.R == ((0.25, 0.0), (0.0, 0.25))
+    assert c.control.alpha1 == ((15.6, 10.6), (10.6, 10.4))
+    assert (c.critic.eta_c, c.critic.nu, c.critic.gamma0, c.critic.epsilon_T) == (800, 1, 100, 1e-3)
+    assert (c.actor.eta_a1, c.actor.eta_a2) == (0.01, 1.0)
+    assert c == adparm.Config()
+
+
+def test_config_is_frozen_and_hashable() -> None:
+    c = adparm.paper_config()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        c.critic.eta_c = 1.0  # type: ignore[misc]
+    assert hash(c) == hash(adparm.paper_config())
+
+
+def test_load_config_fills_missing_keys_with_paper_defaults(tmp_path) -> None:
+    path = tmp_path / "run.toml"
+    path.write_text(
+        """
+[critic]
+eta_c = 200
+epsilon_T = 1e-5
+
+[cost]
+R = [[0.2, 0.0], [0.0, 0.2]]
+Q = [[40, 2, -4, 4], [2, 40, 4, -6], [-4, 4, 5, 0], [4, -6, 0, 5]]
+
+[probe]
+amplitude = 3.0
+frequencies = [1.0, 2.0]
+
+[sim]
+T = 2.5
+record_every = 5
+"""
+    )
+    c = adparm.load_config(path)
+    assert c.critic.eta_c == 200.0 and c.critic.epsilon_T == 1e-5
+    assert c.critic.nu == 1.0 and c.critic.gamma0 == 100.0
+    assert c.probe.amplitude == (3.0, 3.0) and c.probe.phase_matrix().shape == (2, 2)
+    assert c.sim.T == 2.5 and c.sim.dt == 1e-3 and c.sim.record_every == 5
+    assert c.plant == adparm.PlantConfig()
+    assert adparm.optimal_weights(c)[0] == 4.0
+
+
+def test_round_trip_through_dict() -> None:
+    c = adparm.paper_config().updated({"model": {"p1": 4.0}, "task": {"qd": [0.5, 0.0]}})
+    d = c.to_dict()
+    assert d["model"] == {"p1": 4.0}
+    assert adparm.Config.from_dict(d) == c
+
+
+@pytest.mark.parametrize(
+    ("data", "error", "message"),
+    [
+        ({"critc": {}}, ValueError, r"unknown config section \[critc\] \(did you mean 'critic'\?\)"),
+        ({"critic": {"eta": 1}}, ValueError, r"unknown key critic.eta \(did you mean 'eta_c'\?\)"),
+        ({"critic": 3}, TypeError, r"\[critic\]: expected a table"),
+        ({"critic": {"eta_c": "fast"}}, TypeError, "critic.eta_c: expected a number"),
+        ({"critic": {"eta_c": True}}, TypeError, "critic.eta_c: expected a number"),
+        ({"critic": {"eta_c": -1}}, ValueError, "critic.eta_c: must be >= 0"),
+        ({"critic": {"gamma0": 0}}, ValueError, "critic.gamma0: must be > 0"),
+        ({"critic": {"epsilon_T": 200}}, ValueError, "critic.epsilon_T: must be < critic.gamma0"),
+        ({"sim": {"dt": 0}}, ValueError, "sim.dt: must be > 0"),
+        ({"sim": {"T": float("nan")}}, ValueError, "sim.T: must be finite"),
+        ({"sim": {"record_every": 0}}, ValueError, "sim.record_every: must be >= 1"),
+        ({"sim": {"record_every": 2.5}}, TypeError, "sim.record_every: expected an integer"),
+        ({"sim": {"dt": 2.0, "T": 1.0}}, ValueError, "sim.dt: must be <= sim.T"),
+        ({"task": {"q0": [0.1]}}, ValueError, r"task.q0: expected shape \(2,\), got \(1,\)"),
+        ({"task": {"q0": 0.1}}, TypeError, "task.q0: expected a list of 2 numbers"),
+        ({"task": {"qd": [0.0, float("inf")]}}, ValueError, "task.qd: must be finite"),
+        ({"cost": {"R": [[1, 0.5], [0, 1]]}}, ValueError, "cost.R: must be symmetric"),
+        ({"cost": {"R": [[1, 0], [0, -1]]}}, ValueError, "cost.R: must be positive definite"),
+        ({"cost": {"Q": np.zeros((4, 4))}}, ValueError, "cost.Q: must be positive definite"),
+        ({"cost": {"Q": [[1, 2], [3, 4]]}}, ValueError, r"cost.Q: expected shape \(4, 4\)"),
+        ({"control": {"alpha1": [["a", 0], [0, 1]]}}, TypeError, "control.alpha1: expected an array"),
+        ({"plant": {"p2": -1}}, ValueError, "plant.p2: must be > 0"),
+        ({"plant": {"p1": 1.0}}, ValueError, "plant.p1, plant.p2, plant.p3: M"),
+        ({"model": {"p3": 3.0}}, ValueError, "model.p1, model.p2, model.p3: M"),
+        ({"init": {"critic_weights": [1, 2]}}, ValueError, r"init.critic_weights: expected shape \(8,\)"),
+        ({"probe": {"phases": [[0, 0]]}}, ValueError, "probe.phases: expected shape"),
+        ({"actor": {"weight_bound": 0}}, ValueError, "actor.weight_bound: must be > 0"),
+    ],
+)
+def test_bad_input_names_the_field(data, error, message) -> None:
+    with pytest.raises(error, match=message):
+        adparm.Config.from_dict(data)
+
+
+def test_load_config_reports_invalid_toml(tmp_path) -> None:
+    path = tmp_path / "broken.toml"
+    path.write_text("[critic\neta_c = 1\n")
+    with pytest.raises(ValueError, match="invalid TOML"):
+        adparm.load_config(path)
+
+
+def test_load_config_refuses_unknown_keys_in_files(tmp_path) -> None:
+    path = tmp_path / "typo.toml"
+    path.write_text("[sim]\nrecord_evry = 3\n")
+    with pytest.raises(ValueError, match="did you mean 'record_every'"):
+        adparm.load_config(path)
+
+
+def test_simulate_refuses_non_config() -> None:
+    with pytest.raises(TypeError, match="config: expected adparm.Config"):
+        adparm.simulate({"sim": {"T": 1}})  # type: ignore[arg-type]

@@ -1,0 +1,105 @@
+"""The paper preset end to end: it runs, stays bounded, regulates, and is reproducible."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from numpy_reference import arm_terms, plant_parameters
+
+import adparm
+
+
+@pytest.fixture(scope="module")
+def paper_result() -> adparm.SimulationResult:
+    return adparm.simulate(adparm.paper_config())
+
+
+def test_paper_preset_runs_and_records(paper_result) -> None:
+    r = paper_result
+    c = r.config
+    rows = round(c.sim.T / c.sim.dt) // c.sim.record_every + 1
+    assert r.status == "finished"
+    assert r.t.shape == (rows,) and r.q.shape == (rows, 2) and r.critic_weights.shape == (rows, 8)
+    np.testing.assert_allclose(np.diff(r.t), c.sim.dt * c.sim.record_every, rtol=1e-9)
+    assert r.t[-1] == pytest.approx(c.sim.T)
+    np.testing.assert_array_equal(r.q[0], c.task.q0)
+    np.testing.assert_array_equal(r.critic_weights[0], c.init.critic_weights)
+    for name in ("t", "q", "dq", "e1", "e2", "tau", "critic_weights", "actor_weights", "hjb_error"):
+        assert np.all(np.isfinite(getattr(r, name))), name
+    with pytest.raises(ValueError):
+        r.q[0, 0] = 1.0  # read-only
+
+
+def test_paper_preset_keeps_q_bounded_and_reaches_the_set_point(paper_result) -> None:
+    r = paper_result
+    assert np.abs(r.q).max() < 1.0
+    after_probe = r.t >= r.config.probe.until + 5.0
+    assert np.abs(r.e1[after_probe]).max() < 1e-3
+    np.testing.assert_allclose(r.e1, np.array(r.config.task.qd) - r.q, atol=1e-15)
+
+
+def test_recorded_probe_and_torque_are_consistent(paper_result) -> None:
+    r = paper_result
+    during = r.t < r.config.probe.until
+    assert np.abs(r.probe[during]).max() > 1.0
+    assert np.all(r.probe[~during] == 0.0)
+    # tau = h + mu - (u_hat + probe), h of eq. (5), at every recorded row
+    alpha1 = np.array(r.config.control.alpha1)
+    parameters = plant_parameters(r.config)
+    for i in range(0, r.t.size, 97):
+        M, C, G, F = arm_terms(parameters, r.q[i], r.dq[i])
+        h = M @ alpha1 @ (-r.dq[i]) + C @ alpha1 @ r.e1[i] + G + F
+        np.testing.assert_allclose(r.tau[i], h + r.mu[i] - r.u_hat[i] - r.probe[i], atol=1e-10)
+
+
+def test_same_config_gives_identical_results(paper_result) -> None:
+    again = adparm.simulate(adparm.paper_config())
+    for name in ("q", "dq", "tau", "critic_weights", "actor_weights", "hjb_error"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(paper_result, name))
+
+
+def test_zero_initial_weights_are_inadmissible() -> None:
+    config = adparm.paper_config().updated(
+        {"init": {"critic_weights": [0.0] * 8, "actor_weights": [0.0] * 8}, "sim": {"T": 5.0}}
+    )
+    with pytest.raises(adparm.SimulationDiverged, match="diverged at t =") as caught:
+        adparm.simulate(config)
+    partial = caught.value.result
+    assert partial.status == "diverged"
+    assert 0.0 < caught.value.time < 1.0  # within the first second (ERRATA: milliseconds)
+    assert partial.t.size >= 1 and partial.t[-1] < caught.value.time
+    for name in ("q", "critic_weights", "actor_weights"):
+        assert np.all(np.isfinite(getattr(partial, name))), name
+
+
+def test_horizon_not_a_multiple_of_the_record_step() -> None:
+    r = adparm.simulate(adparm.paper_config().updated({"sim": {"T": 0.0125, "record_every": 4}}))
+    np.testing.assert_allclose(r.t, [0.0, 0.004, 0.008, 0.012, 0.013])
+
+
+def test_probing_off_and_exact_optimal_weights_keep_them() -> None:
+    # started at W* with no probing, disturbance or friction, the critic has nothing to learn
+    config = adparm.paper_config()
+    W = adparm.optimal_weights(config)
+    config = config.updated(
+        {
+            "init": {"critic_weights": W, "actor_weights": W},
+            "probe": {"until": 0.0},
+            "plant": {"disturbance": [0.0, 0.0], "coulomb": 0.0},
+            "sim": {"T": 5.0},
+        }
+    )
+    r = adparm.simulate(config)
+    assert np.abs(r.hjb_error).max() < 1e-9
+    np.testing.assert_allclose(r.critic_weights[-1], W, atol=1e-8)
+    np.testing.assert_allclose(r.actor_weights[-1], W, atol=1e-8)
+
+
+def test_result_checks_its_arrays(paper_result) -> None:
+    arrays = paper_result.to_dict()
+    arrays["q"] = arrays["q"][:-1]
+    for key in ("status", "wall_time"):
+        arrays.pop(key)
+    with pytest.raises(ValueError, match=r"q: expected shape"):
+        adparm.SimulationResult(**arrays, config=paper_result.config)
