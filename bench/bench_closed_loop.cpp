@@ -20,11 +20,11 @@ int main(int argc, char** argv) {
   optimal << 4, 6, -8, 5, 2, 1, 2, 2;
   const auto& state = simulation.state();
   const double critic_error =
-      (state.segment<8>(adparm::PaperClosedLoop::kCriticWeights) - optimal).norm() /
-      optimal.norm();
-  std::printf("bench=paper_loop steps=%ld ns_per_step=%.1f steps_per_second=%.0f "
-              "final_critic_error=%.4g status=%s\n",
-              steps, 1e9 * seconds / steps, steps / seconds, critic_error,
-              simulation.status() == adparm::RunStatus::finished ? "finished" : "diverged");
+      (state.segment<8>(adparm::PaperClosedLoop::kCriticWeights) - optimal).norm() / optimal.norm();
+  std::printf(
+      "bench=paper_loop steps=%ld ns_per_step=%.1f steps_per_second=%.0f "
+      "final_critic_error=%.4g status=%s\n",
+      steps, 1e9 * seconds / steps, steps / seconds, critic_error,
+      simulation.status() == adparm::RunStatus::finished ? "finished" : "diverged");
   return simulation.status() == adparm::RunStatus::finished ? 0 : 1;
 }

@@ -26,7 +26,13 @@ def random_optimal_config(rng: np.random.Generator) -> adparm.Config:
     p1 = p2 + p3**2 / p2 + rng.uniform(0.1, 5.0)
     return adparm.paper_config().updated(
         {
-            "plant": {"p1": p1, "p2": p2, "p3": p3, "g1": rng.uniform(0, 20), "g2": rng.uniform(0, 10)},
+            "plant": {
+                "p1": p1,
+                "p2": p2,
+                "p3": p3,
+                "g1": rng.uniform(0, 20),
+                "g2": rng.uniform(0, 10),
+            },
             "cost": {"Q": Q, "R": R},
             "control": {"alpha1": alpha1},
             "task": {"qd": [rng.uniform(-1, 1), 0.0]},

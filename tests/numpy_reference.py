@@ -29,7 +29,9 @@ def arm_terms(p: dict, q: np.ndarray, dq: np.ndarray):
 
 
 def plant_parameters(config: Config) -> dict:
-    return {k: getattr(config.plant, k) for k in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")}
+    return {
+        k: getattr(config.plant, k) for k in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+    }
 
 
 def basis(x: np.ndarray):

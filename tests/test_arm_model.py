@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
-from numpy_reference import arm_terms as reference_terms
 
 from adparm import _core
+
+from numpy_reference import arm_terms as reference_terms
 
 angles = st.floats(-np.pi, np.pi)
 speeds = st.floats(-5.0, 5.0)
@@ -23,7 +24,15 @@ def parameters(**values: float) -> _core.ArmParameters:
     return p
 
 
-PAPER = {"p1": 5.0, "p2": 1.0, "p3": 1.0, "g1": 9.8 * 1.2, "g2": 9.8, "coulomb": -0.1, "viscous": 0.0}
+PAPER = {
+    "p1": 5.0,
+    "p2": 1.0,
+    "p3": 1.0,
+    "g1": 9.8 * 1.2,
+    "g2": 9.8,
+    "coulomb": -0.1,
+    "viscous": 0.0,
+}
 
 
 @given(q=joint, dq=velocity)

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from numpy_reference import basis as reference_basis
-from numpy_reference import initial_state as reference_initial_state
-from numpy_reference import rhs as reference_rhs
-from numpy_reference import simulate as reference_simulate
 
 import adparm
 from adparm import _core
 from adparm.simulation import core_settings
+
+from numpy_reference import basis as reference_basis
+from numpy_reference import initial_state as reference_initial_state
+from numpy_reference import rhs as reference_rhs
+from numpy_reference import simulate as reference_simulate
 
 
 def random_state(rng: np.random.Generator, config: adparm.Config) -> np.ndarray:
@@ -43,11 +44,27 @@ def random_config(rng: np.random.Generator) -> adparm.Config:
                 "disturbance": rng.uniform(0, 1, 2),
             },
             "model": {"p1": 6.0, "g1": 10.0, "coulomb": 0.0},
-            "task": {"q0": rng.uniform(-1, 1, 2), "dq0": rng.uniform(-1, 1, 2), "qd": rng.uniform(-1, 1, 2)},
-            "control": {"alpha1": rng.uniform(0.5, 5, (2, 2)), "ks": rng.uniform(0, 20), "beta1": rng.uniform(0, 2)},
+            "task": {
+                "q0": rng.uniform(-1, 1, 2),
+                "dq0": rng.uniform(-1, 1, 2),
+                "qd": rng.uniform(-1, 1, 2),
+            },
+            "control": {
+                "alpha1": rng.uniform(0.5, 5, (2, 2)),
+                "ks": rng.uniform(0, 20),
+                "beta1": rng.uniform(0, 2),
+            },
             "critic": {"eta_c": rng.uniform(1, 1000), "nu": rng.uniform(0, 2)},
-            "actor": {"eta_a1": rng.uniform(0, 1), "eta_a2": rng.uniform(0, 2), "weight_bound": 5.0},
-            "probe": {"amplitude": rng.uniform(0, 3, 2), "frequencies": rng.uniform(0, 10, 3), "until": 5.0},
+            "actor": {
+                "eta_a1": rng.uniform(0, 1),
+                "eta_a2": rng.uniform(0, 2),
+                "weight_bound": 5.0,
+            },
+            "probe": {
+                "amplitude": rng.uniform(0, 3, 2),
+                "frequencies": rng.uniform(0, 10, 3),
+                "until": 5.0,
+            },
         }
     )
 
@@ -110,7 +127,10 @@ def test_initial_state_layout() -> None:
 def test_short_simulation_matches_numpy_rk4() -> None:
     # smooth enough to compare trajectories: resets happen in both (epsilon_T large)
     config = random_config(np.random.default_rng(7)).updated(
-        {"sim": {"T": 0.2, "dt": 1e-3, "record_every": 1}, "critic": {"epsilon_T": 50.0, "eta_c": 400.0}}
+        {
+            "sim": {"T": 0.2, "dt": 1e-3, "record_every": 1},
+            "critic": {"epsilon_T": 50.0, "eta_c": 400.0},
+        }
     )
     result = adparm.simulate(config)
     expected = reference_simulate(config, 200)
@@ -119,3 +139,26 @@ def test_short_simulation_matches_numpy_rk4() -> None:
     np.testing.assert_allclose(result.critic_weights, expected[:, 4:12], rtol=0, atol=1e-8)
     np.testing.assert_allclose(result.actor_weights, expected[:, 12:20], rtol=0, atol=1e-8)
     assert result.covariance_resets > 0
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda s: setattr(s, "critic_weights", np.ones(7)), "init.critic_weights: expected shape"),
+        (lambda s: setattr(s, "actor_weights", np.full(8, np.nan)), "init.actor_weights: must be"),
+        (lambda s: setattr(s, "R", -np.eye(2)), "cost.R: must be positive definite"),
+        (lambda s: setattr(s, "Q", np.triu(np.ones((4, 4)))), "cost.Q: must be symmetric"),
+        (lambda s: setattr(s.sim, "dt", 0.0), "sim.dt: must be a finite number > 0"),
+        (lambda s: setattr(s.sim, "record_every", 0), "sim.record_every: must be >= 1"),
+        (lambda s: setattr(s.critic, "gamma0", -1.0), "critic.gamma0"),
+        (lambda s: setattr(s.plant, "p2", 0.0), "plant.p2: must be > 0"),
+        (lambda s: setattr(s.model, "p1", 0.5), "model.p1, p2, p3"),
+        (lambda s: setattr(s.probe, "phases", np.zeros((2, 1))), "probe.phases: expected shape"),
+    ],
+)
+def test_core_checks_its_own_preconditions(change, message) -> None:
+    # settings built directly, bypassing the Python validation: the core still refuses them
+    settings = core_settings(adparm.paper_config())
+    change(settings)
+    with pytest.raises(ValueError, match=message):
+        _core.Simulation(settings)

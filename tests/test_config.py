@@ -94,7 +94,11 @@ def test_round_trip_through_dict() -> None:
 @pytest.mark.parametrize(
     ("data", "error", "message"),
     [
-        ({"critc": {}}, ValueError, r"unknown config section \[critc\] \(did you mean 'critic'\?\)"),
+        (
+            {"critc": {}},
+            ValueError,
+            r"unknown config section \[critc\] \(did you mean 'critic'\?\)",
+        ),
         ({"critic": {"eta": 1}}, ValueError, r"unknown key critic.eta \(did you mean 'eta_c'\?\)"),
         ({"critic": 3}, TypeError, r"\[critic\]: expected a table"),
         ({"critic": {"eta_c": "fast"}}, TypeError, "critic.eta_c: expected a number"),
@@ -114,11 +118,19 @@ def test_round_trip_through_dict() -> None:
         ({"cost": {"R": [[1, 0], [0, -1]]}}, ValueError, "cost.R: must be positive definite"),
         ({"cost": {"Q": np.zeros((4, 4))}}, ValueError, "cost.Q: must be positive definite"),
         ({"cost": {"Q": [[1, 2], [3, 4]]}}, ValueError, r"cost.Q: expected shape \(4, 4\)"),
-        ({"control": {"alpha1": [["a", 0], [0, 1]]}}, TypeError, "control.alpha1: expected an array"),
+        (
+            {"control": {"alpha1": [["a", 0], [0, 1]]}},
+            TypeError,
+            "control.alpha1: expected an array",
+        ),
         ({"plant": {"p2": -1}}, ValueError, "plant.p2: must be > 0"),
         ({"plant": {"p1": 1.0}}, ValueError, "plant.p1, plant.p2, plant.p3: M"),
         ({"model": {"p3": 3.0}}, ValueError, "model.p1, model.p2, model.p3: M"),
-        ({"init": {"critic_weights": [1, 2]}}, ValueError, r"init.critic_weights: expected shape \(8,\)"),
+        (
+            {"init": {"critic_weights": [1, 2]}},
+            ValueError,
+            r"init.critic_weights: expected shape \(8,\)",
+        ),
         ({"probe": {"phases": [[0, 0]]}}, ValueError, "probe.phases: expected shape"),
         ({"actor": {"weight_bound": 0}}, ValueError, "actor.weight_bound: must be > 0"),
     ],

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import random_optimal_config
-from numpy_reference import hjb_residual as reference_residual
 
 import adparm
+
+from conftest import random_optimal_config
+from numpy_reference import hjb_residual as reference_residual
 
 
 def states(rng: np.random.Generator, n: int) -> np.ndarray:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from numpy_reference import arm_terms, plant_parameters
-
 import adparm
+
+from numpy_reference import arm_terms, plant_parameters
 
 
 @pytest.fixture(scope="module")

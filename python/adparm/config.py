@@ -78,18 +78,21 @@ def _array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
         ) from error
     if array.ndim != len(shape) or any(
         expected is not None and actual != expected
-        for actual, expected in zip(array.shape, shape)
+        for actual, expected in zip(array.shape, shape, strict=False)
     ):
-        raise ValueError(
-            f"{name}: expected shape {_shape_text(shape)}, got {tuple(array.shape)}"
-        )
+        raise ValueError(f"{name}: expected shape {_shape_text(shape)}, got {tuple(array.shape)}")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name}: must be finite, got {array.tolist()}")
     return array
 
 
 def _shape_text(shape: tuple[int | None, ...]) -> str:
-    return "(" + ", ".join("n" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+    return (
+        "("
+        + ", ".join("n" if s is None else str(s) for s in shape)
+        + ("," if len(shape) == 1 else "")
+        + ")"
+    )
 
 
 def _vector(value: Any, name: str, size: int | None) -> Vector:
@@ -140,9 +143,7 @@ class PlantConfig:
     def __post_init__(self) -> None:
         for key in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous"):
             object.__setattr__(self, key, _scalar(getattr(self, key), f"plant.{key}"))
-        object.__setattr__(
-            self, "disturbance", _vector(self.disturbance, "plant.disturbance", 2)
-        )
+        object.__setattr__(self, "disturbance", _vector(self.disturbance, "plant.disturbance", 2))
         _check_arm(self.p1, self.p2, self.p3, "plant")
 
 
@@ -178,7 +179,9 @@ class ModelConfig:
 
 @dataclass(frozen=True)
 class TaskConfig:
-    """Initial joint state and set-point (rad, rad/s). dq0 = 0 is our choice (the paper is silent)."""
+    """Initial joint state and set-point (rad, rad/s).
+
+    dq0 = 0 is our choice (the paper is silent)."""
 
     q0: Vector = (0.1598, 0.2257)
     dq0: Vector = (0.0, 0.0)
@@ -227,13 +230,15 @@ class ControlConfig:
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha1", _matrix(self.alpha1, "control.alpha1", 2, 2))
         for key in ("ks", "alpha2", "beta1"):
-            object.__setattr__(self, key, _scalar(getattr(self, key), f"control.{key}", minimum=0.0))
+            object.__setattr__(
+                self, key, _scalar(getattr(self, key), f"control.{key}", minimum=0.0)
+            )
 
 
 @dataclass(frozen=True)
 class CriticConfig:
-    """Normalised least squares of eqs. (23)-(24): gain eta_c, normalisation nu, Gamma(0) = gamma0 I,
-    reset to gamma0 I when lambda_min(Gamma) < epsilon_T."""
+    """Normalised least squares of eqs. (23)-(24): gain eta_c, normalisation nu,
+    Gamma(0) = gamma0 I, reset to gamma0 I when lambda_min(Gamma) < epsilon_T."""
 
     eta_c: float = 800.0
     nu: float = 1.0
@@ -248,7 +253,8 @@ class CriticConfig:
         )
         if self.epsilon_T >= self.gamma0:
             raise ValueError(
-                f"critic.epsilon_T: must be < critic.gamma0 = {self.gamma0:g}, got {self.epsilon_T:g}"
+                f"critic.epsilon_T: must be < critic.gamma0 = {self.gamma0:g}, "
+                f"got {self.epsilon_T:g}"
             )
 
 
@@ -427,9 +433,7 @@ class Config:
         out: dict[str, dict[str, Any]] = {}
         for name in _SECTIONS:
             section = dataclasses.asdict(getattr(self, name))
-            out[name] = {
-                key: _plain(value) for key, value in section.items() if value is not None
-            }
+            out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
 
     def updated(self, changes: Mapping[str, Any]) -> Config:

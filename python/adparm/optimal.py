@@ -49,10 +49,11 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
         raise ValueError(f"cost.Q: K = -Q12 must be symmetric, got {K.tolist()}")
     if np.linalg.eigvalsh(0.5 * (K + K.T)).min() <= 0.0:
         raise ValueError(f"cost.Q: K = -Q12 must be positive definite, got {K.tolist()}")
-    if not close(Q11, K @ alpha1 + alpha1.T @ K):
+    lyapunov = K @ alpha1 + alpha1.T @ K
+    if not close(Q11, lyapunov):
         raise ValueError(
             "cost.Q: Q11 must equal K alpha1 + alpha1^T K with K = -Q12 "
-            f"(got Q11 = {Q11.tolist()}, K alpha1 + alpha1^T K = {(K @ alpha1 + alpha1.T @ K).tolist()})"
+            f"(got Q11 = {Q11.tolist()}, K alpha1 + alpha1^T K = {lyapunov.tolist()})"
         )
     if not close(Q22, np.linalg.inv(R)):
         raise ValueError(
@@ -61,11 +62,21 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
         )
     if config.task.qd[1] != 0.0:
         raise ValueError(
-            f"task.qd: the paper basis represents V* only for qd2 = 0, got qd = {list(config.task.qd)}"
+            "task.qd: the paper basis represents V* only for qd2 = 0, "
+            f"got qd = {list(config.task.qd)}"
         )
     p = config.model.resolve(config.plant)
     return np.array(
-        [K[0, 0], K[1, 1], 2.0 * K[0, 1], p["p1"], 2.0 * p["p3"], p["p2"], 2.0 * p["p2"], 2.0 * p["p3"]]
+        [
+            K[0, 0],
+            K[1, 1],
+            2.0 * K[0, 1],
+            p["p1"],
+            2.0 * p["p3"],
+            p["p2"],
+            2.0 * p["p2"],
+            2.0 * p["p3"],
+        ]
     )
 
 

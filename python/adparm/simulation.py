@@ -45,7 +45,11 @@ def core_settings(config: Config) -> _core.Settings:
     control = _core.ControlSettings()
     control.alpha1 = np.array(config.control.alpha1)
     rise = _core.RiseGains()
-    rise.ks, rise.alpha2, rise.beta1 = config.control.ks, config.control.alpha2, config.control.beta1
+    rise.ks, rise.alpha2, rise.beta1 = (
+        config.control.ks,
+        config.control.alpha2,
+        config.control.beta1,
+    )
     control.rise = rise
     settings.control = control
 

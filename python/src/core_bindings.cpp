@@ -18,7 +18,8 @@ namespace {
 using RowsX4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
 void bind_settings(py::module_& m) {
-  py::class_<TwoLinkArmParameters>(m, "ArmParameters", "Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.")
+  py::class_<TwoLinkArmParameters>(m, "ArmParameters",
+                                   "Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.")
       .def(py::init<>())
       .def_readwrite("p1", &TwoLinkArmParameters::p1)
       .def_readwrite("p2", &TwoLinkArmParameters::p2)
@@ -104,10 +105,10 @@ void bind_arm(py::module_& m) {
       "Model terms at q (2,), dq (2,): dict of M, M_inv, C (2, 2) and G, F (2,).");
   m.def(
       "simulate_open_loop",
-      [](const TwoLinkArmParameters& parameters, const Vec2& disturbance,
-         const Vec4& initial_state, double dt, long steps, bool compensate_gravity) {
-        const OpenLoopArm<TwoLinkArm> system(TwoLinkArm(parameters),
-                                             SinusoidalDisturbance{disturbance}, compensate_gravity);
+      [](const TwoLinkArmParameters& parameters, const Vec2& disturbance, const Vec4& initial_state,
+         double dt, long steps, bool compensate_gravity) {
+        const OpenLoopArm<TwoLinkArm> system(
+            TwoLinkArm(parameters), SinusoidalDisturbance{disturbance}, compensate_gravity);
         py::gil_scoped_release release;
         return simulate_open_loop(system, initial_state, dt, steps);
       },
@@ -178,7 +179,8 @@ void bind_closed_loop(py::module_& m) {
       "Right-hand side at t of state (86,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major), "
       "nu (2)]; returns (rate (86,), outputs dict).");
   m.def(
-      "initial_state", [](const Settings& settings) {
+      "initial_state",
+      [](const Settings& settings) {
         return Eigen::VectorXd(PaperClosedLoop(settings).initial_state());
       },
       py::arg("settings"), "The closed loop's initial state (86,).");
@@ -193,34 +195,40 @@ void bind_simulation(py::module_& m) {
       .def_property_readonly("status",
                              [](const PaperSimulation& s) {
                                switch (s.status()) {
-                                 case RunStatus::running: return "running";
-                                 case RunStatus::finished: return "finished";
-                                 default: return "diverged";
+                                 case RunStatus::running:
+                                   return "running";
+                                 case RunStatus::finished:
+                                   return "finished";
+                                 default:
+                                   return "diverged";
                                }
                              })
       .def_property_readonly("steps", &PaperSimulation::steps)
       .def_property_readonly("step", &PaperSimulation::step)
       .def_property_readonly("divergence_time", &PaperSimulation::divergence_time)
       .def_property_readonly("reset_times", &PaperSimulation::reset_times)
-      .def_property_readonly(
-          "state", [](const PaperSimulation& s) { return Eigen::VectorXd(s.state()); })
-      .def("recording", [](const PaperSimulation& s) {
-        const Recording r = s.recording();
-        py::dict out;
-        out["t"] = r.t;
-        out["q"] = r.q;
-        out["dq"] = r.dq;
-        out["e1"] = r.e1;
-        out["e2"] = r.e2;
-        out["tau"] = r.tau;
-        out["u_hat"] = r.u_hat;
-        out["mu"] = r.mu;
-        out["probe"] = r.probe;
-        out["critic_weights"] = r.critic_weights;
-        out["actor_weights"] = r.actor_weights;
-        out["hjb_error"] = r.hjb_error;
-        return out;
-      }, "Recorded rows so far: dict of arrays t (n,), q ... (n, 2), weights (n, 8).");
+      .def_property_readonly("state",
+                             [](const PaperSimulation& s) { return Eigen::VectorXd(s.state()); })
+      .def(
+          "recording",
+          [](const PaperSimulation& s) {
+            const Recording r = s.recording();
+            py::dict out;
+            out["t"] = r.t;
+            out["q"] = r.q;
+            out["dq"] = r.dq;
+            out["e1"] = r.e1;
+            out["e2"] = r.e2;
+            out["tau"] = r.tau;
+            out["u_hat"] = r.u_hat;
+            out["mu"] = r.mu;
+            out["probe"] = r.probe;
+            out["critic_weights"] = r.critic_weights;
+            out["actor_weights"] = r.actor_weights;
+            out["hjb_error"] = r.hjb_error;
+            return out;
+          },
+          "Recorded rows so far: dict of arrays t (n,), q ... (n, 2), weights (n, 8).");
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 // Actor: the policy of eq. (20) and its gradient update law with projection (eq. 26).
 //   u_hat = -1/2 R^-1 g^T (dphi/dx)^T Wa = -1/2 R^-1 B^T Wa,   B = (dphi/dx) g   (N x m)
 //   dWa = proj{ -eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps_hjb - eta_a2 (Wa - Wc) }
-// B R^-1 B^T is the ERRATA's grad(phi) G grad(phi)^T with G = g R^-1 g^T. The law is the gradient of
-// eps_hjb^2 up to a factor 1/2 that eta_a1 absorbs. proj keeps ||Wa|| <= weight_bound: at the boundary
-// the outward radial component of the rate is removed.
+// B R^-1 B^T is the ERRATA's grad(phi) G grad(phi)^T with G = g R^-1 g^T. The law is the gradient
+// of eps_hjb^2 up to a factor 1/2 that eta_a1 absorbs. proj keeps ||Wa|| <= weight_bound: at the
+// boundary the outward radial component of the rate is removed.
 #pragma once
 
 #include "adparm/types.hpp"
@@ -43,9 +43,9 @@ class Actor {
                      double hjb_error, const Vector& Wa, const Vector& Wc) const {
     const Vector difference = Wa - Wc;
     const Input projected = R_inverse * (B.transpose() * difference);
-    Vector rate = (-settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
-                      (B * projected) -
-                  settings_.eta_a2 * difference;
+    Vector rate =
+        (-settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) * (B * projected) -
+        settings_.eta_a2 * difference;
     return project(Wa, rate);
   }
 

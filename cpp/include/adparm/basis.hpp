@@ -3,7 +3,8 @@
 //   phi(x) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos x2, x4^2, x3 x4, x3 x4 cos x2]
 // (cos x2 = cos q2 because qd = 0). Its exact weights for V* = x^T blockdiag(K, M) x are
 //   W* = [K11, K22, 2 K12, p1, 2 p3, p2, 2 p2, 2 p3]   (paper: [4, 6, -8, 5, 2, 1, 2, 2]).
-// Another basis offers kSize, kStateDim, Vector, Jacobian and evaluate(); the loop takes it unchanged.
+// Another basis offers kSize, kStateDim, Vector, Jacobian and evaluate(); the loop takes it
+// unchanged.
 #pragma once
 
 #include <cmath>
@@ -23,10 +24,10 @@ struct PaperBasis {
     const double c = std::cos(x2);
     const double s = std::sin(x2);
     phi << x1 * x1, x2 * x2, x1 * x2, x3 * x3, x3 * x3 * c, x4 * x4, x3 * x4, x3 * x4 * c;
-    jacobian << 2.0 * x1, 0.0, 0.0, 0.0,  //
-        0.0, 2.0 * x2, 0.0, 0.0,          //
-        x2, x1, 0.0, 0.0,                 //
-        0.0, 0.0, 2.0 * x3, 0.0,          //
+    jacobian << 2.0 * x1, 0.0, 0.0, 0.0,       //
+        0.0, 2.0 * x2, 0.0, 0.0,               //
+        x2, x1, 0.0, 0.0,                      //
+        0.0, 0.0, 2.0 * x3, 0.0,               //
         0.0, -x3 * x3 * s, 2.0 * x3 * c, 0.0,  //
         0.0, 0.0, 0.0, 2.0 * x4,               //
         0.0, 0.0, x4, x3,                      //

@@ -1,4 +1,5 @@
-// The closed loop of Figure 1 as one ODE system for RK4 (fixed parameters here, evolving state apart):
+// The closed loop of Figure 1 as one ODE system for RK4 (fixed parameters here, evolving state
+// apart):
 //   state = [q (2), dq (2), Wc (N), Wa (N), Gamma (N x N, column-major), nu (2)]
 // At each evaluation, with x = [e1; e2] (error_system.hpp):
 //   u_hat  = -1/2 R^-1 g^T (dphi/dx)^T Wa                         (eq. 20)
@@ -48,10 +49,10 @@ class ClosedLoop {
 
   struct Outputs {
     TrackingErrors errors;
-    Vec2 tau;       // applied joint torque
-    Vec2 u_hat;     // actor's input, eq. (20)
-    Vec2 mu;        // RISE feedback, eq. (27)
-    Vec2 probe;     // probing signal
+    Vec2 tau;                // applied joint torque
+    Vec2 u_hat;              // actor's input, eq. (20)
+    Vec2 mu;                 // RISE feedback, eq. (27)
+    Vec2 probe;              // probing signal
     double hjb_error = 0.0;  // eq. (21)
   };
 
@@ -73,9 +74,9 @@ class ClosedLoop {
     check_size(settings.actor_weights, kBasisSize, 1, "init.actor_weights");
     check_finite(settings.critic_weights, "init.critic_weights");
     check_finite(settings.actor_weights, "init.actor_weights");
-    const TrackingErrors initial = tracking_errors(settings.task.q0, settings.task.dq0,
-                                                   settings.task.qd, Vec2::Zero(),
-                                                   settings.control.alpha1);
+    const TrackingErrors initial =
+        tracking_errors(settings.task.q0, settings.task.dq0, settings.task.qd, Vec2::Zero(),
+                        settings.control.alpha1);
     rise_ = Rise(settings.control.rise, initial.e2);
     initial_state_.setZero();
     initial_state_.template segment<kDof>(kQ) = settings.task.q0;
@@ -132,8 +133,8 @@ class ClosedLoop {
         actor_.weight_rate(hjb.input_gradient, cost_.R_inverse(), hjb.omega, hjb.error,
                            actor_weights, critic_weights);  // eq. (26)
 
-    const Vec2 mu = rise_.feedback(errors.e2, nu);                          // eq. (27)
-    rate.template segment<kDof>(kNu) = rise_.integral_rate(errors.e2);      // eq. (28)
+    const Vec2 mu = rise_.feedback(errors.e2, nu);                      // eq. (27)
+    rate.template segment<kDof>(kNu) = rise_.integral_rate(errors.e2);  // eq. (28)
     const Vec2 u = hjb.u_hat + signals.probe;
     const Vec2 tau = error_system_.feedforward(model_terms, dq, errors) + mu - u;
 

@@ -3,8 +3,8 @@
 //   dWc   = -eta_c Gamma omega eps_hjb / rho                 (eq. 23)
 //   dGamma = -eta_c Gamma omega omega^T Gamma / rho           (eq. 24)
 // Gamma is reset to gamma0 I when its smallest eigenvalue falls below epsilon_T. The test needs no
-// eigen-decomposition: lambda_min(Gamma) >= epsilon_T exactly when Gamma - epsilon_T I has a Cholesky
-// factor.
+// eigen-decomposition: lambda_min(Gamma) >= epsilon_T exactly when Gamma - epsilon_T I has a
+// Cholesky factor.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -38,7 +38,8 @@ class Critic {
 
   const CriticSettings& settings() const { return settings_; }
 
-  // eqs. (23)-(24); Gamma is symmetric, so Gamma omega omega^T Gamma = (Gamma omega)(Gamma omega)^T.
+  // eqs. (23)-(24); Gamma is symmetric, so Gamma omega omega^T Gamma = (Gamma omega)(Gamma
+  // omega)^T.
   template <class CovarianceIn, class CovarianceOut>
   void rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma, Vector& weight_rate,
              CovarianceOut&& gamma_rate) const {
@@ -57,9 +58,7 @@ class Critic {
     return cholesky.info() != Eigen::Success;
   }
 
-  Covariance initial_covariance() const {
-    return settings_.gamma0 * Covariance::Identity();
-  }
+  Covariance initial_covariance() const { return settings_.gamma0 * Covariance::Identity(); }
 
  private:
   CriticSettings settings_{};

@@ -6,8 +6,8 @@
 //
 // (the paper prints g = [0; -M^-1], the same system with the opposite sign of u). The torque that
 // realises an input u is tau = h_hat + mu - u, with h_hat the feedforward of the model the
-// controller believes and mu the RISE term (rise.hpp). For a constant qd the joint state follows from x:
-// q = qd - e1, dq = alpha1 e1 - e2, which is what makes f a function of x alone.
+// controller believes and mu the RISE term (rise.hpp). For a constant qd the joint state follows
+// from x: q = qd - e1, dq = alpha1 e1 - e2, which is what makes f a function of x alone.
 #pragma once
 
 #include "adparm/types.hpp"
@@ -21,8 +21,8 @@ struct TrackingErrors {
   Vec4 x() const { return (Vec4() << e1, e2).finished(); }
 };
 
-inline TrackingErrors tracking_errors(const Vec2& q, const Vec2& dq, const Vec2& qd, const Vec2& dqd,
-                                      const Mat2& alpha1) {
+inline TrackingErrors tracking_errors(const Vec2& q, const Vec2& dq, const Vec2& qd,
+                                      const Vec2& dqd, const Mat2& alpha1) {
   TrackingErrors errors;
   errors.e1 = qd - q;
   errors.e2 = (dqd - dq) + alpha1 * errors.e1;

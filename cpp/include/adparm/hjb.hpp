@@ -18,14 +18,15 @@ struct HjbEvaluation {
   typename ActorType::InputGradient input_gradient;  // B = (dphi/dx) g(x)
   typename ActorType::Input u_hat;                   // eq. (20)
   typename Basis::Vector omega;
-  double error = 0.0;                                // eq. (21)
+  double error = 0.0;  // eq. (21)
 };
 
 // Evaluates eq. (21) at x, given the drift f(x) and M^-1 of the model at the matching joint state
 // (g(x) = [0; M^-1]).
 template <class Basis, int Dof>
-void evaluate_hjb(const Vec4& x, const Vec4& drift, const Eigen::Matrix<double, Dof, Dof>& mass_inverse,
-                  const QuadraticCost& cost, const typename Basis::Vector& critic_weights,
+void evaluate_hjb(const Vec4& x, const Vec4& drift,
+                  const Eigen::Matrix<double, Dof, Dof>& mass_inverse, const QuadraticCost& cost,
+                  const typename Basis::Vector& critic_weights,
                   const typename Basis::Vector& actor_weights, HjbEvaluation<Basis, Dof>& out) {
   Basis::evaluate(x, out.phi, out.jacobian);
   out.input_gradient.noalias() = out.jacobian.template rightCols<Dof>() * mass_inverse;
@@ -45,8 +46,8 @@ double hjb_error(const ErrorSystem<Arm>& system, const QuadraticCost& cost, cons
   typename Arm::Terms terms;
   system.model().compute(q, dq, terms);
   HjbEvaluation<Basis, Arm::kDof> evaluation;
-  evaluate_hjb<Basis, Arm::kDof>(x, system.drift(x, terms), terms.mass_inverse, cost, critic_weights,
-                                 actor_weights, evaluation);
+  evaluate_hjb<Basis, Arm::kDof>(x, system.drift(x, terms), terms.mass_inverse, cost,
+                                 critic_weights, actor_weights, evaluation);
   return evaluation.error;
 }
 

@@ -1,6 +1,7 @@
-// The arm alone, under tau = G(q) (gravity exactly compensated) or tau = 0, integrated with the same
-// RK4. With no friction and no disturbance, gravity compensation leaves M ddq + C dq = 0 and so keeps
-// the kinetic energy dq^T M dq / 2 constant (dM/dt - 2C skew): a property test of the model and RK4.
+// The arm alone, under tau = G(q) (gravity exactly compensated) or tau = 0, integrated with the
+// same RK4. With no friction and no disturbance, gravity compensation leaves M ddq + C dq = 0 and
+// so keeps the kinetic energy dq^T M dq / 2 constant (dM/dt - 2C skew): a property test of the
+// model and RK4.
 #pragma once
 
 #include <vector>
@@ -13,7 +14,7 @@ namespace adparm {
 template <class Arm>
 class OpenLoopArm {
  public:
-  using State = Vec4;  // [q; dq]
+  using State = Vec4;        // [q; dq]
   using TimeSignals = Vec2;  // tau_d(t)
   struct Outputs {};
 

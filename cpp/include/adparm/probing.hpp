@@ -12,7 +12,7 @@ namespace adparm {
 struct ProbeSettings {
   Vec2 amplitude = Vec2::Zero();
   double until = 0.0;
-  Eigen::VectorXd frequencies;                  // rad/s, one entry per sinusoid
+  Eigen::VectorXd frequencies;                      // rad/s, one entry per sinusoid
   Eigen::Matrix<double, 2, Eigen::Dynamic> phases;  // rad, 2 x frequencies.size()
 };
 

@@ -1,6 +1,7 @@
 // Classical fixed-step Runge-Kutta 4 for any System offering
 //   State, TimeSignals, Outputs,
-//   time_signals(t, TimeSignals&) and derivative(const TimeSignals&, const State&, State&, Outputs*).
+//   time_signals(t, TimeSignals&) and derivative(const TimeSignals&, const State&, State&,
+//   Outputs*).
 // Signals that depend on time only (disturbance, probing) are evaluated once per distinct time: the
 // two midpoint stages share them, and a step's end signals are the next step's start signals.
 #pragma once
