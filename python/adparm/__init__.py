@@ -4,7 +4,6 @@ A C++ core (adparm._core) integrates the closed loop of the paper; this package 
 runs it and returns NumPy arrays.
 """
 
-from ._core import __doc__ as _core_doc  # noqa: F401  (fails early if the extension is missing)
 from .config import (
     ActorConfig,
     Config,

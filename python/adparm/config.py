@@ -333,7 +333,8 @@ class ProbeConfig:
 class SimConfig:
     """Fixed-step RK4: horizon T (s), step dt (s), record every record_every-th step, and the
     bound on |q|, |dq|, |Wc|, |Wa| beyond which a run stops as diverged. The paper prints no step;
-    dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices."""
+    dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T is not a
+    multiple of dt, the last step is shortened to end exactly at T."""
 
     T: float = 150.0
     dt: float = 1e-3

@@ -4,6 +4,8 @@
 // allocated once, up front, so a step does no heap allocation.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "adparm/closed_loop.hpp"
@@ -47,10 +49,13 @@ class Simulation {
     check_positive(sim_.dt, "sim.dt");
     check_positive(sim_.divergence_bound, "sim.divergence_bound");
     if (sim_.record_every < 1) throw std::invalid_argument("sim.record_every: must be >= 1");
-    const double steps = std::ceil(sim_.T / sim_.dt - 1e-9);
+    // T / dt steps, rounded up (a ratio within 1e-12 of an integer counts as that integer); the
+    // last step is shortened to end exactly at T.
+    const double steps = std::ceil(sim_.T / sim_.dt * (1.0 - 1e-12));
     if (steps > 1e10) throw std::invalid_argument("sim.T / sim.dt: more than 1e10 steps");
     steps_ = static_cast<long>(steps);
     state_ = system_.initial_state();
+    reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, System::kDof, System::kBasisSize);
     record(0.0, state_);
   }
@@ -60,7 +65,7 @@ class Simulation {
     long taken = 0;
     while (status_ == RunStatus::running && taken < max_steps) {
       const double t_begin = step_ * sim_.dt;
-      const double t_end = (step_ + 1) * sim_.dt;
+      const double t_end = std::min((step_ + 1) * sim_.dt, sim_.T);
       previous_state_ = state_;
       rk4_step(system_, t_begin, t_end, state_, workspace_);
       ++step_;
