@@ -123,6 +123,9 @@ def _check_arm(p1: float, p2: float, p3: float, section: str) -> None:
         )
 
 
+_ARM_KEYS = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+
+
 # --- sections ---------------------------------------------------------------------------------
 
 
@@ -141,13 +144,11 @@ class PlantConfig:
     disturbance: Vector = (0.1, 0.1)
 
     def __post_init__(self) -> None:
-        for key in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous"):
+        for key in _ARM_KEYS:
             object.__setattr__(self, key, _scalar(getattr(self, key), f"plant.{key}"))
         object.__setattr__(self, "disturbance", _vector(self.disturbance, "plant.disturbance", 2))
         _check_arm(self.p1, self.p2, self.p3, "plant")
 
-
-_ARM_KEYS = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
 
 
 @dataclass(frozen=True)

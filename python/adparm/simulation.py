@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .config import Config
+from .config import _ARM_KEYS, Config
 
 __all__ = ["SimulationDiverged", "SimulationResult", "core_settings", "simulate"]
 
@@ -24,7 +24,7 @@ def core_settings(config: Config) -> _core.Settings:
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     settings = _core.Settings()
     plant = _core.ArmParameters()
-    for key in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous"):
+    for key in _ARM_KEYS:
         setattr(plant, key, getattr(config.plant, key))
     model = _core.ArmParameters()
     for key, value in config.model.resolve(config.plant).items():

@@ -113,13 +113,10 @@ class ClosedLoop {
         tracking_errors(q, dq, error_system_.qd(), Vec2::Zero(), error_system_.alpha1());
     const Vec4 x = errors.x();
 
-    typename Arm::Terms plant_terms, model_terms;
+    typename Arm::Terms plant_terms, believed_terms;
     plant_.compute(q, dq, plant_terms);
-    if (model_is_plant_) {
-      model_terms = plant_terms;
-    } else {
-      error_system_.model().compute(q, dq, model_terms);
-    }
+    if (!model_is_plant_) error_system_.model().compute(q, dq, believed_terms);
+    const typename Arm::Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
 
     HjbEvaluation<Basis, kDof> hjb;
     evaluate_hjb<Basis, kDof>(x, error_system_.drift(x, model_terms), model_terms.mass_inverse,
