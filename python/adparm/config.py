@@ -150,7 +150,6 @@ class PlantConfig:
         _check_arm(self.p1, self.p2, self.p3, "plant")
 
 
-
 @dataclass(frozen=True)
 class ModelConfig:
     """The arm the controller believes (feedforward h of eq. 5 and f, g of eq. 9). A key left
