@@ -88,7 +88,7 @@ def probe(config: Config, t: float) -> np.ndarray:
         return np.zeros(2)
     w = np.array(config.probe.frequencies)
     phases = config.probe.phase_matrix()
-    return np.array(config.probe.amplitude) * np.sin(w * t + phases).sum(axis=1)
+    return (config.probe.amplitude_matrix() * np.sin(w * t + phases)).sum(axis=1)
 
 
 def initial_state(config: Config) -> np.ndarray:

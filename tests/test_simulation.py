@@ -33,9 +33,9 @@ def test_paper_preset_runs_and_records(paper_result) -> None:
 
 def test_paper_preset_keeps_q_bounded_and_reaches_the_set_point(paper_result) -> None:
     r = paper_result
-    assert np.abs(r.q).max() < 1.0
-    after_probe = r.t >= r.config.probe.until + 5.0
-    assert np.abs(r.e1[after_probe]).max() < 1e-3
+    assert np.abs(r.q).max() < 1.2  # the probe swings the arm by up to about 1 rad
+    after_probe = r.t >= r.config.probe.until + 10.0
+    assert np.abs(r.e1[after_probe]).max() < 1e-4
     np.testing.assert_allclose(r.e1, np.array(r.config.task.qd) - r.q, atol=1e-15)
 
 

@@ -55,7 +55,7 @@ class ActorSettings:
     def __init__(self) -> None: ...
 
 class ProbeSettings:
-    """amplitude (2,), until, frequencies (n,), phases (2, n)."""
+    """amplitude (2, n), until, frequencies (n,), phases (2, n)."""
 
     until: float
     def __init__(self) -> None: ...

@@ -238,12 +238,16 @@ class ControlConfig:
 @dataclass(frozen=True)
 class CriticConfig:
     """Normalised least squares of eqs. (23)-(24): gain eta_c, normalisation nu,
-    Gamma(0) = gamma0 I, reset to gamma0 I when lambda_min(Gamma) < epsilon_T."""
+    Gamma(0) = gamma0 I, reset to gamma0 I when lambda_min(Gamma) < epsilon_T.
+
+    Paper values except epsilon_T = 1e-6 (paper: 1e-3). With 1e-3 Gamma is reset every few tens
+    of ms under strong excitation, each window is too short to inform the weakly excited e1
+    direction, and the critic stalls 10-40 % off W*; see README, "Probing"."""
 
     eta_c: float = 800.0
     nu: float = 1.0
     gamma0: float = 100.0
-    epsilon_T: float = 0.001
+    epsilon_T: float = 1e-6
 
     def __post_init__(self) -> None:
         for key in ("eta_c", "nu", "epsilon_T"):
@@ -295,38 +299,55 @@ class InitConfig:
 
 @dataclass(frozen=True)
 class ProbeConfig:
-    """Probing signal added to the applied input u for t < until (persistence of excitation):
-    probe_j(t) = amplitude_j * sum_k sin(frequencies_k t + phases_jk).
+    """Probing signal added to the applied input u (persistence of excitation, eq. 25):
+    probe_j(t) = ramp(t) sum_k amplitude_jk sin(frequencies_k t + phases_jk) for t < until,
+    ramp(t) = min(1, t / ramp).
 
-    The paper says only that "a probing signal is added". Defaults: amplitude 2 N m per sinusoid,
-    frequencies 1, 2.7, 5.3, 9.1 rad/s, sine on joint 1 and cosine on joint 2 (phases 0 and pi/2),
-    until t = 100 s. amplitude may be one number for both joints; until = 0 turns probing off."""
+    The paper says only that "a probing signal is added"; the design is ours (README, "Probing").
+    amplitude is one number (both joints), a pair (per joint, every sinusoid) or a 2 x n matrix
+    (per joint and sinusoid, N m). Default: 4 sinusoids at 1, 2.7, 5.3, 9.1 rad/s, each with the
+    torque direction [71, 23] N m = 75 N m along M(qd) v_fast, where v_fast is the eigenvector of
+    alpha1 with the larger eigenvalue (23.9 1/s): that mode of e1 is filtered hardest and is the
+    critic's least excited direction. Phases k rad on both joints (None), so each sinusoid keeps
+    that direction; until 100 s, no ramp; until = 0 turns probing off."""
 
-    amplitude: Vector = (2.0, 2.0)
+    amplitude: Vector | Matrix = (71.0, 23.0)
     until: float = 100.0
+    ramp: float = 0.0
     frequencies: Vector = (1.0, 2.7, 5.3, 9.1)
-    phases: Matrix | None = None  # None: row 0 all 0, row 1 all pi/2
+    phases: Matrix | None = None  # None: phase k rad for sinusoid k, on both joints
 
     def __post_init__(self) -> None:
-        amplitude = self.amplitude
-        if isinstance(amplitude, numbers.Real) and not isinstance(amplitude, bool):
-            amplitude = (amplitude, amplitude)
-        object.__setattr__(self, "amplitude", _vector(amplitude, "probe.amplitude", 2))
-        object.__setattr__(self, "until", _scalar(self.until, "probe.until", minimum=0.0))
         object.__setattr__(
             self, "frequencies", _vector(self.frequencies, "probe.frequencies", None)
         )
+        n = len(self.frequencies)
+        amplitude = self.amplitude
+        if isinstance(amplitude, numbers.Real) and not isinstance(amplitude, bool):
+            amplitude = (amplitude, amplitude)
+        if np.ndim(amplitude) == 2:
+            amplitude = _matrix(amplitude, "probe.amplitude", 2, n)
+        else:
+            amplitude = _vector(amplitude, "probe.amplitude", 2)
+        object.__setattr__(self, "amplitude", amplitude)
+        object.__setattr__(self, "until", _scalar(self.until, "probe.until", minimum=0.0))
+        object.__setattr__(self, "ramp", _scalar(self.ramp, "probe.ramp", minimum=0.0))
         if self.phases is not None:
-            object.__setattr__(
-                self, "phases", _matrix(self.phases, "probe.phases", 2, len(self.frequencies))
-            )
+            object.__setattr__(self, "phases", _matrix(self.phases, "probe.phases", 2, n))
+
+    def amplitude_matrix(self) -> np.ndarray:
+        """Amplitudes as a (2, n) array (one column per sinusoid)."""
+        amplitude = np.array(self.amplitude, dtype=float)
+        if amplitude.ndim == 1:
+            amplitude = np.repeat(amplitude[:, None], len(self.frequencies), axis=1)
+        return amplitude.reshape(2, len(self.frequencies))
 
     def phase_matrix(self) -> np.ndarray:
         """Phases as a (2, n) array, with the default filled in."""
         if self.phases is not None:
             return np.array(self.phases, dtype=float).reshape(2, len(self.frequencies))
         n = len(self.frequencies)
-        return np.vstack([np.zeros(n), np.full(n, 0.5 * np.pi)])
+        return np.vstack([np.arange(n, dtype=float)] * 2)
 
 
 @dataclass(frozen=True)

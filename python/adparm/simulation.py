@@ -66,8 +66,9 @@ def core_settings(config: Config) -> _core.Settings:
     settings.actor_weights = np.array(config.init.actor_weights)
 
     probe = _core.ProbeSettings()
-    probe.amplitude = np.array(config.probe.amplitude)
+    probe.amplitude = config.probe.amplitude_matrix()
     probe.until = config.probe.until
+    probe.ramp = config.probe.ramp
     probe.frequencies = np.array(config.probe.frequencies)
     probe.phases = config.probe.phase_matrix()
     settings.probe = probe

@@ -45,10 +45,11 @@ void bind_settings(py::module_& m) {
       .def_readwrite("eta_a2", &ActorSettings::eta_a2)
       .def_readwrite("weight_bound", &ActorSettings::weight_bound);
   py::class_<ProbeSettings>(m, "ProbeSettings",
-                            "amplitude (2,), until, frequencies (n,), phases (2, n).")
+                            "amplitude (2, n), until, ramp, frequencies (n,), phases (2, n).")
       .def(py::init<>())
       .def_readwrite("amplitude", &ProbeSettings::amplitude)
       .def_readwrite("until", &ProbeSettings::until)
+      .def_readwrite("ramp", &ProbeSettings::ramp)
       .def_readwrite("frequencies", &ProbeSettings::frequencies)
       .def_readwrite("phases", &ProbeSettings::phases);
   py::class_<TaskSettings>(m, "TaskSettings", "q0 (2,), dq0 (2,), qd (2,).")

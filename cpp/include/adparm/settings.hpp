@@ -56,13 +56,16 @@ inline Settings paper_settings() {
   s.R = 0.25 * Mat2::Identity();
   s.critic_weights = Eigen::VectorXd::Ones(8);
   s.actor_weights = Eigen::VectorXd::Ones(8);
-  s.probe.amplitude = Vec2(2.0, 2.0);
   s.probe.until = 100.0;
   s.probe.frequencies.resize(4);
   s.probe.frequencies << 1.0, 2.7, 5.3, 9.1;
+  s.probe.amplitude.resize(2, 4);
+  s.probe.amplitude.row(0).setConstant(71.0);  // N m; direction M(qd) v_fast (README)
+  s.probe.amplitude.row(1).setConstant(23.0);
   s.probe.phases.resize(2, 4);
-  s.probe.phases.row(0).setZero();
-  s.probe.phases.row(1).setConstant(0.5 * M_PI);
+  s.probe.phases.row(0) << 0.0, 1.0, 2.0, 3.0;
+  s.probe.phases.row(1) = s.probe.phases.row(0);
+  s.critic.epsilon_T = 1e-6;  // the paper's 1e-3 stalls; README, "Probing"
   return s;
 }
 

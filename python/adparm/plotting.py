@@ -1,0 +1,184 @@
+"""Figures of a run (matplotlib): the paper's Figures 2-4 plus torques and the probing signal.
+
+Each function takes a :class:`adparm.SimulationResult` and returns a matplotlib Figure sized for a
+paper column pair (7 x 4.2 in, 9 pt text). Weights are labelled with the basis functions of
+adparm.BASIS_NAMES; the analytic W* (ERRATA.md) is drawn dashed in the same colour when it exists.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .optimal import BASIS_NAMES, optimal_weights
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+    from .simulation import SimulationResult
+
+__all__ = [
+    "FIGURES",
+    "plot_actor_weights",
+    "plot_critic_weights",
+    "plot_errors",
+    "plot_result",
+    "plot_torques",
+    "save_figures",
+]
+
+_FIGSIZE = (7.0, 4.2)
+_RC = {
+    "font.size": 9,
+    "axes.titlesize": 9,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "svg.hashsalt": "adparm",  # reproducible SVG ids
+}
+
+
+def _figure(rows: int = 1) -> Figure:
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=_FIGSIZE, layout="constrained")
+    figure.subplots(rows, 1, sharex=True, squeeze=False)
+    return figure
+
+
+def _known_optimum(result: SimulationResult) -> np.ndarray | None:
+    try:
+        return optimal_weights(result.config)
+    except ValueError:
+        return None
+
+
+def _weights(result: SimulationResult, weights: np.ndarray, title: str) -> Figure:
+    import matplotlib
+
+    with matplotlib.rc_context(_RC):
+        figure = _figure()
+        axes = figure.axes[0]
+        target = _known_optimum(result)
+        colours = matplotlib.colormaps["tab10"].colors
+        for i, name in enumerate(BASIS_NAMES):
+            colour = colours[i % len(colours)]
+            axes.plot(result.t, weights[:, i], color=colour, lw=1.1, label=f"${_tex(name)}$")
+            if target is not None:
+                axes.axhline(target[i], color=colour, lw=0.9, ls="--")
+        axes.set_xlabel("time t (s)")
+        axes.set_ylabel("weight (-)")
+        axes.set_title(title + ("  (dashed: analytic W*)" if target is not None else ""))
+        axes.legend(ncols=4, loc="upper right", framealpha=0.85)
+        _mark_probe_end(axes, result)
+    return figure
+
+
+def _tex(name: str) -> str:
+    return name.replace("cos x2", r"\cos x_2").replace("x", "x_").replace("x__", "x_")
+
+
+def _mark_probe_end(axes: Any, result: SimulationResult) -> None:
+    until = result.config.probe.until
+    if result.t.size and 0.0 < until < result.t[-1]:
+        axes.axvline(until, color="0.4", lw=0.8, ls=":")
+
+
+def plot_critic_weights(result: SimulationResult) -> Figure:
+    """Figure 2: critic weights Wc(t) (eq. 23) with W* dashed."""
+    return _weights(result, result.critic_weights, "Critic weights $\\hat W_c$ (Figure 2)")
+
+
+def plot_actor_weights(result: SimulationResult) -> Figure:
+    """Figure 3: actor weights Wa(t) (eq. 26) with W* dashed."""
+    return _weights(result, result.actor_weights, "Actor weights $\\hat W_a$ (Figure 3)")
+
+
+def plot_errors(result: SimulationResult) -> Figure:
+    """Figure 4: joint angles q, tracking errors e1 = qd - q and filtered errors e2."""
+    import matplotlib
+
+    with matplotlib.rc_context(_RC):
+        figure = _figure(3)
+        top, middle, bottom = figure.axes
+        for j in range(2):
+            top.plot(result.t, result.q[:, j], lw=1.0, label=f"$q_{j + 1}$")
+            middle.plot(result.t, result.e1[:, j], lw=1.0, label=f"$e_{{1,{j + 1}}}$")
+            bottom.plot(result.t, result.e2[:, j], lw=1.0, label=f"$e_{{2,{j + 1}}}$")
+        top.set_ylabel("q (rad)")
+        middle.set_ylabel("$e_1$ (rad)")
+        bottom.set_ylabel("$e_2$ (rad/s)")
+        bottom.set_xlabel("time t (s)")
+        top.set_title("Joint angles and tracking errors (Figure 4)")
+        for axes in figure.axes:
+            axes.legend(loc="upper right", ncols=2)
+            _mark_probe_end(axes, result)
+    return figure
+
+
+def plot_torques(result: SimulationResult) -> Figure:
+    """Applied joint torques tau and the probing signal."""
+    import matplotlib
+
+    with matplotlib.rc_context(_RC):
+        figure = _figure(2)
+        top, bottom = figure.axes
+        for j in range(2):
+            top.plot(result.t, result.tau[:, j], lw=0.8, label=f"$\\tau_{j + 1}$")
+            bottom.plot(result.t, result.probe[:, j], lw=0.8, label=f"probe$_{j + 1}$")
+        top.set_ylabel("torque $\\tau$ (N m)")
+        bottom.set_ylabel("probing signal (N m)")
+        bottom.set_xlabel("time t (s)")
+        top.set_title("Applied torques and probing signal")
+        for axes in figure.axes:
+            axes.legend(loc="upper right", ncols=2)
+            _mark_probe_end(axes, result)
+    return figure
+
+
+#: Figure name -> function; the names are the file stems written by save_figures.
+FIGURES = {
+    "fig2_critic_weights": plot_critic_weights,
+    "fig3_actor_weights": plot_actor_weights,
+    "fig4_errors": plot_errors,
+    "torques": plot_torques,
+}
+
+
+def plot_result(result: SimulationResult, which: Iterable[str] | None = None) -> dict[str, Figure]:
+    """The figures named in ``which`` (default all of FIGURES), by name."""
+    names = list(FIGURES) if which is None else list(which)
+    unknown = [name for name in names if name not in FIGURES]
+    if unknown:
+        raise ValueError(f"which: unknown figure(s) {unknown}; known: {', '.join(FIGURES)}")
+    return {name: FIGURES[name](result) for name in names}
+
+
+def save_figures(
+    figures: dict[str, Figure], directory: str | Path, formats: Iterable[str] = ("png", "svg")
+) -> list[Path]:
+    """Write each figure as ``<directory>/<name>.<format>``; returns the paths written."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, figure in figures.items():
+        for fmt in formats:
+            path = directory / f"{name}.{fmt}"
+            figure.savefig(path, dpi=200, metadata=_metadata(fmt))
+            written.append(path)
+    return written
+
+
+def _metadata(fmt: str) -> dict[str, Any] | None:
+    # Leave out creation dates so that the same run writes the same files.
+    if fmt == "svg":
+        return {"Date": None}
+    if fmt == "pdf":
+        return {"CreationDate": None}
+    return None
