@@ -88,7 +88,9 @@ def probe(config: Config, t: float) -> np.ndarray:
         return np.zeros(2)
     w = np.array(config.probe.frequencies)
     phases = config.probe.phase_matrix()
-    return (config.probe.amplitude_matrix() * np.sin(w * t + phases)).sum(axis=1)
+    value = (config.probe.amplitude_matrix() * np.sin(w * t + phases)).sum(axis=1)
+    ramp = config.probe.ramp
+    return value * (t / ramp if t < ramp else 1.0)
 
 
 def initial_state(config: Config) -> np.ndarray:

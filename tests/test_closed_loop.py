@@ -61,9 +61,11 @@ def random_config(rng: np.random.Generator) -> adparm.Config:
                 "weight_bound": 5.0,
             },
             "probe": {
-                "amplitude": rng.uniform(0, 3, 2),
+                "amplitude": rng.uniform(-3, 3, (2, 3)),
                 "frequencies": rng.uniform(0, 10, 3),
+                "phases": rng.uniform(0, 6.3, (2, 3)),
                 "until": 5.0,
+                "ramp": rng.uniform(0, 10),
             },
         }
     )

@@ -20,7 +20,9 @@ from .config import (
     paper_config,
 )
 from .optimal import BASIS_NAMES, hjb_residual, optimal_weights
+from .report import write_report
 from .simulation import SimulationDiverged, SimulationResult, simulate
+from .storage import load_result
 
 __version__ = "0.1.0"
 
@@ -41,7 +43,9 @@ __all__ = [
     "TaskConfig",
     "hjb_residual",
     "load_config",
+    "load_result",
     "optimal_weights",
     "paper_config",
     "simulate",
+    "write_report",
 ]

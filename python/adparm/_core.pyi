@@ -55,9 +55,10 @@ class ActorSettings:
     def __init__(self) -> None: ...
 
 class ProbeSettings:
-    """amplitude (2, n), until, frequencies (n,), phases (2, n)."""
+    """amplitude (2, n), until, ramp, frequencies (n,), phases (2, n)."""
 
     until: float
+    ramp: float
     def __init__(self) -> None: ...
     @property
     def amplitude(self) -> _FloatArray:

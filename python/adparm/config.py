@@ -458,6 +458,12 @@ class Config:
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
 
+    def to_toml(self) -> str:
+        """The config as TOML text that load_config reads back to an equal config."""
+        import tomli_w
+
+        return tomli_w.dumps(self.to_dict())
+
     def updated(self, changes: Mapping[str, Any]) -> Config:
         """A copy with ``changes`` (``{section: {key: value}}``) applied, e.g.
         ``config.updated({"critic": {"eta_c": 100}})``."""

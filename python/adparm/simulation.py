@@ -3,13 +3,20 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from . import _core
 from .config import _ARM_KEYS, Config
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+    from matplotlib.figure import Figure
 
 __all__ = ["SimulationDiverged", "SimulationResult", "core_settings", "simulate"]
 
@@ -143,6 +150,36 @@ class SimulationResult:
         out["wall_time"] = self.wall_time
         return out
 
+    def plot(self, which: Iterable[str] | None = None) -> dict[str, Figure]:
+        """Figures 2-4 of the paper and the torques, as matplotlib figures by name (see
+        adparm.plotting.FIGURES); ``which`` picks some of them."""
+        from .plotting import plot_result
+
+        return plot_result(self, which)
+
+    def save(self, path: str | Path) -> Path:
+        """Write to ``path``: ``.npz`` (everything, for adparm.load_result) or ``.csv``."""
+        from .storage import save_result
+
+        return save_result(self, path)
+
+    def to_dataframe(self) -> pandas.DataFrame:
+        """The time series as a pandas DataFrame (columns of adparm.storage.columns()).
+        Needs pandas (``pip install pandas``)."""
+        try:
+            import pandas
+        except ImportError as error:  # pragma: no cover - pandas is in the test extra
+            raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
+        from .storage import columns, table
+
+        return pandas.DataFrame(table(self), columns=columns())
+
+    def summary(self, tolerance: float = 0.02) -> dict[str, Any]:
+        """The metrics of summary.json (adparm.summary.summarize)."""
+        from .summary import summarize
+
+        return summarize(self, tolerance=tolerance)
+
     def __repr__(self) -> str:
         return (
             f"SimulationResult(status={self.status!r}, rows={self.t.size}, "
@@ -162,15 +199,26 @@ class SimulationDiverged(RuntimeError):
         self.time = time
 
 
-def simulate(config: Config) -> SimulationResult:
+def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
     """Simulate the closed loop of ``config`` in the C++ core (fixed-step RK4).
 
-    Raises SimulationDiverged (with the partial result) if the state diverges."""
+    ``progress=True`` shows a tqdm progress bar in simulated seconds. Raises SimulationDiverged
+    (with the partial result) if the state diverges."""
     settings = core_settings(config)
     run = _core.Simulation(settings)
+    chunk = max(1000, run.steps // 200) if progress else CHUNK_STEPS
     start = time.perf_counter()
-    while run.status == "running":
-        run.advance(CHUNK_STEPS)
+    with tqdm(
+        total=round(config.sim.T, 6),
+        unit="s",
+        unit_scale=True,
+        disable=not progress,
+        desc="simulating",
+        bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]",
+    ) as bar:
+        while run.status == "running":
+            run.advance(chunk)
+            bar.update(round(config.sim.T * run.step / run.steps, 6) - bar.n)
     wall_time = time.perf_counter() - start
     result = SimulationResult(
         **run.recording(),

@@ -1,7 +1,7 @@
 // Probing (exploration) signal added to the applied input while t < until, for persistence of
 // excitation (eq. 25). The paper does not print one; ours is a sum of sinusoids per joint:
-//   probe_j(t) = ramp(t) sum_k amplitude_jk sin(frequencies_k t + phases_jk)   for t < until, else 0,
-//   ramp(t) = min(1, t / ramp) (a linear fade-in over the first `ramp` seconds; ramp = 0: none).
+//   probe_j(t) = ramp(t) sum_k amplitude_jk sin(frequencies_k t + phases_jk)   for t < until, else
+//   0, ramp(t) = min(1, t / ramp) (a linear fade-in over the first `ramp` seconds; ramp = 0: none).
 // A column of amplitude is the torque direction of one sinusoid (see README, "Probing").
 #pragma once
 
@@ -14,7 +14,7 @@ namespace adparm {
 struct ProbeSettings {
   Eigen::Matrix<double, 2, Eigen::Dynamic> amplitude;  // N m, 2 x frequencies.size()
   double until = 0.0;
-  double ramp = 0.0;  // s
+  double ramp = 0.0;                                // s
   Eigen::VectorXd frequencies;                      // rad/s, one entry per sinusoid
   Eigen::Matrix<double, 2, Eigen::Dynamic> phases;  // rad, 2 x frequencies.size()
 };
