@@ -62,7 +62,7 @@ class ProbeSettings:
     def __init__(self) -> None: ...
     @property
     def amplitude(self) -> _FloatArray:
-        """(2,)"""
+        """(2, n) N m"""
     @amplitude.setter
     def amplitude(self, value: ArrayLike) -> None: ...
     @property
