@@ -100,46 +100,45 @@ def plot_actor_weights(result: SimulationResult) -> Figure:
     return _weights(result, result.actor_weights, "Actor weights $\\hat W_a$ (Figure 3)")
 
 
-def plot_errors(result: SimulationResult) -> Figure:
-    """Figure 4: joint angles q, tracking errors e1 = qd - q and filtered errors e2."""
+def _joint_panels(
+    result: SimulationResult,
+    title: str,
+    panels: list[tuple[np.ndarray, str, str]],
+    linewidth: float,
+) -> Figure:
+    """One panel per (array (n, 2), y label, legend label with {j} for the joint) over time."""
     import matplotlib
 
     with matplotlib.rc_context(_RC):
-        figure = _figure(3)
-        top, middle, bottom = figure.axes
-        for j in range(2):
-            top.plot(result.t, result.q[:, j], lw=1.0, label=f"$q_{j + 1}$")
-            middle.plot(result.t, result.e1[:, j], lw=1.0, label=f"$e_{{1,{j + 1}}}$")
-            bottom.plot(result.t, result.e2[:, j], lw=1.0, label=f"$e_{{2,{j + 1}}}$")
-        top.set_ylabel("q (rad)")
-        middle.set_ylabel("$e_1$ (rad)")
-        bottom.set_ylabel("$e_2$ (rad/s)")
-        bottom.set_xlabel("time t (s)")
-        top.set_title("Joint angles and tracking errors (Figure 4)")
-        for axes in figure.axes:
+        figure = _figure(len(panels))
+        for axes, (values, ylabel, label) in zip(figure.axes, panels, strict=True):
+            for j in range(2):
+                axes.plot(result.t, values[:, j], lw=linewidth, label=label.format(j=j + 1))
+            axes.set_ylabel(ylabel)
             axes.legend(loc="upper right", ncols=2)
             _mark_probe_end(axes, result)
+        figure.axes[-1].set_xlabel("time t (s)")
+        figure.axes[0].set_title(title)
     return figure
+
+
+def plot_errors(result: SimulationResult) -> Figure:
+    """Figure 4: joint angles q, tracking errors e1 = qd - q and filtered errors e2."""
+    panels = [
+        (result.q, "q (rad)", "$q_{j}$"),
+        (result.e1, "$e_1$ (rad)", "$e_{{1,{j}}}$"),
+        (result.e2, "$e_2$ (rad/s)", "$e_{{2,{j}}}$"),
+    ]
+    return _joint_panels(result, "Joint angles and tracking errors (Figure 4)", panels, 1.0)
 
 
 def plot_torques(result: SimulationResult) -> Figure:
     """Applied joint torques tau and the probing signal."""
-    import matplotlib
-
-    with matplotlib.rc_context(_RC):
-        figure = _figure(2)
-        top, bottom = figure.axes
-        for j in range(2):
-            top.plot(result.t, result.tau[:, j], lw=0.8, label=f"$\\tau_{j + 1}$")
-            bottom.plot(result.t, result.probe[:, j], lw=0.8, label=f"probe$_{j + 1}$")
-        top.set_ylabel("torque $\\tau$ (N m)")
-        bottom.set_ylabel("probing signal (N m)")
-        bottom.set_xlabel("time t (s)")
-        top.set_title("Applied torques and probing signal")
-        for axes in figure.axes:
-            axes.legend(loc="upper right", ncols=2)
-            _mark_probe_end(axes, result)
-    return figure
+    panels = [
+        (result.tau, "torque $\\tau$ (N m)", "$\\tau_{j}$"),
+        (result.probe, "probing signal (N m)", "probe$_{j}$"),
+    ]
+    return _joint_panels(result, "Applied torques and probing signal", panels, 0.8)
 
 
 #: Figure name -> function; the names are the file stems written by save_figures.
