@@ -8,16 +8,18 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .config import Config, load_config, paper_config
-from .report import FIGURE_FORMATS, write_report
+from .report import FIGURE_FORMATS, check_formats, write_report
 from .simulation import SimulationDiverged, SimulationResult, simulate
 
 __all__ = ["main"]
 
 
 def _formats(text: str) -> tuple[str, ...]:
-    formats = tuple(f.strip() for f in text.split(",") if f.strip())
-    unknown = [f for f in formats if f not in FIGURE_FORMATS]
-    if unknown or not formats:
+    try:
+        formats = check_formats(f.strip() for f in text.split(",") if f.strip())
+    except ValueError:
+        formats = ()
+    if not formats:
         raise argparse.ArgumentTypeError(
             f"expected a comma-separated list of {', '.join(FIGURE_FORMATS)}, got {text!r}"
         )
@@ -71,8 +73,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"adparm {args.command}: {error}", file=sys.stderr)
         return 2
     result, failure = _simulate(config, progress=not args.no_progress)
-    write_report(result, args.out, formats=args.formats, figures=not args.no_figures)
     summary = result.summary()
+    write_report(
+        result, args.out, formats=args.formats, figures=not args.no_figures, summary=summary
+    )
     print(f"wrote {args.out}/ (summary.md, summary.json, result.npz, result.csv, figures)")
     error = summary.get("critic_relative_error")
     if error is not None:

@@ -11,16 +11,26 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .summary import summarize, summary_markdown
 
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import SimulationResult
 
-__all__ = ["write_report"]
+__all__ = ["check_formats", "write_report"]
 
 FIGURE_FORMATS = ("png", "svg", "pdf")
+
+
+def check_formats(formats: Iterable[str]) -> tuple[str, ...]:
+    """``formats`` as a tuple; ValueError if one is not in FIGURE_FORMATS."""
+    formats = tuple(formats)
+    unknown = [fmt for fmt in formats if fmt not in FIGURE_FORMATS]
+    if unknown:
+        expected = ", ".join(FIGURE_FORMATS)
+        raise ValueError(f"formats: unknown {unknown}; expected some of {expected}")
+    return formats
 
 
 def write_report(
@@ -29,18 +39,15 @@ def write_report(
     *,
     formats: Iterable[str] = ("png", "svg"),
     figures: bool = True,
+    summary: dict[str, Any] | None = None,
 ) -> list[Path]:
     """Write figures, summaries, the recorded result and the config to ``directory``; returns
-    the paths written."""
-    formats = tuple(formats)
-    unknown = [fmt for fmt in formats if fmt not in FIGURE_FORMATS]
-    if unknown:
-        raise ValueError(
-            f"formats: unknown {unknown}; expected some of {', '.join(FIGURE_FORMATS)}"
-        )
+    the paths written. ``summary`` is ``summarize(result)`` if the caller already has it."""
+    formats = check_formats(formats)
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    summary = summarize(result)
+    if summary is None:
+        summary = summarize(result)
     written = []
     (directory / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     (directory / "summary.md").write_text(summary_markdown(summary))
