@@ -28,8 +28,19 @@ def test_python_preset_equals_the_cores_copy() -> None:
     for name in ("Q", "R", "disturbance", "critic_weights", "actor_weights"):
         np.testing.assert_array_equal(getattr(ours, name), getattr(core, name), err_msg=name)
     np.testing.assert_array_equal(ours.control.alpha1, core.control.alpha1)
-    for name in ("q0", "dq0", "qd"):
+    for name in ("q0", "dq0"):
         np.testing.assert_array_equal(getattr(ours.task, name), getattr(core.task, name))
+    assert ours.task.qd.kind == core.task.qd.kind == _core.TrajectoryKind.constant
+    np.testing.assert_array_equal(ours.task.qd.offset, core.task.qd.offset)
+    assert ours.basis == core.basis
+    for key in ("kind", "rise", "kp", "kd"):
+        np.testing.assert_array_equal(
+            getattr(ours.controller, key), getattr(core.controller, key), err_msg=key
+        )
+    for key in ("points", "box", "mode", "seed"):
+        np.testing.assert_array_equal(
+            getattr(ours.extrapolation, key), getattr(core.extrapolation, key), err_msg=key
+        )
     for name in ("amplitude", "until", "frequencies", "phases"):
         np.testing.assert_array_equal(getattr(ours.probe, name), getattr(core.probe, name))
 

@@ -75,7 +75,7 @@ def test_hjb_residual_keeps_batch_shape(rng) -> None:
     [
         ({"cost": {"R": [[0.5, 0.0], [0.0, 0.25]]}}, "Q22 must equal R"),
         ({"control": {"alpha1": [[15.0, 10.6], [10.6, 10.4]]}}, "Q11 must equal"),
-        ({"task": {"qd": [0.0, 0.3]}}, "qd2 = 0"),
+        ({"task": {"qd": [0.0, 0.3]}, "controller": {"basis": "paper"}}, "qd2 = 0"),
     ],
 )
 def test_optimal_weights_refuses_instances_without_known_solution(change, message) -> None:

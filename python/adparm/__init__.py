@@ -8,20 +8,36 @@ from .config import (
     ActorConfig,
     Config,
     ControlConfig,
+    ControllerConfig,
     CostConfig,
     CriticConfig,
+    ExtrapolationConfig,
     InitConfig,
     ModelConfig,
     PlantConfig,
     ProbeConfig,
+    SampledTrajectory,
     SimConfig,
+    SinusoidTrajectory,
     TaskConfig,
     load_config,
     paper_config,
 )
-from .optimal import BASIS_NAMES, hjb_residual, optimal_weights
+from .optimal import (
+    BASIS_NAMES,
+    hjb_residual,
+    initial_error_state,
+    optimal_value,
+    optimal_weights,
+)
 from .report import write_report
-from .simulation import SimulationDiverged, SimulationResult, simulate
+from .simulation import (
+    SimulationDiverged,
+    SimulationResult,
+    desired_state,
+    extrapolation_points,
+    simulate,
+)
 from .storage import load_result
 
 __version__ = "0.1.0"
@@ -31,19 +47,27 @@ __all__ = [
     "ActorConfig",
     "Config",
     "ControlConfig",
+    "ControllerConfig",
     "CostConfig",
     "CriticConfig",
+    "ExtrapolationConfig",
     "InitConfig",
     "ModelConfig",
     "PlantConfig",
     "ProbeConfig",
+    "SampledTrajectory",
     "SimConfig",
     "SimulationDiverged",
     "SimulationResult",
+    "SinusoidTrajectory",
     "TaskConfig",
+    "desired_state",
+    "extrapolation_points",
     "hjb_residual",
+    "initial_error_state",
     "load_config",
     "load_result",
+    "optimal_value",
     "optimal_weights",
     "paper_config",
     "simulate",

@@ -15,7 +15,7 @@ import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -28,13 +28,17 @@ __all__ = [
     "ActorConfig",
     "Config",
     "ControlConfig",
+    "ControllerConfig",
     "CostConfig",
     "CriticConfig",
+    "ExtrapolationConfig",
     "InitConfig",
     "ModelConfig",
     "PlantConfig",
     "ProbeConfig",
+    "SampledTrajectory",
     "SimConfig",
+    "SinusoidTrajectory",
     "TaskConfig",
     "load_config",
     "paper_config",
@@ -67,6 +71,22 @@ def _integer(value: Any, name: str, *, minimum: int) -> int:
     return int(value)
 
 
+def _boolean(value: Any, name: str) -> bool:
+    if not isinstance(value, bool):
+        raise TypeError(f"{name}: expected true or false, got {type(value).__name__} {value!r}")
+    return value
+
+
+def _choice(value: Any, name: str, choices: tuple[str, ...]) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"{name}: expected one of {', '.join(choices)}, got {value!r}")
+    if value not in choices:
+        raise ValueError(
+            f"{name}: expected one of {', '.join(choices)}, got {value!r}{_hint(value, choices)}"
+        )
+    return value
+
+
 def _array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
     if isinstance(value, (str, bytes, Mapping)) or isinstance(value, bool):
         raise TypeError(f"{name}: expected an array of shape {_shape_text(shape)}, got {value!r}")
@@ -93,6 +113,29 @@ def _shape_text(shape: tuple[int | None, ...]) -> str:
         + ("," if len(shape) == 1 else "")
         + ")"
     )
+
+
+def _rows(value: Any, name: str, columns: int | None) -> Matrix:
+    """A (2,) vector (one column) or a (2, n) matrix, as a (2, n) matrix."""
+    if np.ndim(value) == 1:
+        return tuple((v,) for v in _vector(value, name, 2))
+    return _matrix(value, name, 2, columns)
+
+
+def _gain(value: Any, name: str) -> float | Matrix:
+    """A number (times the identity) or a 2 x 2 matrix."""
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        return _scalar(value, name)
+    return _matrix(value, name, 2, 2)
+
+
+def _check_keys(values: Mapping[str, Any], keys: list[str], where: str) -> None:
+    for key in values:
+        if key not in keys:
+            raise ValueError(
+                f"unknown key {where}.{key}{_hint(key, keys)}; known keys of [{where}]: "
+                f"{', '.join(keys)}"
+            )
 
 
 def _vector(value: Any, name: str, size: int | None) -> Vector:
@@ -178,18 +221,154 @@ class ModelConfig:
 
 
 @dataclass(frozen=True)
-class TaskConfig:
-    """Initial joint state and set-point (rad, rad/s).
+class SinusoidTrajectory:
+    """qd_j(t) = offset_j + sum_k amplitude_jk sin(frequency_jk t + phase_jk) (rad, rad/s).
 
-    dq0 = 0 is our choice (the paper is silent)."""
+    amplitude, frequency and phase are each a pair (one sinusoid per joint) or a 2 x n matrix
+    (n sinusoids per joint); phase None is all zeros. In TOML: ``[task.qd]`` with
+    ``kind = "sinusoid"``."""
+
+    kind: ClassVar[str] = "sinusoid"
+    amplitude: Vector | Matrix = (0.5, 0.3)
+    frequency: Vector | Matrix = (1.0, 1.0)
+    phase: Vector | Matrix | None = None
+    offset: Vector = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        amplitude = _rows(self.amplitude, "task.qd.amplitude", None)
+        n = len(amplitude[0])
+        object.__setattr__(self, "amplitude", amplitude)
+        object.__setattr__(self, "frequency", _rows(self.frequency, "task.qd.frequency", n))
+        phase = ((0.0,) * n,) * 2 if self.phase is None else self.phase
+        object.__setattr__(self, "phase", _rows(phase, "task.qd.phase", n))
+        object.__setattr__(self, "offset", _vector(self.offset, "task.qd.offset", 2))
+        for key in ("frequency", "phase"):
+            if len(getattr(self, key)[0]) != n:
+                raise ValueError(
+                    f"task.qd.{key}: expected {n} column(s) like task.qd.amplitude, "
+                    f"got {len(getattr(self, key)[0])}"
+                )
+
+    def at(self, t: float) -> np.ndarray:
+        """qd(t) (2,)."""
+        a, w, p = (np.array(getattr(self, k)) for k in ("amplitude", "frequency", "phase"))
+        return np.array(self.offset) + (a * np.sin(w * t + p)).sum(axis=1)
+
+
+@dataclass(frozen=True)
+class SampledTrajectory:
+    """qd(t) through samples (t_i, qd_i), interpolated by a cubic spline
+    (scipy.interpolate.CubicSpline with bc_type = boundary), which gives dqd and ddqd too.
+
+    Either ``file``, a CSV file with columns t, qd1, qd2 (a header line and # comments are
+    skipped; a relative path in a TOML file is relative to that file), or ``t`` (n,) and ``q``
+    (n, 2) inline. The first sample must be at t <= 0 and the last at t >= sim.T. In TOML:
+    ``[task.qd]`` with ``kind = "samples"``."""
+
+    kind: ClassVar[str] = "samples"
+    t: Vector = ()
+    q: Matrix = ()
+    file: str | None = None
+    boundary: str = "not-a-knot"
+
+    def __post_init__(self) -> None:
+        if self.file is not None:
+            if not isinstance(self.file, (str, Path)):
+                raise TypeError(f"task.qd.file: expected a path, got {self.file!r}")
+            if len(self.t) or len(self.q):
+                raise ValueError("task.qd: give either file or t and q, not both")
+            t, q = _read_samples(Path(self.file))
+            object.__setattr__(self, "file", str(self.file))
+            object.__setattr__(self, "t", t)
+            object.__setattr__(self, "q", q)
+        object.__setattr__(self, "t", _vector(self.t, "task.qd.t", None))
+        object.__setattr__(self, "q", _matrix(self.q, "task.qd.q", len(self.t), 2))
+        if len(self.t) < 2:
+            raise ValueError(f"task.qd.t: expected at least 2 samples, got {len(self.t)}")
+        if np.any(np.diff(self.t) <= 0.0):
+            raise ValueError("task.qd.t: sample times must be strictly increasing")
+        if self.t[0] > 0.0:
+            raise ValueError(f"task.qd.t: the first sample must be at t <= 0, got {self.t[0]:g}")
+        _choice(self.boundary, "task.qd.boundary", ("not-a-knot", "clamped", "natural"))
+
+    def spline(self) -> Any:
+        """The scipy CubicSpline through the samples (axis 0 is time)."""
+        from scipy.interpolate import CubicSpline
+
+        return CubicSpline(np.array(self.t), np.array(self.q), axis=0, bc_type=self.boundary)
+
+    def at(self, t: float) -> np.ndarray:
+        """qd(t) (2,)."""
+        return np.asarray(self.spline()(min(max(t, self.t[0]), self.t[-1])))
+
+
+def _read_samples(path: Path) -> tuple[Vector, Matrix]:
+    try:
+        lines = path.read_text().splitlines()
+    except OSError as error:
+        raise ValueError(f"task.qd.file: cannot read {str(path)!r}: {error}") from error
+    rows = []
+    for number, line in enumerate(lines, start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        try:
+            rows.append([float(v) for v in text.split(",")])
+        except ValueError as error:
+            if rows:  # only a first line may be a header
+                raise ValueError(f"task.qd.file: {path}:{number}: not numbers: {line!r}") from error
+            continue
+        if len(rows[-1]) != 3:
+            raise ValueError(
+                f"task.qd.file: {path}:{number}: expected 3 columns t, qd1, qd2, got {line!r}"
+            )
+    if not rows:
+        raise ValueError(f"task.qd.file: {path} holds no samples")
+    array = np.array(rows)
+    return tuple(array[:, 0]), tuple(map(tuple, array[:, 1:]))
+
+
+_TRAJECTORIES: dict[str, type] = {"sinusoid": SinusoidTrajectory, "samples": SampledTrajectory}
+Trajectory = Vector | SinusoidTrajectory | SampledTrajectory
+
+
+def _trajectory(value: Any) -> Trajectory:
+    if isinstance(value, (SinusoidTrajectory, SampledTrajectory)):
+        return value
+    if not isinstance(value, Mapping):
+        return _vector(value, "task.qd", 2)
+    values = dict(value)
+    kind = _choice(values.pop("kind", None) or "", "task.qd.kind", tuple(_TRAJECTORIES))
+    cls = _TRAJECTORIES[kind]
+    _check_keys(values, [f.name for f in dataclasses.fields(cls)], "task.qd")
+    return cls(**values)
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """Initial joint state and desired trajectory qd (rad, rad/s).
+
+    qd is a set-point (a pair, the paper's qd = 0), a SinusoidTrajectory or a SampledTrajectory
+    (in TOML a ``[task.qd]`` table with ``kind = "sinusoid"`` or ``"samples"``). The feedforward
+    uses qd, dqd and ddqd (eq. 5 in full). dq0 = 0 is our choice (the paper is silent)."""
 
     q0: Vector = (0.1598, 0.2257)
     dq0: Vector = (0.0, 0.0)
-    qd: Vector = (0.0, 0.0)
+    qd: Trajectory = (0.0, 0.0)
 
     def __post_init__(self) -> None:
-        for key in ("q0", "dq0", "qd"):
+        for key in ("q0", "dq0"):
             object.__setattr__(self, key, _vector(getattr(self, key), f"task.{key}", 2))
+        object.__setattr__(self, "qd", _trajectory(self.qd))
+
+    @property
+    def is_set_point(self) -> bool:
+        """Whether qd is constant."""
+        return not isinstance(self.qd, (SinusoidTrajectory, SampledTrajectory))
+
+    def desired(self, t: float) -> np.ndarray:
+        """qd(t) (2,)."""
+        return np.array(self.qd) if self.is_set_point else self.qd.at(t)
 
 
 _PAPER_Q: Matrix = (
@@ -350,6 +529,87 @@ class ProbeConfig:
         return np.vstack([np.arange(n, dtype=float)] * 2)
 
 
+CONTROLLER_KINDS = ("adp", "rise", "pd", "optimal")
+BASIS_KINDS = ("augmented", "paper")
+EXTRAPOLATION_MODES = ("fixed", "grid", "local")
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """Which input u the loop applies (tau = h_hat + mu - u, mu the RISE term):
+    ``adp`` u = u_hat + probe (the paper; critic and actor learn), ``rise`` u = 0,
+    ``pd`` u = -(kp e1 + kd de1), ``optimal`` u = -R^-1 e2 (the exact optimal policy of ERRATA).
+    Only adp learns and probes. ``rise = false`` drops the RISE term mu (not with kind rise).
+    kp, kd: a number (times I) or a 2 x 2 matrix, used by pd only (our choice 50 and 10).
+
+    basis: the critic/actor basis. ``augmented`` (default) is the paper's 8 functions over the
+    augmented state [x; qd] with cos x2 replaced by cos(qd2 - x2) = cos q2: identical to the
+    paper's basis while qd2 = 0 (the paper's task), and exact for V* = x^T blockdiag(K, M(q)) x
+    with the same W* for any qd(t). ``paper`` is the printed phi(x), exact only for qd2 = 0."""
+
+    kind: str = "adp"
+    basis: str = "augmented"
+    rise: bool = True
+    kp: float | Matrix = 50.0
+    kd: float | Matrix = 10.0
+
+    def __post_init__(self) -> None:
+        _choice(self.kind, "controller.kind", CONTROLLER_KINDS)
+        _choice(self.basis, "controller.basis", BASIS_KINDS)
+        _boolean(self.rise, "controller.rise")
+        if self.kind == "rise" and not self.rise:
+            raise ValueError(
+                "controller.rise: kind = 'rise' is the RISE feedback alone, so rise must be true"
+            )
+        for key in ("kp", "kd"):
+            object.__setattr__(self, key, _gain(getattr(self, key), f"controller.{key}"))
+
+    def gain_matrix(self, key: str) -> np.ndarray:
+        """kp or kd as a 2 x 2 array."""
+        value = getattr(self, key)
+        return value * np.eye(2) if isinstance(value, float) else np.array(value)
+
+
+@dataclass(frozen=True)
+class ExtrapolationConfig:
+    """Bellman-error extrapolation: the critic and actor laws also average their terms over the
+    HJB error at ``points`` extra states x (0: off, the paper). ``mode``: ``fixed`` (points drawn
+    once, uniform in [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points
+    redrawn every step, uniform in x(t) + [-box, box]). ``box``: half-widths in x = [e1; e2], one
+    number or 4. ``seed`` (0 <= seed < 2^32) seeds MT19937, drawn in the order of NumPy's
+    ``RandomState(seed).random_sample((points, 4))``."""
+
+    points: int = 0
+    box: float | Vector = 1.0
+    mode: str = "fixed"
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "points", _integer(self.points, "extrapolation.points", minimum=0))
+        if isinstance(self.box, numbers.Real) and not isinstance(self.box, bool):
+            box: float | Vector = _scalar(self.box, "extrapolation.box", minimum=0.0, strict=True)
+        else:
+            box = _vector(self.box, "extrapolation.box", 4)
+            if min(box) <= 0.0:
+                raise ValueError(f"extrapolation.box: half-widths must be > 0, got {list(box)}")
+        object.__setattr__(self, "box", box)
+        _choice(self.mode, "extrapolation.mode", EXTRAPOLATION_MODES)
+        object.__setattr__(self, "seed", _integer(self.seed, "extrapolation.seed", minimum=0))
+        if self.seed >= 2**32:
+            raise ValueError(f"extrapolation.seed: must be < 2^32, got {self.seed}")
+        if self.mode == "grid":
+            m = round(self.points**0.25)
+            if m**4 != self.points:
+                raise ValueError(
+                    "extrapolation.points: grid mode needs m^4 points (1, 16, 81, 256, ...), "
+                    f"got {self.points}"
+                )
+
+    def box_vector(self) -> np.ndarray:
+        """The half-widths as a (4,) array."""
+        return np.broadcast_to(np.array(self.box, dtype=float), (4,)).copy()
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """Fixed-step RK4: horizon T (s), step dt (s), record every record_every-th step, and the
@@ -389,6 +649,8 @@ _SECTIONS: dict[str, type] = {
     "actor": ActorConfig,
     "init": InitConfig,
     "probe": ProbeConfig,
+    "controller": ControllerConfig,
+    "extrapolation": ExtrapolationConfig,
     "sim": SimConfig,
 }
 
@@ -411,6 +673,8 @@ class Config:
     actor: ActorConfig = field(default_factory=ActorConfig)
     init: InitConfig = field(default_factory=InitConfig)
     probe: ProbeConfig = field(default_factory=ProbeConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    extrapolation: ExtrapolationConfig = field(default_factory=ExtrapolationConfig)
     sim: SimConfig = field(default_factory=SimConfig)
 
     def __post_init__(self) -> None:
@@ -421,6 +685,11 @@ class Config:
                 )
         model = self.model.resolve(self.plant)
         _check_arm(model["p1"], model["p2"], model["p3"], "model")
+        qd = self.task.qd
+        if isinstance(qd, SampledTrajectory) and qd.t[-1] < self.sim.T * (1.0 - 1e-12):
+            raise ValueError(
+                f"task.qd: the samples end at t = {qd.t[-1]:g} s, before sim.T = {self.sim.T:g} s"
+            )
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], base: Config | None = None) -> Config:
@@ -440,13 +709,7 @@ class Config:
                 raise TypeError(
                     f"[{section}]: expected a table of keys, got {type(values).__name__}"
                 )
-            keys = [f.name for f in dataclasses.fields(_SECTIONS[section])]
-            for key in values:
-                if key not in keys:
-                    raise ValueError(
-                        f"unknown key {section}.{key}{_hint(key, keys)}; "
-                        f"known keys of [{section}]: {', '.join(keys)}"
-                    )
+            _check_keys(values, [f.name for f in dataclasses.fields(_SECTIONS[section])], section)
             sections[section] = dataclasses.replace(getattr(base, section), **values)
         return dataclasses.replace(base, **sections)
 
@@ -454,7 +717,10 @@ class Config:
         """Nested plain dict (lists for arrays, model keys left at the plant's value omitted)."""
         out: dict[str, dict[str, Any]] = {}
         for name in _SECTIONS:
-            section = dataclasses.asdict(getattr(self, name))
+            section = {
+                f.name: getattr(getattr(self, name), f.name)
+                for f in dataclasses.fields(_SECTIONS[name])
+            }
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
 
@@ -473,6 +739,16 @@ class Config:
 def _plain(value: Any) -> Any:
     if isinstance(value, tuple):
         return [_plain(v) for v in value]
+    if isinstance(value, SampledTrajectory):  # the samples inline, not the file
+        return {
+            "kind": value.kind,
+            "t": _plain(value.t),
+            "q": _plain(value.q),
+            "boundary": value.boundary,
+        }
+    if isinstance(value, SinusoidTrajectory):
+        fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        return {"kind": value.kind, **fields}
     return value
 
 
@@ -483,11 +759,15 @@ def paper_config() -> Config:
 
 def load_config(path: str | Path) -> Config:
     """Read a TOML file of sections [plant] [model] [task] [cost] [control] [critic] [actor]
-    [init] [probe] [sim]; keys left out take the paper default."""
+    [init] [probe] [controller] [extrapolation] [sim]; keys left out take the paper default. A
+    relative ``task.qd.file`` is relative to the TOML file's folder."""
     path = Path(path)
     try:
         with path.open("rb") as stream:
             data = tomllib.load(stream)
     except tomllib.TOMLDecodeError as error:
         raise ValueError(f"{path}: invalid TOML: {error}") from error
+    qd = data.get("task", {}).get("qd") if isinstance(data.get("task"), Mapping) else None
+    if isinstance(qd, Mapping) and isinstance(qd.get("file"), str):
+        data["task"]["qd"] = {**qd, "file": str(path.parent / Path(qd["file"]).expanduser())}
     return Config.from_dict(data)

@@ -8,9 +8,9 @@ import numpy as np
 
 from . import _core
 from .config import Config
-from .simulation import core_settings
+from .simulation import core_settings, desired_state
 
-__all__ = ["BASIS_NAMES", "hjb_residual", "optimal_weights"]
+__all__ = ["BASIS_NAMES", "hjb_residual", "initial_error_state", "optimal_value", "optimal_weights"]
 
 #: The paper's basis phi(x), x = [e1; e2] (ERRATA ordering).
 BASIS_NAMES = (
@@ -29,7 +29,8 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     """The exact weights W* of V*(x) = x^T blockdiag(K, M(q)) x in the paper's basis.
 
     They exist when K = -Q12 is symmetric positive definite, Q11 = K alpha1 + alpha1^T K and
-    Q22 = R^-1 (to relative tolerance rtol), and qd2 = 0 (the basis uses cos x2 = cos q2). Then
+    Q22 = R^-1 (to relative tolerance rtol), for any desired trajectory with the augmented basis
+    and for a set-point with qd2 = 0 with the paper's basis (cos x2 = cos q2 there). Then
     u* = -R^-1 e2 and W* = [K11, K22, 2 K12, p1, 2 p3, p2, 2 p2, 2 p3] with p of the arm the
     controller believes ([model], default the plant). Otherwise raises ValueError naming the
     condition that fails."""
@@ -60,10 +61,12 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             f"cost.Q: Q22 must equal R^-1 (got Q22 = {Q22.tolist()}, "
             f"R^-1 = {np.linalg.inv(R).tolist()})"
         )
-    if config.task.qd[1] != 0.0:
+    if config.controller.basis == "paper" and not (
+        config.task.is_set_point and config.task.qd[1] == 0.0
+    ):
         raise ValueError(
-            "task.qd: the paper basis represents V* only for qd2 = 0, "
-            f"got qd = {list(config.task.qd)}"
+            "task.qd: the paper basis represents V* only for a set-point with qd2 = 0 "
+            "(controller.basis = 'augmented' represents it for any qd)"
         )
     p = config.model.resolve(config.plant)
     return np.array(
@@ -93,11 +96,12 @@ def _weights(value: Any, name: str) -> np.ndarray:
 
 
 def hjb_residual(
-    config: Config, x: Any, critic_weights: Any, actor_weights: Any
+    config: Config, x: Any, critic_weights: Any, actor_weights: Any, *, t: float = 0.0
 ) -> np.ndarray | float:
     """The HJB error of eq. (21) at x = [e1; e2], computed by the C++ core with the cost, alpha1,
-    set-point and believed arm of ``config``. ``x`` is one state (4,) or a batch (..., 4); the
-    result has x's leading shape (a float for one state)."""
+    basis and believed arm of ``config`` and the desired state (qd, dqd) at time ``t``. ``x`` is
+    one state (4,) or a batch (..., 4); the result has x's leading shape (a float for one
+    state)."""
     try:
         states = np.asarray(x, dtype=float)
     except (TypeError, ValueError) as error:
@@ -111,7 +115,35 @@ def hjb_residual(
         np.ascontiguousarray(states.reshape(-1, 4)),
         _weights(critic_weights, "critic_weights"),
         _weights(actor_weights, "actor_weights"),
+        float(t),
     )
     if states.ndim == 1:
         return float(residual[0])
     return residual.reshape(states.shape[:-1])
+
+
+def initial_error_state(config: Config) -> np.ndarray:
+    """x(0) = [e1(0); e2(0)] of ``config``: e1 = qd(0) - q0, e2 = dqd(0) - dq0 + alpha1 e1."""
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    desired = desired_state(config, 0.0)
+    alpha1 = np.array(config.control.alpha1)
+    e1 = desired[0] - np.array(config.task.q0)
+    e2 = desired[1] - np.array(config.task.dq0) + alpha1 @ e1
+    return np.concatenate([e1, e2])
+
+
+def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
+    """V*(x) = e1^T K e1 + e2^T M(q) e2 (ERRATA), q = qd(t) - e1 on the believed model: the
+    optimal cost-to-go of eq. (10) from x for the disturbance-free error system, when the
+    conditions of :func:`optimal_weights` hold (it raises ValueError otherwise). ``x`` defaults to
+    the initial error state of ``config``."""
+    weights = optimal_weights(config)
+    x = initial_error_state(config) if x is None else x
+    # V* = W*^T phi(x, qd) in the augmented basis, exactly
+    states = np.asarray(x, dtype=float)
+    if states.shape != (4,) or not np.all(np.isfinite(states)):
+        raise ValueError(f"x: expected 4 finite numbers, got {x!r}")
+    qd = desired_state(config, t)[0]
+    phi, _, _ = _core.basis(_core.BasisKind.augmented, states, qd, np.zeros(2))
+    return float(weights @ np.asarray(phi))

@@ -12,13 +12,20 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from . import _core
-from .config import _ARM_KEYS, Config
+from .config import _ARM_KEYS, Config, SampledTrajectory, SinusoidTrajectory
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
     from matplotlib.figure import Figure
 
-__all__ = ["SimulationDiverged", "SimulationResult", "core_settings", "simulate"]
+__all__ = [
+    "SimulationDiverged",
+    "SimulationResult",
+    "core_settings",
+    "desired_state",
+    "extrapolation_points",
+    "simulate",
+]
 
 # Steps per call into C++: the GIL is released inside a chunk and Python regains control between
 # chunks (for progress reporting and Ctrl-C).
@@ -43,7 +50,7 @@ def core_settings(config: Config) -> _core.Settings:
     task = _core.TaskSettings()
     task.q0 = np.array(config.task.q0)
     task.dq0 = np.array(config.task.dq0)
-    task.qd = np.array(config.task.qd)
+    task.qd = _trajectory_settings(config)
     settings.task = task
 
     settings.Q = np.array(config.cost.Q)
@@ -69,6 +76,20 @@ def core_settings(config: Config) -> _core.Settings:
         setattr(actor, key, getattr(config.actor, key))
     settings.actor = actor
 
+    controller = _core.ControllerSettings()
+    controller.kind = getattr(_core.ControllerKind, config.controller.kind)
+    controller.rise = config.controller.rise
+    controller.kp = config.controller.gain_matrix("kp")
+    controller.kd = config.controller.gain_matrix("kd")
+    settings.controller = controller
+    settings.basis = getattr(_core.BasisKind, config.controller.basis)
+    extrapolation = _core.ExtrapolationSettings()
+    extrapolation.points = config.extrapolation.points
+    extrapolation.box = config.extrapolation.box_vector()
+    extrapolation.mode = getattr(_core.ExtrapolationMode, config.extrapolation.mode)
+    extrapolation.seed = config.extrapolation.seed
+    settings.extrapolation = extrapolation
+
     settings.critic_weights = np.array(config.init.critic_weights)
     settings.actor_weights = np.array(config.init.actor_weights)
 
@@ -87,7 +108,48 @@ def core_settings(config: Config) -> _core.Settings:
     return settings
 
 
-_ARRAYS_2 = ("q", "dq", "e1", "e2", "tau", "u_hat", "mu", "probe")
+def _trajectory_settings(config: Config) -> _core.TrajectorySettings:
+    qd = config.task.qd
+    trajectory = _core.TrajectorySettings()
+    if isinstance(qd, SinusoidTrajectory):
+        trajectory.kind = _core.TrajectoryKind.sinusoid
+        trajectory.offset = np.array(qd.offset)
+        trajectory.amplitude = np.array(qd.amplitude)
+        trajectory.frequency = np.array(qd.frequency)
+        trajectory.phase = np.array(qd.phase)
+    elif isinstance(qd, SampledTrajectory):
+        spline = qd.spline()
+        # scipy's c[m, i, j]: coefficient of (t - x_i)^(3 - m) for joint j -> rows i, 4 j + m
+        trajectory.kind = _core.TrajectoryKind.spline
+        trajectory.breaks = np.array(spline.x)
+        trajectory.coefficients = np.ascontiguousarray(
+            np.transpose(spline.c, (1, 2, 0)).reshape(spline.c.shape[1], 8)
+        )
+    else:
+        trajectory.offset = np.array(qd)
+    return trajectory
+
+
+def desired_state(config: Config, t: Any) -> np.ndarray:
+    """The desired state of ``config.task.qd`` as the core evaluates it: for one time t, a (3, 2)
+    array [qd, dqd, ddqd]; for times (n,), an (n, 3, 2) array."""
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    times = np.asarray(t, dtype=float)
+    if times.ndim > 1:
+        raise ValueError(f"t: expected a time or a 1-d array of times, got shape {times.shape}")
+    rows = np.asarray(_core.desired_state(_trajectory_settings(config), times.reshape(-1)))
+    rows = rows.reshape(-1, 3, 2)
+    return rows[0] if times.ndim == 0 else rows
+
+
+def extrapolation_points(config: Config) -> np.ndarray:
+    """The extrapolation points (N, 4) in x = [e1; e2] of a fixed or grid ``config.extrapolation``
+    (for mode local: the offsets are drawn anew at each step, and this returns zeros)."""
+    return np.array(_core.extrapolation_points(core_settings(config)))
+
+
+_ARRAYS_2 = ("q", "dq", "qd", "e1", "e2", "tau", "u", "u_hat", "mu", "probe")
 _ARRAYS_N = ("critic_weights", "actor_weights")
 
 
@@ -95,24 +157,29 @@ _ARRAYS_N = ("critic_weights", "actor_weights")
 class SimulationResult:
     """One closed-loop run, one row per recorded step (all arrays read-only).
 
-    t (n,) s; q, dq (n, 2) rad, rad/s; e1 = qd - q, e2 = de1 + alpha1 e1 (n, 2);
-    tau (n, 2) applied torque N m; u_hat (n, 2) actor input (eq. 20); mu (n, 2) RISE term (eq. 27);
+    t (n,) s; q, dq (n, 2) rad, rad/s; qd (n, 2) desired position; e1 = qd - q,
+    e2 = de1 + alpha1 e1 (n, 2); tau (n, 2) applied torque N m; u (n, 2) the controller's input
+    (adp: u_hat + probe); u_hat (n, 2) actor input (eq. 20); mu (n, 2) RISE term (eq. 27);
     probe (n, 2) probing signal; critic_weights, actor_weights (n, 8) in the order of
-    adparm.BASIS_NAMES; hjb_error (n,) eq. (21); covariance_reset_times (k,) s.
+    adparm.BASIS_NAMES; hjb_error (n,) eq. (21); cost (n,) accumulated cost of eq. (10),
+    int_0^t x^T Q x + u^T R u, integrated by RK4 with the state; covariance_reset_times (k,) s.
     """
 
     t: np.ndarray
     q: np.ndarray
     dq: np.ndarray
+    qd: np.ndarray
     e1: np.ndarray
     e2: np.ndarray
     tau: np.ndarray
+    u: np.ndarray
     u_hat: np.ndarray
     mu: np.ndarray
     probe: np.ndarray
     critic_weights: np.ndarray
     actor_weights: np.ndarray
     hjb_error: np.ndarray
+    cost: np.ndarray
     covariance_reset_times: np.ndarray
     config: Config
     status: str = "finished"
@@ -122,7 +189,7 @@ class SimulationResult:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
         if n < 0:
             raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
-        shapes = {"t": (n,), "hjb_error": (n,)}
+        shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
         shapes.update({name: (n, 2) for name in _ARRAYS_2})
         shapes.update({name: (n, 8) for name in _ARRAYS_N})
         for name, shape in shapes.items():
@@ -144,7 +211,7 @@ class SimulationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The arrays by name (copies), with status and wall_time."""
-        names = ("t", "hjb_error", *_ARRAYS_2, *_ARRAYS_N, "covariance_reset_times")
+        names = ("t", "hjb_error", "cost", *_ARRAYS_2, *_ARRAYS_N, "covariance_reset_times")
         out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
         out["status"] = self.status
         out["wall_time"] = self.wall_time

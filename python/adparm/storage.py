@@ -15,22 +15,25 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 # (result attribute, column names); weights in the order of adparm.BASIS_NAMES.
 _COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("t", ("t",)),
     ("q", ("q1", "q2")),
     ("dq", ("dq1", "dq2")),
+    ("qd", ("qd1", "qd2")),
     ("e1", ("e1_1", "e1_2")),
     ("e2", ("e2_1", "e2_2")),
     ("tau", ("tau1", "tau2")),
+    ("u", ("u1", "u2")),
     ("u_hat", ("u_hat1", "u_hat2")),
     ("mu", ("mu1", "mu2")),
     ("probe", ("probe1", "probe2")),
     ("critic_weights", tuple(f"Wc{i}" for i in range(1, 9))),
     ("actor_weights", tuple(f"Wa{i}" for i in range(1, 9))),
     ("hjb_error", ("hjb_error",)),
+    ("cost", ("cost",)),
 )
 
 

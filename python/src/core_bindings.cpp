@@ -52,7 +52,22 @@ void bind_settings(py::module_& m) {
       .def_readwrite("ramp", &ProbeSettings::ramp)
       .def_readwrite("frequencies", &ProbeSettings::frequencies)
       .def_readwrite("phases", &ProbeSettings::phases);
-  py::class_<TaskSettings>(m, "TaskSettings", "q0 (2,), dq0 (2,), qd (2,).")
+  py::enum_<TrajectoryKind>(m, "TrajectoryKind")
+      .value("constant", TrajectoryKind::constant)
+      .value("sinusoid", TrajectoryKind::sinusoid)
+      .value("spline", TrajectoryKind::spline);
+  py::class_<TrajectorySettings>(m, "TrajectorySettings",
+                                 "kind, offset (2,); sinusoid: amplitude, frequency, phase (2, n); "
+                                 "spline: breaks (n + 1,), coefficients (n, 8).")
+      .def(py::init<>())
+      .def_readwrite("kind", &TrajectorySettings::kind)
+      .def_readwrite("offset", &TrajectorySettings::offset)
+      .def_readwrite("amplitude", &TrajectorySettings::amplitude)
+      .def_readwrite("frequency", &TrajectorySettings::frequency)
+      .def_readwrite("phase", &TrajectorySettings::phase)
+      .def_readwrite("breaks", &TrajectorySettings::breaks)
+      .def_readwrite("coefficients", &TrajectorySettings::coefficients);
+  py::class_<TaskSettings>(m, "TaskSettings", "q0 (2,), dq0 (2,), qd (TrajectorySettings).")
       .def(py::init<>())
       .def_readwrite("q0", &TaskSettings::q0)
       .def_readwrite("dq0", &TaskSettings::dq0)
@@ -61,6 +76,30 @@ void bind_settings(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("alpha1", &ControlSettings::alpha1)
       .def_readwrite("rise", &ControlSettings::rise);
+  py::enum_<ControllerKind>(m, "ControllerKind")
+      .value("adp", ControllerKind::adp)
+      .value("rise", ControllerKind::rise)
+      .value("pd", ControllerKind::pd)
+      .value("optimal", ControllerKind::optimal);
+  py::class_<ControllerSettings>(m, "ControllerSettings", "kind, rise, kp (2, 2), kd (2, 2).")
+      .def(py::init<>())
+      .def_readwrite("kind", &ControllerSettings::kind)
+      .def_readwrite("rise", &ControllerSettings::rise)
+      .def_readwrite("kp", &ControllerSettings::kp)
+      .def_readwrite("kd", &ControllerSettings::kd);
+  py::enum_<BasisKind>(m, "BasisKind")
+      .value("paper", BasisKind::paper)
+      .value("augmented", BasisKind::augmented);
+  py::enum_<ExtrapolationMode>(m, "ExtrapolationMode")
+      .value("fixed", ExtrapolationMode::fixed)
+      .value("grid", ExtrapolationMode::grid)
+      .value("local", ExtrapolationMode::local);
+  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings", "points, box (4,), mode, seed.")
+      .def(py::init<>())
+      .def_readwrite("points", &ExtrapolationSettings::points)
+      .def_readwrite("box", &ExtrapolationSettings::box)
+      .def_readwrite("mode", &ExtrapolationSettings::mode)
+      .def_readwrite("seed", &ExtrapolationSettings::seed);
   py::class_<SimSettings>(m, "SimSettings", "T, dt, record_every, divergence_bound.")
       .def(py::init<>())
       .def_readwrite("T", &SimSettings::T)
@@ -81,6 +120,9 @@ void bind_settings(py::module_& m) {
       .def_readwrite("control", &Settings::control)
       .def_readwrite("critic", &Settings::critic)
       .def_readwrite("actor", &Settings::actor)
+      .def_readwrite("controller", &Settings::controller)
+      .def_readwrite("basis", &Settings::basis)
+      .def_readwrite("extrapolation", &Settings::extrapolation)
       .def_readwrite("critic_weights", &Settings::critic_weights)
       .def_readwrite("actor_weights", &Settings::actor_weights)
       .def_readwrite("probe", &Settings::probe)
@@ -118,39 +160,72 @@ void bind_arm(py::module_& m) {
       "RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4).");
 }
 
+void bind_trajectory(py::module_& m) {
+  m.def(
+      "desired_state",
+      [](const TrajectorySettings& settings, const Eigen::VectorXd& times) {
+        check_finite(times, "t");
+        const Trajectory trajectory(settings);
+        Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> out(times.size(), 6);
+        for (Eigen::Index i = 0; i < times.size(); ++i) {
+          const DesiredState d = trajectory(times[i]);
+          out.row(i) << d.q.transpose(), d.dq.transpose(), d.ddq.transpose();
+        }
+        return out;
+      },
+      py::arg("trajectory"), py::arg("t"),
+      "The desired state at times t (n,): rows [qd1, qd2, dqd1, dqd2, ddqd1, ddqd2] (n, 6).");
+}
+
 void bind_basis(py::module_& m) {
   m.def(
       "basis",
-      [](const Vec4& x) {
-        PaperBasis::Vector phi;
-        PaperBasis::Jacobian jacobian;
-        PaperBasis::evaluate(x, phi, jacobian);
-        return py::make_tuple(phi, jacobian);
+      [](BasisKind kind, const Vec4& x, const Vec2& qd, const Vec2& dqd) {
+        DesiredState desired;
+        desired.q = qd;
+        desired.dq = dqd;
+        return with_basis(kind, [&](auto basis) {
+          using Basis = decltype(basis);
+          typename Basis::Vector phi, desired_rate;
+          typename Basis::Jacobian jacobian;
+          Basis::evaluate(x, desired, phi, jacobian, desired_rate);
+          return py::make_tuple(Eigen::VectorXd(phi), Eigen::MatrixXd(jacobian),
+                                Eigen::VectorXd(desired_rate));
+        });
       },
-      py::arg("x"), "The paper basis at x (4,): phi (8,) and its Jacobian (8, 4).");
+      py::arg("kind"), py::arg("x"), py::arg("qd"), py::arg("dqd"),
+      "A basis at x (4,) and desired qd, dqd (2,): phi (8,), d phi / dx (8, 4) and "
+      "(d phi / d qd) dqd (8,).");
 }
 
 void bind_hjb(py::module_& m) {
   m.def(
       "hjb_residual",
       [](const Settings& settings, const RowsX4& states, const Eigen::VectorXd& critic_weights,
-         const Eigen::VectorXd& actor_weights) {
-        check_size(critic_weights, PaperBasis::kSize, 1, "critic_weights");
-        check_size(actor_weights, PaperBasis::kSize, 1, "actor_weights");
+         const Eigen::VectorXd& actor_weights, double t) {
+        check_size(critic_weights, 8, 1, "critic_weights");
+        check_size(actor_weights, 8, 1, "actor_weights");
         check_finite(critic_weights, "critic_weights");
         check_finite(actor_weights, "actor_weights");
         check_finite(states, "x");
-        const PaperClosedLoop loop(settings);
-        const PaperBasis::Vector wc = critic_weights, wa = actor_weights;
-        Eigen::VectorXd residual(states.rows());
-        py::gil_scoped_release release;
-        for (Eigen::Index i = 0; i < states.rows(); ++i)
-          residual[i] = hjb_error<PaperBasis>(loop.error_system(), loop.cost(),
-                                              states.row(i).transpose(), wc, wa);
-        return residual;
+        check_finite(t, "t");
+        return with_basis(settings.basis, [&](auto basis) {
+          using Basis = decltype(basis);
+          const ClosedLoop<TwoLinkArm, Basis> loop(settings);
+          const typename Basis::Vector wc = critic_weights, wa = actor_weights;
+          const DesiredState desired = loop.trajectory()(t);
+          Eigen::VectorXd residual(states.rows());
+          py::gil_scoped_release release;
+          for (Eigen::Index i = 0; i < states.rows(); ++i)
+            residual[i] = hjb_error<Basis>(loop.error_system(), loop.cost(),
+                                           states.row(i).transpose(), desired, wc, wa);
+          return residual;
+        });
       },
       py::arg("settings"), py::arg("x"), py::arg("critic_weights"), py::arg("actor_weights"),
-      "HJB error of eq. (21) at each row of x (n, 4) for weights (8,); returns (n,).");
+      py::arg("t"),
+      "HJB error of eq. (21) at each row of x (n, 4) for weights (8,), with the desired state at "
+      "time t; returns (n,).");
 }
 
 void bind_closed_loop(py::module_& m) {
@@ -160,41 +235,64 @@ void bind_closed_loop(py::module_& m) {
       [](const Settings& settings, double t, const Eigen::VectorXd& state) {
         check_size(state, PaperClosedLoop::kStateSize, 1, "state");
         check_finite(state, "state");
-        const PaperClosedLoop loop(settings);
-        PaperClosedLoop::TimeSignals signals;
-        PaperClosedLoop::State x = state, rate;
-        PaperClosedLoop::Outputs outputs;
-        loop.time_signals(t, signals);
-        loop.derivative(signals, x, rate, &outputs);
-        py::dict out;
-        out["e1"] = outputs.errors.e1;
-        out["e2"] = outputs.errors.e2;
-        out["tau"] = outputs.tau;
-        out["u_hat"] = outputs.u_hat;
-        out["mu"] = outputs.mu;
-        out["probe"] = outputs.probe;
-        out["hjb_error"] = outputs.hjb_error;
-        return py::make_tuple(Eigen::VectorXd(rate), out);
+        check_finite(t, "t");
+        return with_basis(settings.basis, [&](auto basis) {
+          using Loop = ClosedLoop<TwoLinkArm, decltype(basis)>;
+          Loop loop(settings);
+          typename Loop::TimeSignals signals;
+          typename Loop::State x = state, rate;
+          typename Loop::Outputs outputs;
+          loop.begin_step(t, x);
+          loop.time_signals(t, signals);
+          loop.derivative(signals, x, rate, &outputs);
+          py::dict out;
+          out["qd"] = outputs.qd;
+          out["e1"] = outputs.errors.e1;
+          out["e2"] = outputs.errors.e2;
+          out["tau"] = outputs.tau;
+          out["u"] = outputs.u;
+          out["u_hat"] = outputs.u_hat;
+          out["mu"] = outputs.mu;
+          out["probe"] = outputs.probe;
+          out["hjb_error"] = outputs.hjb_error;
+          return py::make_tuple(Eigen::VectorXd(rate), out);
+        });
       },
       py::arg("settings"), py::arg("t"), py::arg("state"),
-      "Right-hand side at t of state (86,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major), "
-      "nu (2)]; returns (rate (86,), outputs dict).");
+      "Right-hand side at t of state (87,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major), "
+      "nu (2), J]; local extrapolation points are drawn around this state first. Returns "
+      "(rate (87,), outputs dict).");
   m.def(
       "initial_state",
       [](const Settings& settings) {
-        return Eigen::VectorXd(PaperClosedLoop(settings).initial_state());
+        return with_basis(settings.basis, [&](auto basis) {
+          return Eigen::VectorXd(ClosedLoop<TwoLinkArm, decltype(basis)>(settings).initial_state());
+        });
       },
-      py::arg("settings"), "The closed loop's initial state (86,).");
+      py::arg("settings"), "The closed loop's initial state (87,).");
+  m.def(
+      "extrapolation_points",
+      [](const Settings& settings) {
+        const PaperClosedLoop loop(settings);
+        const auto& points = loop.extrapolation().points();
+        RowsX4 out(static_cast<Eigen::Index>(points.size()), 4);
+        for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
+        return out;
+      },
+      py::arg("settings"),
+      "The fixed or grid extrapolation points (N, 4) in x (zeros for mode local, whose points are "
+      "drawn around the state at each step).");
 }
 
 void bind_simulation(py::module_& m) {
-  py::class_<PaperSimulation>(m, "Simulation",
-                              "The closed-loop run; advance(n) takes up to n RK4 steps.")
+  py::class_<AnySimulation>(m, "Simulation",
+                            "The closed-loop run (basis from settings.basis); advance(n) takes up "
+                            "to n RK4 steps.")
       .def(py::init<const Settings&>(), py::arg("settings"))
-      .def("advance", &PaperSimulation::advance, py::arg("max_steps"),
+      .def("advance", &AnySimulation::advance, py::arg("max_steps"),
            py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("status",
-                             [](const PaperSimulation& s) {
+                             [](const AnySimulation& s) {
                                switch (s.status()) {
                                  case RunStatus::running:
                                    return "running";
@@ -204,32 +302,35 @@ void bind_simulation(py::module_& m) {
                                    return "diverged";
                                }
                              })
-      .def_property_readonly("steps", &PaperSimulation::steps)
-      .def_property_readonly("step", &PaperSimulation::step)
-      .def_property_readonly("divergence_time", &PaperSimulation::divergence_time)
-      .def_property_readonly("reset_times", &PaperSimulation::reset_times)
-      .def_property_readonly("state",
-                             [](const PaperSimulation& s) { return Eigen::VectorXd(s.state()); })
+      .def_property_readonly("steps", &AnySimulation::steps)
+      .def_property_readonly("step", &AnySimulation::step)
+      .def_property_readonly("divergence_time", &AnySimulation::divergence_time)
+      .def_property_readonly("reset_times", &AnySimulation::reset_times)
+      .def_property_readonly("state", &AnySimulation::state)
       .def(
           "recording",
-          [](const PaperSimulation& s) {
+          [](const AnySimulation& s) {
             const Recording r = s.recording();
             py::dict out;
             out["t"] = r.t;
             out["q"] = r.q;
             out["dq"] = r.dq;
+            out["qd"] = r.qd;
             out["e1"] = r.e1;
             out["e2"] = r.e2;
             out["tau"] = r.tau;
+            out["u"] = r.u;
             out["u_hat"] = r.u_hat;
             out["mu"] = r.mu;
             out["probe"] = r.probe;
             out["critic_weights"] = r.critic_weights;
             out["actor_weights"] = r.actor_weights;
             out["hjb_error"] = r.hjb_error;
+            out["cost"] = r.cost;
             return out;
           },
-          "Recorded rows so far: dict of arrays t (n,), q ... (n, 2), weights (n, 8).");
+          "Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2), "
+          "weights (n, 8).");
 }
 
 }  // namespace
@@ -238,6 +339,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "adparm's C++ core (private; use the adparm package).";
   bind_settings(m);
   bind_arm(m);
+  bind_trajectory(m);
   bind_basis(m);
   bind_hjb(m);
   bind_closed_loop(m);

@@ -2,8 +2,9 @@
 //   u_hat = -1/2 R^-1 g^T (dphi/dx)^T Wa = -1/2 R^-1 B^T Wa,   B = (dphi/dx) g   (N x m)
 //   dWa = proj{ -eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps_hjb - eta_a2 (Wa - Wc) }
 // B R^-1 B^T is the ERRATA's grad(phi) G grad(phi)^T with G = g R^-1 g^T. The law is the gradient
-// of eps_hjb^2 up to a factor 1/2 that eta_a1 absorbs. proj keeps ||Wa|| <= weight_bound: at the
-// boundary the outward radial component of the rate is removed.
+// of eps_hjb^2 up to a factor 1/2 that eta_a1 absorbs. With Bellman-error extrapolation the
+// gradient term gains its average over the N extrapolation points (extrapolation.hpp). proj keeps
+// ||Wa|| <= weight_bound: at the boundary the outward radial component of the rate is removed.
 #pragma once
 
 #include "adparm/types.hpp"
@@ -38,15 +39,21 @@ class Actor {
     return -0.5 * (R_inverse * (B.transpose() * Wa));
   }
 
-  // eq. (26)
-  Vector weight_rate(const InputGradient& B, const InputWeight& R_inverse, const Vector& omega,
-                     double hjb_error, const Vector& Wa, const Vector& Wc) const {
-    const Vector difference = Wa - Wc;
+  // Adds one sample's share of the gradient term of eq. (26) to `gradient`:
+  //   gradient -= w eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps_hjb
+  // (w = 1 for the trajectory, 1/N for each of N extrapolation points).
+  void add_gradient(const InputGradient& B, const InputWeight& R_inverse, const Vector& omega,
+                    double hjb_error, const Vector& difference, double weight,
+                    Vector& gradient) const {
     const Input projected = R_inverse * (B.transpose() * difference);
-    Vector rate =
-        (-settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) * (B * projected) -
-        settings_.eta_a2 * difference;
-    return project(Wa, rate);
+    gradient.noalias() -=
+        (weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
+        (B * projected);
+  }
+
+  // eq. (26): dWa = proj{gradient - eta_a2 (Wa - Wc)}, difference = Wa - Wc.
+  Vector weight_rate(const Vector& gradient, const Vector& difference, const Vector& Wa) const {
+    return project(Wa, gradient - settings_.eta_a2 * difference);
   }
 
   // proj{}: on or outside the ball ||Wa|| <= weight_bound, drop the outward radial component.

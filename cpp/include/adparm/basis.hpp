@@ -1,10 +1,19 @@
-// The critic/actor basis phi(x) and its Jacobian (eq. 19), for the paper's 8 functions in the
-// ERRATA's ordering:
+// The critic/actor bases phi and their Jacobians (eq. 19). A basis may depend on the desired joint
+// position qd as well as on x = [e1; e2] (an augmented state [x; qd]); it then reports the part of
+// d phi / dt that comes from qd moving, (d phi / d qd) dqd, which the HJB regressor omega needs.
+// A basis offers kSize, kStateDim, Vector, Jacobian and
+//   evaluate(x, desired, phi, jacobian, desired_rate)
+// and the loop takes it unchanged.
+//
+// PaperBasis: the paper's 8 functions in the ERRATA's ordering,
 //   phi(x) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos x2, x4^2, x3 x4, x3 x4 cos x2]
-// (cos x2 = cos q2 because qd = 0). Its exact weights for V* = x^T blockdiag(K, M) x are
+// (cos x2 = cos q2 only when qd2 = 0). Its exact weights for V* = x^T blockdiag(K, M) x are
 //   W* = [K11, K22, 2 K12, p1, 2 p3, p2, 2 p2, 2 p3]   (paper: [4, 6, -8, 5, 2, 1, 2, 2]).
-// Another basis offers kSize, kStateDim, Vector, Jacobian and evaluate(); the loop takes it
-// unchanged.
+//
+// AugmentedBasis: the same functions over [x; qd] with cos x2 replaced by cos(qd2 - x2) = cos q2,
+//   phi(x, qd) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos q2, x4^2, x3 x4, x3 x4 cos q2],
+// so V*(x, qd) = e1^T K e1 + e2^T M(q) e2 is exact for any qd(t), constant or not, with the same
+// W*. It equals PaperBasis when qd2 = 0 at all times (cos and sin of -x2 are exact).
 #pragma once
 
 #include <cmath>
@@ -13,26 +22,67 @@
 
 namespace adparm {
 
+namespace detail {
+// The 8 functions and their x-Jacobian given c (cos q2 or cos x2) and dc_dx2 = d c / d x2.
+template <class Vector, class Jacobian>
+void quadratic_arm_basis(const Vec4& x, double c, double dc_dx2, Vector& phi, Jacobian& jacobian) {
+  const double x1 = x[0], x2 = x[1], x3 = x[2], x4 = x[3];
+  phi << x1 * x1, x2 * x2, x1 * x2, x3 * x3, x3 * x3 * c, x4 * x4, x3 * x4, x3 * x4 * c;
+  jacobian << 2.0 * x1, 0.0, 0.0, 0.0,           //
+      0.0, 2.0 * x2, 0.0, 0.0,                   //
+      x2, x1, 0.0, 0.0,                          //
+      0.0, 0.0, 2.0 * x3, 0.0,                   //
+      0.0, x3 * x3 * dc_dx2, 2.0 * x3 * c, 0.0,  //
+      0.0, 0.0, 0.0, 2.0 * x4,                   //
+      0.0, 0.0, x4, x3,                          //
+      0.0, x3 * x4 * dc_dx2, x4 * c, x3 * c;
+}
+}  // namespace detail
+
 struct PaperBasis {
   static constexpr int kSize = 8;
   static constexpr int kStateDim = 4;
   using Vector = Eigen::Matrix<double, kSize, 1>;
   using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;  // d phi / d x
 
-  static void evaluate(const Vec4& x, Vector& phi, Jacobian& jacobian) {
-    const double x1 = x[0], x2 = x[1], x3 = x[2], x4 = x[3];
-    const double c = std::cos(x2);
-    const double s = std::sin(x2);
-    phi << x1 * x1, x2 * x2, x1 * x2, x3 * x3, x3 * x3 * c, x4 * x4, x3 * x4, x3 * x4 * c;
-    jacobian << 2.0 * x1, 0.0, 0.0, 0.0,       //
-        0.0, 2.0 * x2, 0.0, 0.0,               //
-        x2, x1, 0.0, 0.0,                      //
-        0.0, 0.0, 2.0 * x3, 0.0,               //
-        0.0, -x3 * x3 * s, 2.0 * x3 * c, 0.0,  //
-        0.0, 0.0, 0.0, 2.0 * x4,               //
-        0.0, 0.0, x4, x3,                      //
-        0.0, -x3 * x4 * s, x4 * c, x3 * c;
+  static void evaluate(const Vec4& x, const DesiredState&, Vector& phi, Jacobian& jacobian,
+                       Vector& desired_rate) {
+    detail::quadratic_arm_basis(x, std::cos(x[1]), -std::sin(x[1]), phi, jacobian);
+    desired_rate.setZero();
   }
 };
+
+struct AugmentedBasis {
+  static constexpr int kSize = 8;
+  static constexpr int kStateDim = 4;
+  using Vector = Eigen::Matrix<double, kSize, 1>;
+  using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;  // d phi / d x
+
+  static void evaluate(const Vec4& x, const DesiredState& desired, Vector& phi, Jacobian& jacobian,
+                       Vector& desired_rate) {
+    const double q2 = desired.q[1] - x[1];
+    const double s = std::sin(q2);
+    detail::quadratic_arm_basis(x, std::cos(q2), s, phi, jacobian);
+    // d phi / d qd2 = -d phi / d x2 for the two cos q2 functions
+    desired_rate.setZero();
+    desired_rate[4] = -x[2] * x[2] * s * desired.dq[1];
+    desired_rate[7] = -x[2] * x[3] * s * desired.dq[1];
+  }
+};
+
+enum class BasisKind { paper, augmented };
+
+// Calls f(Basis{}) with the basis type of `kind` (the binding and the bench pick a basis at run
+// time; each basis is its own compiled loop).
+template <class F>
+decltype(auto) with_basis(BasisKind kind, F&& f) {
+  switch (kind) {
+    case BasisKind::paper:
+      return f(PaperBasis{});
+    case BasisKind::augmented:
+    default:
+      return f(AugmentedBasis{});
+  }
+}
 
 }  // namespace adparm

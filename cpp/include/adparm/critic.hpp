@@ -2,6 +2,8 @@
 //   rho   = 1 + nu omega^T Gamma omega
 //   dWc   = -eta_c Gamma omega eps_hjb / rho                 (eq. 23)
 //   dGamma = -eta_c Gamma omega omega^T Gamma / rho           (eq. 24)
+// With Bellman-error extrapolation each law gains the average of the same term over the N
+// extrapolation points (extrapolation.hpp).
 // Gamma is reset to gamma0 I when its smallest eigenvalue falls below epsilon_T. The test needs no
 // eigen-decomposition: lambda_min(Gamma) >= epsilon_T exactly when Gamma - epsilon_T I has a
 // Cholesky factor.
@@ -38,15 +40,19 @@ class Critic {
 
   const CriticSettings& settings() const { return settings_; }
 
-  // eqs. (23)-(24); Gamma is symmetric, so Gamma omega omega^T Gamma = (Gamma omega)(Gamma
+  // Adds one sample's share of eqs. (23)-(24) to the rates:
+  //   weight_rate -= w eta_c Gamma omega eps / rho,  gamma_rate -= w eta_c Gamma omega omega^T
+  //   Gamma / rho
+  // with w = 1 for the trajectory and w = 1/N for each of N extrapolation points
+  // (extrapolation.hpp). Gamma is symmetric, so Gamma omega omega^T Gamma = (Gamma omega)(Gamma
   // omega)^T.
   template <class CovarianceIn, class CovarianceOut>
-  void rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma, Vector& weight_rate,
-             CovarianceOut&& gamma_rate) const {
+  void add_rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma, double weight,
+                 Vector& weight_rate, CovarianceOut&& gamma_rate) const {
     const Vector gamma_omega = gamma * omega;
-    const double gain = settings_.eta_c / (1.0 + settings_.nu * omega.dot(gamma_omega));
-    weight_rate = (-gain * hjb_error) * gamma_omega;
-    gamma_rate.noalias() = (-gain) * gamma_omega * gamma_omega.transpose();
+    const double gain = weight * settings_.eta_c / (1.0 + settings_.nu * omega.dot(gamma_omega));
+    weight_rate.noalias() -= (gain * hjb_error) * gamma_omega;
+    gamma_rate.noalias() -= gain * gamma_omega * gamma_omega.transpose();
   }
 
   // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma).

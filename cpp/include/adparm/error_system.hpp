@@ -6,8 +6,9 @@
 //
 // (the paper prints g = [0; -M^-1], the same system with the opposite sign of u). The torque that
 // realises an input u is tau = h_hat + mu - u, with h_hat the feedforward of the model the
-// controller believes and mu the RISE term (rise.hpp). For a constant qd the joint state follows
-// from x: q = qd - e1, dq = alpha1 e1 - e2, which is what makes f a function of x alone.
+// controller believes and mu the RISE term (rise.hpp). The joint state follows from x and the
+// desired state: q = qd - e1, dq = dqd - e2 + alpha1 e1; f is a function of x alone only for a
+// constant qd, and of [x; qd; dqd] for a trajectory (ERRATA).
 #pragma once
 
 #include "adparm/types.hpp"
@@ -29,23 +30,26 @@ inline TrackingErrors tracking_errors(const Vec2& q, const Vec2& dq, const Vec2&
   return errors;
 }
 
-// The error system for a set-point qd, on the arm model the controller believes.
+inline TrackingErrors tracking_errors(const Vec2& q, const Vec2& dq, const DesiredState& desired,
+                                      const Mat2& alpha1) {
+  return tracking_errors(q, dq, desired.q, desired.dq, alpha1);
+}
+
+// The error system on the arm model the controller believes.
 template <class Arm>
 class ErrorSystem {
  public:
   using Terms = typename Arm::Terms;
 
-  ErrorSystem(const Arm& model, const Mat2& alpha1, const Vec2& qd)
-      : model_(model), alpha1_(alpha1), qd_(qd) {}
+  ErrorSystem(const Arm& model, const Mat2& alpha1) : model_(model), alpha1_(alpha1) {}
 
   const Arm& model() const { return model_; }
   const Mat2& alpha1() const { return alpha1_; }
-  const Vec2& qd() const { return qd_; }
 
-  // q = qd - e1, dq = alpha1 e1 - e2 (constant qd).
-  void joint_state(const Vec4& x, Vec2& q, Vec2& dq) const {
-    q = qd_ - x.head<2>();
-    dq = alpha1_ * x.head<2>() - x.tail<2>();
+  // q = qd - e1, dq = dqd - e2 + alpha1 e1.
+  void joint_state(const Vec4& x, const DesiredState& desired, Vec2& q, Vec2& dq) const {
+    q = desired.q - x.head<2>();
+    dq = desired.dq + alpha1_ * x.head<2>() - x.tail<2>();
   }
 
   // f(x) = [-alpha1 e1 + e2; -M^-1 C e2] (eq. 9) from model terms at the matching joint state.
@@ -59,16 +63,15 @@ class ErrorSystem {
   // Exact-linearization feedforward (eq. 5 in full, ERRATA):
   //   h = M (ddqd + alpha1 de1) + C (dqd + alpha1 e1) + G + F,  de1 = dqd - dq.
   Vec2 feedforward(const Terms& terms, const Vec2& dq, const TrackingErrors& errors,
-                   const Vec2& dqd = Vec2::Zero(), const Vec2& ddqd = Vec2::Zero()) const {
-    const Vec2 de1 = dqd - dq;
-    return terms.mass * (ddqd + alpha1_ * de1) + terms.coriolis * (dqd + alpha1_ * errors.e1) +
-           terms.gravity + terms.friction;
+                   const DesiredState& desired) const {
+    const Vec2 de1 = desired.dq - dq;
+    return terms.mass * (desired.ddq + alpha1_ * de1) +
+           terms.coriolis * (desired.dq + alpha1_ * errors.e1) + terms.gravity + terms.friction;
   }
 
  private:
   Arm model_;
   Mat2 alpha1_;
-  Vec2 qd_;
 };
 
 }  // namespace adparm

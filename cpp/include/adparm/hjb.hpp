@@ -1,7 +1,12 @@
 // The HJB error of eqs. (21)-(22) with critic weights Wc and actor weights Wa at one state x:
-//   eps_hjb = x^T Q x + u_hat^T R u_hat + Wc^T (dphi/dx) (f(x) + g(x) u_hat),   u_hat from eq. (20)
-//   omega   = (dphi/dx) (f(x) + g(x) u_hat)   (the regressor of eqs. 23-26)
+//   eps_hjb = x^T Q x + u_hat^T R u_hat + Wc^T omega,   u_hat from eq. (20)
+//   omega   = (dphi/dx) (f(x) + g(x) u_hat) + (dphi/dqd) dqd   (the regressor of eqs. 23-26)
+// The last term is d phi / dt from the desired position moving (zero for the paper's set-point).
 // With Wc = Wa = W* (basis.hpp) and the ERRATA conditions on Q and R, eps_hjb = 0 at every x.
+//
+// The evaluation is split in two: an HjbPoint holds what does not depend on the weights (the
+// drift part of omega, B = (dphi/dx) g and x^T Q x), so that fixed extrapolation points compute it
+// once; evaluate_hjb() then costs a few small matrix-vector products per point.
 #pragma once
 
 #include "adparm/actor.hpp"
@@ -11,43 +16,68 @@
 namespace adparm {
 
 template <class Basis, int Dof>
+struct HjbPoint {
+  using ActorType = Actor<Basis, Dof>;
+  typename Basis::Vector drift_rate;                 // (dphi/dx) f(x) + (dphi/dqd) dqd
+  typename ActorType::InputGradient input_gradient;  // B = (dphi/dx) g(x)
+  double state_cost = 0.0;                           // x^T Q x
+};
+
+template <class Basis, int Dof>
 struct HjbEvaluation {
   using ActorType = Actor<Basis, Dof>;
-  typename Basis::Vector phi;
-  typename Basis::Jacobian jacobian;
-  typename ActorType::InputGradient input_gradient;  // B = (dphi/dx) g(x)
-  typename ActorType::Input u_hat;                   // eq. (20)
+  typename ActorType::Input u_hat;  // eq. (20)
   typename Basis::Vector omega;
   double error = 0.0;  // eq. (21)
 };
 
-// Evaluates eq. (21) at x, given the drift f(x) and M^-1 of the model at the matching joint state
-// (g(x) = [0; M^-1]).
+// The weight-free part at x, given the desired state, the drift f(x) and M^-1 of the model at the
+// matching joint state (g(x) = [0; M^-1]).
 template <class Basis, int Dof>
-void evaluate_hjb(const Vec4& x, const Vec4& drift,
-                  const Eigen::Matrix<double, Dof, Dof>& mass_inverse, const QuadraticCost& cost,
-                  const typename Basis::Vector& critic_weights,
-                  const typename Basis::Vector& actor_weights, HjbEvaluation<Basis, Dof>& out) {
-  Basis::evaluate(x, out.phi, out.jacobian);
-  out.input_gradient.noalias() = out.jacobian.template rightCols<Dof>() * mass_inverse;
-  out.u_hat = Actor<Basis, Dof>::policy(out.input_gradient, cost.R_inverse(), actor_weights);
-  out.omega.noalias() = out.jacobian * drift;
-  out.omega.noalias() += out.input_gradient * out.u_hat;
-  out.error = cost(x, out.u_hat) + critic_weights.dot(out.omega);
+void prepare_hjb_point(const Vec4& x, const DesiredState& desired, const Vec4& drift,
+                       const Eigen::Matrix<double, Dof, Dof>& mass_inverse,
+                       const QuadraticCost& cost, HjbPoint<Basis, Dof>& point) {
+  typename Basis::Vector phi;
+  typename Basis::Jacobian jacobian;
+  Basis::evaluate(x, desired, phi, jacobian, point.drift_rate);
+  point.drift_rate.noalias() += jacobian * drift;
+  point.input_gradient.noalias() = jacobian.template rightCols<Dof>() * mass_inverse;
+  point.state_cost = cost.state_cost(x);
 }
 
-// eq. (21) at a state x of the error system for a set-point (q, dq recovered from x).
+// eqs. (20)-(21) at a prepared point.
+template <class Basis, int Dof>
+void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCost& cost,
+                  const typename Basis::Vector& critic_weights,
+                  const typename Basis::Vector& actor_weights, HjbEvaluation<Basis, Dof>& out) {
+  out.u_hat = Actor<Basis, Dof>::policy(point.input_gradient, cost.R_inverse(), actor_weights);
+  out.omega = point.drift_rate;
+  out.omega.noalias() += point.input_gradient * out.u_hat;
+  out.error = point.state_cost + cost.input_cost(out.u_hat) + critic_weights.dot(out.omega);
+}
+
+// The weight-free part at an error state x with the desired state `desired` (q, dq recovered from
+// x), on the model the controller believes.
 template <class Basis, class Arm>
-double hjb_error(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
-                 const typename Basis::Vector& critic_weights,
-                 const typename Basis::Vector& actor_weights) {
+void prepare_hjb_point(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
+                       const DesiredState& desired, HjbPoint<Basis, Arm::kDof>& point) {
   Vec2 q, dq;
-  system.joint_state(x, q, dq);
+  system.joint_state(x, desired, q, dq);
   typename Arm::Terms terms;
   system.model().compute(q, dq, terms);
+  prepare_hjb_point<Basis, Arm::kDof>(x, desired, system.drift(x, terms), terms.mass_inverse, cost,
+                                      point);
+}
+
+// eq. (21) at an error state x with the desired state `desired`.
+template <class Basis, class Arm>
+double hjb_error(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
+                 const DesiredState& desired, const typename Basis::Vector& critic_weights,
+                 const typename Basis::Vector& actor_weights) {
+  HjbPoint<Basis, Arm::kDof> point;
+  prepare_hjb_point<Basis>(system, cost, x, desired, point);
   HjbEvaluation<Basis, Arm::kDof> evaluation;
-  evaluate_hjb<Basis, Arm::kDof>(x, system.drift(x, terms), terms.mass_inverse, cost,
-                                 critic_weights, actor_weights, evaluation);
+  evaluate_hjb(point, cost, critic_weights, actor_weights, evaluation);
   return evaluation.error;
 }
 

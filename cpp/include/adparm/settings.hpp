@@ -6,16 +6,20 @@
 
 #include "adparm/actor.hpp"
 #include "adparm/arm_model.hpp"
+#include "adparm/basis.hpp"
+#include "adparm/controller.hpp"
 #include "adparm/critic.hpp"
+#include "adparm/extrapolation.hpp"
 #include "adparm/probing.hpp"
 #include "adparm/rise.hpp"
+#include "adparm/trajectory.hpp"
 
 namespace adparm {
 
 struct TaskSettings {
   Vec2 q0 = Vec2(0.1598, 0.2257);
   Vec2 dq0 = Vec2::Zero();
-  Vec2 qd = Vec2::Zero();
+  TrajectorySettings qd{};  // desired trajectory; default the set-point qd = 0
 };
 
 struct ControlSettings {
@@ -40,6 +44,9 @@ struct Settings {
   ControlSettings control{};
   CriticSettings critic{};
   ActorSettings actor{};
+  ControllerSettings controller{};
+  BasisKind basis = BasisKind::augmented;  // equals the paper's basis while qd2 = 0
+  ExtrapolationSettings extrapolation{};
   Eigen::VectorXd critic_weights;  // Wc(0), one entry per basis function
   Eigen::VectorXd actor_weights;   // Wa(0)
   ProbeSettings probe{};

@@ -5,7 +5,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <variant>
 #include <vector>
 
 #include "adparm/closed_loop.hpp"
@@ -18,24 +20,29 @@ enum class RunStatus { running, finished, diverged };
 // One row per recorded step; matrices are (rows x columns), row-major.
 struct Recording {
   using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  Eigen::VectorXd t;
-  Rows q, dq, e1, e2, tau, u_hat, mu, probe, critic_weights, actor_weights;
-  Eigen::VectorXd hjb_error;
+  Eigen::VectorXd t, hjb_error, cost;  // cost: accumulated cost of eq. (10) from t = 0
+  Rows q, dq, qd, e1, e2, tau, u, u_hat, mu, probe;  // one column per joint
+  Rows critic_weights, actor_weights;                // one column per basis function
   Eigen::Index rows = 0;
 
   void allocate(Eigen::Index capacity, int dof, int basis_size) {
-    t.resize(capacity);
-    hjb_error.resize(capacity);
-    for (Rows* m : {&q, &dq, &e1, &e2, &tau, &u_hat, &mu, &probe}) m->resize(capacity, dof);
-    for (Rows* m : {&critic_weights, &actor_weights}) m->resize(capacity, basis_size);
+    for (Eigen::VectorXd* v : series()) v->resize(capacity);
+    for (Rows* m : joint_series()) m->resize(capacity, dof);
+    for (Rows* m : weight_series()) m->resize(capacity, basis_size);
   }
 
   void shrink_to_rows() {
-    t.conservativeResize(rows);
-    hjb_error.conservativeResize(rows);
-    for (Rows* m : {&q, &dq, &e1, &e2, &tau, &u_hat, &mu, &probe, &critic_weights, &actor_weights})
-      m->conservativeResize(rows, m->cols());
+    for (Eigen::VectorXd* v : series()) v->conservativeResize(rows);
+    for (Rows* m : joint_series()) m->conservativeResize(rows, m->cols());
+    for (Rows* m : weight_series()) m->conservativeResize(rows, m->cols());
   }
+
+ private:
+  std::array<Eigen::VectorXd*, 3> series() { return {&t, &hjb_error, &cost}; }
+  std::array<Rows*, 10> joint_series() {
+    return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
+  }
+  std::array<Rows*, 2> weight_series() { return {&critic_weights, &actor_weights}; }
 };
 
 template <class Arm, class Basis>
@@ -53,8 +60,11 @@ class Simulation {
     // last step is shortened to end exactly at T.
     const double steps = std::ceil(sim_.T / sim_.dt * (1.0 - 1e-12));
     if (steps > 1e10) throw std::invalid_argument("sim.T / sim.dt: more than 1e10 steps");
+    if (sim_.T > system_.trajectory().end_time() * (1.0 + 1e-12))
+      throw std::invalid_argument("task.qd: the samples end before sim.T");
     steps_ = static_cast<long>(steps);
     state_ = system_.initial_state();
+    system_.begin_step(0.0, state_);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, System::kDof, System::kBasisSize);
     record(0.0, state_);
@@ -78,6 +88,7 @@ class Simulation {
         break;
       }
       if (system_.reset_covariance_if_needed(state_)) reset_times_.push_back(t_end);
+      system_.begin_step(t_end, state_);  // for the next step (and the row recorded at t_end)
       if (step_ % sim_.record_every == 0 || step_ == steps_) record(t_end, state_);
       if (step_ == steps_) status_ = RunStatus::finished;
     }
@@ -115,9 +126,11 @@ class Simulation {
     r.t[i] = t;
     r.q.row(i) = state.template segment<System::kDof>(System::kQ).transpose();
     r.dq.row(i) = state.template segment<System::kDof>(System::kDq).transpose();
+    r.qd.row(i) = outputs.qd.transpose();
     r.e1.row(i) = outputs.errors.e1.transpose();
     r.e2.row(i) = outputs.errors.e2.transpose();
     r.tau.row(i) = outputs.tau.transpose();
+    r.u.row(i) = outputs.u.transpose();
     r.u_hat.row(i) = outputs.u_hat.transpose();
     r.mu.row(i) = outputs.mu.transpose();
     r.probe.row(i) = outputs.probe.transpose();
@@ -126,6 +139,7 @@ class Simulation {
     r.actor_weights.row(i) =
         state.template segment<System::kBasisSize>(System::kActorWeights).transpose();
     r.hjb_error[i] = outputs.hjb_error;
+    r.cost[i] = state[System::kCost];
   }
 
   System system_;
@@ -141,5 +155,47 @@ class Simulation {
 };
 
 using PaperSimulation = Simulation<TwoLinkArm, PaperBasis>;
+
+// A simulation of the two-link arm whose basis is picked at run time by settings.basis.
+class AnySimulation {
+ public:
+  explicit AnySimulation(const Settings& settings) : impl_(make(settings)) {}
+
+  long advance(long max_steps) {
+    return std::visit([&](auto& s) { return s.advance(max_steps); }, impl_);
+  }
+  RunStatus status() const {
+    return std::visit([](const auto& s) { return s.status(); }, impl_);
+  }
+  long steps() const {
+    return std::visit([](const auto& s) { return s.steps(); }, impl_);
+  }
+  long step() const {
+    return std::visit([](const auto& s) { return s.step(); }, impl_);
+  }
+  double divergence_time() const {
+    return std::visit([](const auto& s) { return s.divergence_time(); }, impl_);
+  }
+  const std::vector<double>& reset_times() const {
+    return std::visit([](const auto& s) -> const std::vector<double>& { return s.reset_times(); },
+                      impl_);
+  }
+  Eigen::VectorXd state() const {
+    return std::visit([](const auto& s) { return Eigen::VectorXd(s.state()); }, impl_);
+  }
+  Recording recording() const {
+    return std::visit([](const auto& s) { return s.recording(); }, impl_);
+  }
+
+ private:
+  using Variant =
+      std::variant<Simulation<TwoLinkArm, PaperBasis>, Simulation<TwoLinkArm, AugmentedBasis>>;
+  static Variant make(const Settings& settings) {
+    return with_basis(settings.basis, [&](auto basis) {
+      return Variant(std::in_place_type<Simulation<TwoLinkArm, decltype(basis)>>, settings);
+    });
+  }
+  Variant impl_;
+};
 
 }  // namespace adparm

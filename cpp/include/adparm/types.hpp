@@ -15,6 +15,13 @@ using Vec4 = Eigen::Vector4d;
 using Mat4 = Eigen::Matrix4d;
 using Mat42 = Eigen::Matrix<double, 4, 2>;
 
+// The desired joint state at one time: qd, dqd, ddqd (trajectory.hpp).
+struct DesiredState {
+  Vec2 q = Vec2::Zero();
+  Vec2 dq = Vec2::Zero();
+  Vec2 ddq = Vec2::Zero();
+};
+
 // Throws std::invalid_argument (ValueError in Python) naming the argument whose size is wrong.
 template <class Derived>
 void check_size(const Eigen::DenseBase<Derived>& value, Eigen::Index rows, Eigen::Index cols,

@@ -1,0 +1,144 @@
+// Bellman-error extrapolation: the model f, g is known, so the HJB error of eq. (21) can be
+// evaluated at N extra states x_i as well as along the trajectory. The critic and actor laws
+// (eqs. 23, 24, 26) then gain the average of their terms over the points,
+//   dWc    = -eta_c Gamma [omega eps / rho + (1/N) sum_i omega_i eps_i / rho_i]
+//   dGamma = -eta_c Gamma [omega omega^T / rho + (1/N) sum_i omega_i omega_i^T / rho_i] Gamma
+//   dWa    = proj{-eta_a1 [B R^-1 B^T (Wa - Wc) eps / sqrt(1 + omega^T omega) + (1/N) sum_i ...]
+//                 - eta_a2 (Wa - Wc)}
+// which is what lets the critic converge without a probing signal (model-based learning for
+// approximate optimal regulation). The points, in x = [e1; e2], are
+//   fixed  N points drawn once, uniform in the box [-box, box]
+//   grid   a regular grid of m points per axis over the box (N = m^4)
+//   local  N points drawn at the start of every step, uniform in x(t_k) + [-box, box]
+// and each is evaluated with the current desired state (qd, dqd). Draws use MT19937 seeded with
+// `seed`, in the order of NumPy's legacy RandomState(seed).random_sample((N, 4)), each mapped to
+// box * (2 u - 1); so the points are reproducible, also from Python.
+// For a constant desired state the weight-free part of each point (HjbPoint) is computed when the
+// points are drawn, not at every evaluation.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "adparm/hjb.hpp"
+
+namespace adparm {
+
+enum class ExtrapolationMode { fixed, grid, local };
+
+struct ExtrapolationSettings {
+  long points = 0;          // N; 0 turns extrapolation off
+  Vec4 box = Vec4::Ones();  // half-widths in x = [e1; e2]
+  ExtrapolationMode mode = ExtrapolationMode::fixed;
+  std::uint32_t seed = 0;
+};
+
+// Uniform numbers in [0, 1) from MT19937, as NumPy's RandomState.random_sample draws them.
+class UniformDraws {
+ public:
+  explicit UniformDraws(std::uint32_t seed = 0) : generator_(seed) {}
+  double operator()() {
+    const double a = static_cast<double>(generator_() >> 5);
+    const double b = static_cast<double>(generator_() >> 6);
+    return (a * 67108864.0 + b) / 9007199254740992.0;
+  }
+
+ private:
+  std::mt19937 generator_;
+};
+
+template <class Arm, class Basis>
+class Extrapolation {
+ public:
+  using Point = HjbPoint<Basis, Arm::kDof>;
+  using Evaluation = HjbEvaluation<Basis, Arm::kDof>;
+  using Points = std::vector<Vec4, Eigen::aligned_allocator<Vec4>>;
+
+  Extrapolation() = default;
+  // `constant_desired`: the desired state never changes, so points can be prepared once.
+  Extrapolation(const ExtrapolationSettings& settings, bool constant_desired)
+      : settings_(settings), draws_(settings.seed), constant_desired_(constant_desired) {
+    if (settings.points < 0) throw std::invalid_argument("extrapolation.points: must be >= 0");
+    check_finite(settings.box, "extrapolation.box");
+    if (!(settings.box.array() > 0.0).all())
+      throw std::invalid_argument("extrapolation.box: half-widths must be > 0");
+    const long n = settings.points;
+    points_.assign(n, Vec4::Zero());
+    prepared_.resize(n);
+    if (settings.mode == ExtrapolationMode::grid) {
+      const long m = std::lround(std::pow(static_cast<double>(n), 0.25));
+      if (m * m * m * m != n)
+        throw std::invalid_argument("extrapolation.points: grid mode needs N = m^4 points");
+      for (long i = 0; i < n; ++i) {
+        long rest = i;
+        for (int axis = 3; axis >= 0; --axis) {  // the last axis varies fastest
+          const long k = rest % m;
+          rest /= m;
+          points_[i][axis] =
+              m == 1 ? 0.0 : settings.box[axis] * (2.0 * static_cast<double>(k) / (m - 1) - 1.0);
+        }
+      }
+    } else if (settings.mode == ExtrapolationMode::fixed) {
+      draw(Vec4::Zero());
+    }
+  }
+
+  long size() const { return settings_.points; }
+  bool enabled() const { return settings_.points > 0; }
+  bool resamples() const { return enabled() && settings_.mode == ExtrapolationMode::local; }
+  const Points& points() const { return points_; }
+
+  // Start of a step at error state x: draws new local points; prepares points that are fixed for
+  // the step when the desired state is constant.
+  void begin_step(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
+                  const DesiredState& desired) {
+    if (!enabled()) return;
+    if (settings_.mode == ExtrapolationMode::local) {
+      draw(x);
+      prepared_valid_ = false;
+    }
+    if (constant_desired_ && !prepared_valid_) {
+      for (long i = 0; i < size(); ++i)
+        prepare_hjb_point<Basis>(system, cost, points_[i], desired, prepared_[i]);
+      prepared_valid_ = true;
+    }
+  }
+
+  // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state.
+  template <class F>
+  void for_each(const ErrorSystem<Arm>& system, const QuadraticCost& cost,
+                const DesiredState& desired, const typename Basis::Vector& critic_weights,
+                const typename Basis::Vector& actor_weights, F&& f) const {
+    if (!enabled()) return;
+    const double weight = 1.0 / static_cast<double>(size());
+    Point fresh;
+    Evaluation evaluation;
+    for (long i = 0; i < size(); ++i) {
+      const Point* point = &prepared_[i];
+      if (!prepared_valid_) {
+        prepare_hjb_point<Basis>(system, cost, points_[i], desired, fresh);
+        point = &fresh;
+      }
+      evaluate_hjb(*point, cost, critic_weights, actor_weights, evaluation);
+      f(*point, evaluation, weight);
+    }
+  }
+
+ private:
+  void draw(const Vec4& centre) {
+    for (Vec4& point : points_)
+      for (int axis = 0; axis < 4; ++axis)
+        point[axis] = centre[axis] + settings_.box[axis] * (2.0 * draws_() - 1.0);
+  }
+
+  ExtrapolationSettings settings_{};
+  UniformDraws draws_;
+  bool constant_desired_ = true;
+  bool prepared_valid_ = false;
+  Points points_;
+  std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
+};
+
+}  // namespace adparm
