@@ -1,14 +1,31 @@
-"""An independent NumPy implementation of the paper's equations, written from the paper and
-ERRATA.md (not from the C++ sources), for checking the C++ core.
+"""An independent NumPy implementation of the paper's equations, written from the paper,
+ERRATA.md and the closed loop's specification (not from the C++ sources), for checking the C++
+core.
 
-State layout (the core's): [q (2), dq (2), Wc (8), Wa (8), Gamma (8x8, column-major), nu (2)].
+State layout (the core's), 87 entries:
+[q (2), dq (2), Wc (8), Wa (8), Gamma (8x8, column-major), nu (2), J (1)], J the accumulated cost
+int x^T Q x + u^T R u dt with u the controller's applied input.
+
+Conventions: e1 = qd - q, e2 = (dqd - dq) + alpha1 e1, x = [e1; e2]; the error system is
+dx = f(x) + g(x) u with g = [0; M^-1] (ERRATA), and the torque is tau = h + mu - u.
 """
 
 from __future__ import annotations
 
+import functools
+import itertools
+
 import numpy as np
 
-from adparm import Config
+from adparm import Config, SampledTrajectory, SinusoidTrajectory
+
+STATE_SIZE = 87
+Q_SLICE, DQ_SLICE = slice(0, 2), slice(2, 4)
+WC_SLICE, WA_SLICE = slice(4, 12), slice(12, 20)
+GAMMA_SLICE, NU_SLICE, COST_INDEX = slice(20, 84), slice(84, 86), 86
+
+
+# --- arm ------------------------------------------------------------------------------------------
 
 
 def arm_terms(p: dict, q: np.ndarray, dq: np.ndarray):
@@ -34,53 +51,172 @@ def plant_parameters(config: Config) -> dict:
     }
 
 
-def basis(x: np.ndarray):
-    """phi(x) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos x2, x4^2, x3 x4, x3 x4 cos x2] and d phi / dx."""
-    x1, x2, x3, x4 = x
-    c, s = np.cos(x2), np.sin(x2)
+def model_parameters(config: Config) -> dict:
+    return config.model.resolve(config.plant)
+
+
+# --- desired trajectory ---------------------------------------------------------------------------
+
+
+@functools.lru_cache(maxsize=64)
+def _spline(trajectory: SampledTrajectory):
+    return trajectory.spline()
+
+
+def desired(config: Config, t: float):
+    """(qd, dqd, ddqd) at time t, each (2,)."""
+    qd = config.task.qd
+    if isinstance(qd, SinusoidTrajectory):
+        a, w, p = (np.array(getattr(qd, k)) for k in ("amplitude", "frequency", "phase"))
+        angle = w * t + p
+        return (
+            np.array(qd.offset) + (a * np.sin(angle)).sum(axis=1),
+            (a * w * np.cos(angle)).sum(axis=1),
+            -(a * w**2 * np.sin(angle)).sum(axis=1),
+        )
+    if isinstance(qd, SampledTrajectory):
+        spline = _spline(qd)
+        tc = min(max(float(t), qd.t[0]), qd.t[-1])
+        return tuple(np.asarray(spline(tc, nu), dtype=float) for nu in range(3))
+    return np.array(qd, dtype=float), np.zeros(2), np.zeros(2)
+
+
+def error_state(config: Config, q, dq, qd, dqd) -> np.ndarray:
+    """x = [e1; e2] of the joint state (q, dq) for the desired state (qd, dqd)."""
+    alpha1 = np.array(config.control.alpha1)
+    e1 = qd - q
+    e2 = (dqd - dq) + alpha1 @ e1
+    return np.concatenate([e1, e2])
+
+
+def joint_state(config: Config, x, qd, dqd):
+    """(q, dq) of the error state x for the desired state (qd, dqd)."""
+    alpha1 = np.array(config.control.alpha1)
+    e1, e2 = x[:2], x[2:]
+    return qd - e1, dqd - e2 + alpha1 @ e1
+
+
+# --- basis ----------------------------------------------------------------------------------------
+
+
+def basis(kind: str, x, qd=(0.0, 0.0), dqd=(0.0, 0.0)):
+    """phi, d phi / dx (8, 4) and the desired rate (d phi / d qd) dqd (8,).
+
+    paper: phi(x) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos x2, x4^2, x3 x4, x3 x4 cos x2];
+    augmented: the same with cos x2 replaced by cos(qd2 - x2) (= cos q2)."""
+    x1, x2, x3, x4 = np.asarray(x, dtype=float)
+    qd, dqd = np.asarray(qd, dtype=float), np.asarray(dqd, dtype=float)
+    if kind == "paper":
+        c, dc_dx2 = np.cos(x2), -np.sin(x2)
+        dc_dqd2 = 0.0
+    elif kind == "augmented":
+        c = np.cos(qd[1] - x2)
+        dc_dx2 = np.sin(qd[1] - x2)
+        dc_dqd2 = -np.sin(qd[1] - x2)
+    else:
+        raise ValueError(kind)
     phi = np.array([x1**2, x2**2, x1 * x2, x3**2, x3**2 * c, x4**2, x3 * x4, x3 * x4 * c])
     J = np.zeros((8, 4))
     J[0, 0] = 2 * x1
     J[1, 1] = 2 * x2
     J[2, 0], J[2, 1] = x2, x1
     J[3, 2] = 2 * x3
-    J[4, 1], J[4, 2] = -(x3**2) * s, 2 * x3 * c
+    J[4, 1], J[4, 2] = x3**2 * dc_dx2, 2 * x3 * c
     J[5, 3] = 2 * x4
     J[6, 2], J[6, 3] = x4, x3
-    J[7, 1], J[7, 2], J[7, 3] = -x3 * x4 * s, x4 * c, x3 * c
-    return phi, J
+    J[7, 1], J[7, 2], J[7, 3] = x3 * x4 * dc_dx2, x4 * c, x3 * c
+    rate = np.zeros(8)
+    rate[4] = x3**2 * dc_dqd2 * dqd[1]
+    rate[7] = x3 * x4 * dc_dqd2 * dqd[1]
+    return phi, J, rate
 
 
-def error_model(config: Config, x: np.ndarray):
-    """f(x), g(x) of eq. (9) (g = [0; M^-1]) for the set-point qd, on the believed model."""
+# --- error system and HJB -------------------------------------------------------------------------
+
+
+def error_model(config: Config, x, qd, dqd):
+    """f(x), g(x) of eq. (9) (g = [0; M^-1]) on the believed model, at the joint state recovered
+    from x and the desired state (qd, dqd)."""
     alpha1 = np.array(config.control.alpha1)
-    qd = np.array(config.task.qd)
-    e1, e2 = x[:2], x[2:]
-    q = qd - e1
-    dq = alpha1 @ e1 - e2
-    M, C, _, _ = arm_terms(config.model.resolve(config.plant), q, dq)
+    q, dq = joint_state(config, x, qd, dqd)
+    M, C, _, _ = arm_terms(model_parameters(config), q, dq)
     Minv = np.linalg.inv(M)
+    e1, e2 = x[:2], x[2:]
     f = np.concatenate([-alpha1 @ e1 + e2, -Minv @ C @ e2])
     g = np.vstack([np.zeros((2, 2)), Minv])
     return f, g
 
 
-def hjb(config: Config, x, f, g, Wc, Wa):
-    """eq. (22): returns (eps_hjb, omega, u_hat, G_phi)."""
+def hjb(config: Config, x, qd, dqd, Wc, Wa) -> dict:
+    """At state x: u_hat = -1/2 R^-1 g^T J^T Wa, omega = J (f + g u_hat) + desired_rate,
+    eps = x^T Q x + u_hat^T R u_hat + Wc . omega and B = J g (8, 2)."""
     Q = np.array(config.cost.Q)
     R = np.array(config.cost.R)
-    Rinv = np.linalg.inv(R)
-    _, J = basis(x)
-    G_phi = J @ (g @ Rinv @ g.T) @ J.T
-    u_hat = -0.5 * Rinv @ g.T @ J.T @ Wa
-    omega = J @ (f + g @ u_hat)
-    eps = x @ Q @ x + 0.25 * Wa @ G_phi @ Wa + Wc @ J @ f - 0.5 * Wc @ G_phi @ Wa
-    return eps, omega, u_hat, G_phi
+    x = np.asarray(x, dtype=float)
+    f, g = error_model(config, x, qd, dqd)
+    _, J, rate = basis(config.controller.basis, x, qd, dqd)
+    u_hat = -0.5 * np.linalg.solve(R, g.T @ J.T @ Wa)
+    omega = J @ (f + g @ u_hat) + rate
+    eps = x @ Q @ x + u_hat @ R @ u_hat + Wc @ omega
+    return {"eps": eps, "omega": omega, "u_hat": u_hat, "B": J @ g}
 
 
-def hjb_residual(config: Config, x, Wc, Wa) -> float:
-    f, g = error_model(config, x)
-    return hjb(config, x, f, g, np.asarray(Wc), np.asarray(Wa))[0]
+def hjb_residual(config: Config, x, Wc, Wa, t: float = 0.0) -> float:
+    """The HJB error at x with the desired state at time t."""
+    qd, dqd, _ = desired(config, t)
+    return hjb(config, np.asarray(x, dtype=float), qd, dqd, np.asarray(Wc), np.asarray(Wa))["eps"]
+
+
+# --- extrapolation points -------------------------------------------------------------------------
+
+
+def box_vector(config: Config) -> np.ndarray:
+    return np.broadcast_to(np.array(config.extrapolation.box, dtype=float), (4,)).copy()
+
+
+def fixed_points(config: Config) -> np.ndarray:
+    e = config.extrapolation
+    draw = np.random.RandomState(e.seed).random_sample((e.points, 4))
+    return box_vector(config) * (2 * draw - 1)
+
+
+def grid_points(config: Config) -> np.ndarray:
+    e = config.extrapolation
+    m = round(e.points**0.25)
+    assert m**4 == e.points
+    box = box_vector(config)
+    axes = [box[k] * (2 * np.arange(m) / (m - 1) - 1) if m > 1 else np.zeros(1) for k in range(4)]
+    return np.array(list(itertools.product(*axes)), dtype=float).reshape(-1, 4)
+
+
+def extrapolation_points(config: Config) -> np.ndarray:
+    """What adparm.extrapolation_points returns: fixed or grid points, zeros for local."""
+    e = config.extrapolation
+    if e.mode == "fixed":
+        return fixed_points(config)
+    if e.mode == "grid":
+        return grid_points(config)
+    return np.zeros((e.points, 4))
+
+
+class LocalPoints:
+    """The local mode's stream: points = x + box (2 U - 1), U drawn from RandomState(seed)."""
+
+    def __init__(self, config: Config) -> None:
+        self.points = config.extrapolation.points
+        self.box = box_vector(config)
+        self.stream = np.random.RandomState(config.extrapolation.seed)
+
+    def draw(self, x: np.ndarray) -> np.ndarray:
+        return x + self.box * (2 * self.stream.random_sample((self.points, 4)) - 1)
+
+
+def tracking_error(config: Config, t: float, state: np.ndarray) -> np.ndarray:
+    qd, dqd, _ = desired(config, t)
+    return error_state(config, state[Q_SLICE], state[DQ_SLICE], qd, dqd)
+
+
+# --- closed loop ----------------------------------------------------------------------------------
 
 
 def probe(config: Config, t: float) -> np.ndarray:
@@ -102,71 +238,144 @@ def initial_state(config: Config) -> np.ndarray:
             config.init.actor_weights,
             (config.critic.gamma0 * np.eye(8)).reshape(-1, order="F"),
             np.zeros(2),
+            np.zeros(1),
         ]
     )
 
 
-def rhs(config: Config, t: float, state: np.ndarray):
-    """The closed loop's right-hand side and its outputs (tau, u_hat, mu, hjb_error)."""
-    q, dq = state[0:2], state[2:4]
-    Wc, Wa = state[4:12], state[12:20]
-    Gamma = state[20:84].reshape(8, 8, order="F")
-    nu = state[84:86]
+def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None = None):
+    """The closed loop's right-hand side at (t, state) and its outputs (qd, e1, e2, tau, u, u_hat,
+    mu, probe, hjb_error).
+
+    ``points``: the extrapolation points (N, 4) in x. None takes the fixed or grid points of the
+    config, or for mode local the first draw of a fresh stream around this state's x (what
+    _core.closed_loop_derivative does)."""
+    state = np.asarray(state, dtype=float)
+    q, dq = state[Q_SLICE], state[DQ_SLICE]
+    Wc, Wa = state[WC_SLICE], state[WA_SLICE]
+    Gamma = state[GAMMA_SLICE].reshape(8, 8, order="F")
+    nu = state[NU_SLICE]
     alpha1 = np.array(config.control.alpha1)
-    qd = np.array(config.task.qd)
-    e1 = qd - q
-    e2 = -dq + alpha1 @ e1
-    x = np.concatenate([e1, e2])
+    Q = np.array(config.cost.Q)
+    R = np.array(config.cost.R)
+    Rinv = np.linalg.inv(R)
+    qd, dqd, ddqd = desired(config, t)
+    x = error_state(config, q, dq, qd, dqd)
+    e1, e2 = x[:2], x[2:]
+    if points is None:
+        if config.extrapolation.mode == "local":
+            points = LocalPoints(config).draw(x)
+        else:
+            points = extrapolation_points(config)
 
-    f, g = error_model(config, x)
-    eps, omega, u_hat, G_phi = hjb(config, x, f, g, Wc, Wa)
+    sample = hjb(config, x, qd, dqd, Wc, Wa)
+    u_hat = sample["u_hat"]
 
-    # critic, eqs. (23)-(24)
-    rho = 1.0 + config.critic.nu * omega @ Gamma @ omega
-    dWc = -config.critic.eta_c * Gamma @ omega * eps / rho
-    dGamma = -config.critic.eta_c * Gamma @ np.outer(omega, omega) @ Gamma / rho
-    # actor, eq. (26) with projection onto ||Wa|| <= bound
-    a = config.actor
-    dWa = -a.eta_a1 / np.sqrt(1 + omega @ omega) * G_phi @ (Wa - Wc) * eps - a.eta_a2 * (Wa - Wc)
-    if Wa @ Wa >= a.weight_bound**2 and Wa @ dWa > 0:
-        dWa = dWa - Wa * (Wa @ dWa) / (Wa @ Wa)
+    # learning (adp only): critic eqs. (23)-(24) and actor eq. (26), averaged over the
+    # extrapolation points (weight 1/N) on top of the trajectory's own sample (weight 1)
+    kind = config.controller.kind
+    dWc, dWa, dGamma = np.zeros(8), np.zeros(8), np.zeros((8, 8))
+    if kind == "adp":
+        c, a = config.critic, config.actor
+        grad = np.zeros(8)
+        samples = [(1.0, sample)]
+        n = len(points)
+        samples += [(1.0 / n, hjb(config, p, qd, dqd, Wc, Wa)) for p in points]
+        for w, s in samples:
+            omega, eps, B = s["omega"], s["eps"], s["B"]
+            rho = 1.0 + c.nu * omega @ Gamma @ omega
+            dWc += -w * c.eta_c * Gamma @ omega * eps / rho
+            dGamma += -w * c.eta_c * Gamma @ np.outer(omega, omega) @ Gamma / rho
+            grad += -w * a.eta_a1 * eps / np.sqrt(1 + omega @ omega) * B @ Rinv @ B.T @ (Wa - Wc)
+        dWa = grad - a.eta_a2 * (Wa - Wc)
+        if Wa @ Wa >= a.weight_bound**2 and Wa @ dWa > 0:
+            dWa = dWa - Wa * (Wa @ dWa) / (Wa @ Wa)
+
+    # the controller's input u (to dx = f + g u)
+    de1 = e2 - alpha1 @ e1
+    p = probe(config, t) if kind == "adp" else np.zeros(2)
+    if kind == "adp":
+        u = u_hat + p
+    elif kind == "rise":
+        u = np.zeros(2)
+    elif kind == "pd":
+        u = -(config.controller.gain_matrix("kp") @ e1 + config.controller.gain_matrix("kd") @ de1)
+    elif kind == "optimal":
+        u = -Rinv @ e2
+    else:
+        raise ValueError(kind)
 
     # RISE, eqs. (27)-(28)
-    c = config.control
-    e2_0 = -np.array(config.task.dq0) + alpha1 @ (qd - np.array(config.task.q0))
-    mu = (c.ks + 1) * e2 - (c.ks + 1) * e2_0 + nu
-    dnu = (c.ks + 1) * c.alpha2 * e2 + c.beta1 * np.sign(e2)
+    ctl = config.control
+    if config.controller.rise:
+        qd0, dqd0, _ = desired(config, 0.0)
+        e2_0 = error_state(config, np.array(config.task.q0), np.array(config.task.dq0), qd0, dqd0)[
+            2:
+        ]
+        mu = (ctl.ks + 1) * (e2 - e2_0) + nu
+        dnu = (ctl.ks + 1) * ctl.alpha2 * e2 + ctl.beta1 * np.sign(e2)
+    else:
+        mu, dnu = np.zeros(2), np.zeros(2)
 
-    # torque: tau = h_hat + mu - (u_hat + probe), h of eq. (5) with the believed model
-    Mm, Cm, Gm, Fm = arm_terms(config.model.resolve(config.plant), q, dq)
-    h = Mm @ (alpha1 @ (-dq)) + Cm @ (alpha1 @ e1) + Gm + Fm
-    tau = h + mu - (u_hat + probe(config, t))
+    # torque tau = h + mu - u, h of eq. (5) in full on the believed model
+    Mm, Cm, Gm, Fm = arm_terms(model_parameters(config), q, dq)
+    h = Mm @ (ddqd + alpha1 @ (dqd - dq)) + Cm @ (dqd + alpha1 @ e1) + Gm + Fm
+    tau = h + mu - u
 
     # plant, eq. (1)
     Mp, Cp, Gp, Fp = arm_terms(plant_parameters(config), q, dq)
-    a1, a2 = config.plant.disturbance
-    tau_d = np.array([a1 * np.sin(t), a2 * np.cos(t)])
+    d1, d2 = config.plant.disturbance
+    tau_d = np.array([d1 * np.sin(t), d2 * np.cos(t)])
     ddq = np.linalg.solve(Mp, tau - Cp @ dq - Gp - Fp - tau_d)
 
-    rate = np.concatenate([dq, ddq, dWc, dWa, dGamma.reshape(-1, order="F"), dnu])
-    outputs = {"e1": e1, "e2": e2, "tau": tau, "u_hat": u_hat, "mu": mu, "hjb_error": eps}
+    dJ = x @ Q @ x + u @ R @ u
+    rate = np.concatenate([dq, ddq, dWc, dWa, dGamma.reshape(-1, order="F"), dnu, [dJ]])
+    outputs = {
+        "qd": qd,
+        "e1": e1,
+        "e2": e2,
+        "tau": tau,
+        "u": u,
+        "u_hat": u_hat,
+        "mu": mu,
+        "probe": p,
+        "hjb_error": sample["eps"],
+    }
     return rate, outputs
 
 
-def simulate(config: Config, steps: int):
-    """RK4 with the covariance reset between steps; returns the states at each step."""
+def reset_threshold(config: Config) -> float:
+    """epsilon_T as core_settings passes it (critic.epsilon_T, or its default when left out)."""
+    resolved = getattr(config, "resolved_epsilon_T", None)
+    return config.critic.epsilon_T if resolved is None else resolved
+
+
+def simulate(config: Config, steps: int, *, redraw: bool = True):
+    """Classical RK4 (step config.sim.dt) with the covariance reset after each step and, in mode
+    local, the extrapolation points redrawn around the state at the start of each step (drawn
+    once, around x(0), if not ``redraw``). Returns the states (steps + 1, 87) and the reset
+    times."""
     dt = config.sim.dt
     state = initial_state(config)
+    local = LocalPoints(config) if config.extrapolation.mode == "local" else None
+    points = extrapolation_points(config)
+    if local is not None:
+        points = local.draw(tracking_error(config, 0.0, state))
     states = [state.copy()]
+    resets = []
+    epsilon_T = reset_threshold(config)
     for k in range(steps):
         t = k * dt
-        k1 = rhs(config, t, state)[0]
-        k2 = rhs(config, t + dt / 2, state + dt / 2 * k1)[0]
-        k3 = rhs(config, t + dt / 2, state + dt / 2 * k2)[0]
-        k4 = rhs(config, t + dt, state + dt * k3)[0]
+        k1 = rhs(config, t, state, points)[0]
+        k2 = rhs(config, t + dt / 2, state + dt / 2 * k1, points)[0]
+        k3 = rhs(config, t + dt / 2, state + dt / 2 * k2, points)[0]
+        k4 = rhs(config, t + dt, state + dt * k3, points)[0]
         state = state + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        Gamma = state[20:84].reshape(8, 8, order="F")
-        if np.linalg.eigvalsh(Gamma).min() < config.critic.epsilon_T:
-            state[20:84] = (config.critic.gamma0 * np.eye(8)).reshape(-1, order="F")
+        Gamma = state[GAMMA_SLICE].reshape(8, 8, order="F")
+        if np.linalg.eigvalsh(0.5 * (Gamma + Gamma.T)).min() < epsilon_T:
+            state[GAMMA_SLICE] = (config.critic.gamma0 * np.eye(8)).reshape(-1, order="F")
+            resets.append((k + 1) * dt)
+        if local is not None and redraw:
+            points = local.draw(tracking_error(config, (k + 1) * dt, state))
         states.append(state.copy())
-    return np.array(states)
+    return np.array(states), np.array(resets)

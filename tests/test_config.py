@@ -54,7 +54,12 @@ def test_paper_values() -> None:
     assert c.cost.R == ((0.25, 0.0), (0.0, 0.25))
     assert c.control.alpha1 == ((15.6, 10.6), (10.6, 10.4))
     assert (c.critic.eta_c, c.critic.nu, c.critic.gamma0) == (800, 1, 100)
-    assert c.critic.epsilon_T == 1e-6  # our deviation from the printed 1e-3 (README)
+    assert c.critic.epsilon_T is None
+    assert c.resolved_epsilon_T == 1e-6  # our deviation from the printed 1e-3 (README)
+    assert c.updated({"extrapolation": {"points": 10}}).resolved_epsilon_T == 1e-3  # printed
+    assert c.updated({"critic": {"epsilon_T": 0.5}}).resolved_epsilon_T == 0.5
+    assert (c.controller.kind, c.controller.basis, c.controller.rise) == ("adp", "augmented", True)
+    assert c.extrapolation.points == 0
     assert (c.actor.eta_a1, c.actor.eta_a2) == (0.01, 1.0)
     assert c == adparm.Config()
 
@@ -145,6 +150,82 @@ def test_round_trip_through_dict() -> None:
         ),
         ({"probe": {"phases": [[0, 0]]}}, ValueError, "probe.phases: expected shape"),
         ({"actor": {"weight_bound": 0}}, ValueError, "actor.weight_bound: must be > 0"),
+        (
+            {"controller": {"kind": "optimum"}},
+            ValueError,
+            r"controller.kind: expected one of adp, rise, pd, optimal, got 'optimum' "
+            r"\(did you mean 'optimal'\?\)",
+        ),
+        ({"controller": {"kind": 1}}, TypeError, "controller.kind: expected one of"),
+        ({"controller": {"basis": "pape"}}, ValueError, "did you mean 'paper'"),
+        ({"controller": {"rise": "yes"}}, TypeError, "controller.rise: expected true or false"),
+        (
+            {"controller": {"kind": "rise", "rise": False}},
+            ValueError,
+            "controller.rise: kind = 'rise' is the RISE feedback alone",
+        ),
+        ({"controller": {"kp": [1, 2]}}, ValueError, r"controller.kp: expected shape \(2, 2\)"),
+        ({"controller": {"kd": float("nan")}}, ValueError, "controller.kd: must be finite"),
+        ({"extrapolation": {"points": -1}}, ValueError, "extrapolation.points: must be >= 0"),
+        ({"extrapolation": {"points": 2.0}}, TypeError, "extrapolation.points: expected an int"),
+        ({"extrapolation": {"box": 0}}, ValueError, "extrapolation.box: must be > 0"),
+        ({"extrapolation": {"box": [1, 1, 0, 1]}}, ValueError, "extrapolation.box: half-widths"),
+        ({"extrapolation": {"box": [1, 1]}}, ValueError, r"extrapolation.box: expected shape"),
+        ({"extrapolation": {"mode": "random"}}, ValueError, "extrapolation.mode: expected one of"),
+        ({"extrapolation": {"seed": 2**32}}, ValueError, "extrapolation.seed: must be < 2"),
+        (
+            {"extrapolation": {"mode": "grid", "points": 10}},
+            ValueError,
+            "extrapolation.points: grid mode needs m\\^4 points",
+        ),
+        ({"extrapolation": {"pts": 10}}, ValueError, "did you mean 'points'"),
+        ({"task": {"qd": {"amplitude": [1, 1]}}}, ValueError, "task.qd.kind: expected one of"),
+        ({"task": {"qd": {"kind": "sinusiod"}}}, ValueError, "did you mean 'sinusoid'"),
+        (
+            {"task": {"qd": {"kind": "sinusoid", "amplitud": [1, 1]}}},
+            ValueError,
+            r"unknown key task.qd.amplitud \(did you mean 'amplitude'\?\)",
+        ),
+        (
+            {
+                "task": {
+                    "qd": {"kind": "sinusoid", "amplitude": [[1, 2], [3, 4]], "frequency": [1, 2]}
+                }
+            },
+            ValueError,
+            r"task.qd.frequency: expected 2 column",
+        ),
+        (
+            {"task": {"qd": {"kind": "sinusoid", "phase": [0, float("nan")]}}},
+            ValueError,
+            "task.qd.phase: must be finite",
+        ),
+        (
+            {"task": {"qd": {"kind": "samples", "t": [0, 1, 1], "q": [[0, 0]] * 3}}},
+            ValueError,
+            "task.qd.t: sample times must be strictly increasing",
+        ),
+        (
+            {"task": {"qd": {"kind": "samples", "t": [1, 2], "q": [[0, 0]] * 2}}},
+            ValueError,
+            "task.qd.t: the first sample must be at t <= 0",
+        ),
+        (
+            {"task": {"qd": {"kind": "samples", "t": [0, 2], "q": [[0, 0]] * 3}}},
+            ValueError,
+            r"task.qd.q: expected shape \(2, 2\)",
+        ),
+        (
+            {"task": {"qd": {"kind": "samples", "t": [0, 2], "q": [[0, 0]] * 2}}},
+            ValueError,
+            r"task.qd: the samples end at t = 2 s, before sim.T = 150 s",
+        ),
+        (
+            {"task": {"qd": {"kind": "samples", "file": "/nonexistent/qd.csv"}}},
+            ValueError,
+            "task.qd.file: cannot read",
+        ),
+        ({"critic": {"gamma0": 1e-7}}, ValueError, "critic.epsilon_T: must be < critic.gamma0"),
     ],
 )
 def test_bad_input_names_the_field(data, error, message) -> None:
@@ -169,3 +250,49 @@ def test_load_config_refuses_unknown_keys_in_files(tmp_path) -> None:
 def test_simulate_refuses_non_config() -> None:
     with pytest.raises(TypeError, match="config: expected adparm.Config"):
         adparm.simulate({"sim": {"T": 1}})  # type: ignore[arg-type]
+
+
+def test_trajectories_round_trip_through_toml(tmp_path) -> None:
+    sinusoid = adparm.paper_config().updated(
+        {
+            "task": {
+                "qd": {
+                    "kind": "sinusoid",
+                    "amplitude": [[0.5, 0.1], [0.3, 0.0]],
+                    "frequency": [[1.0, 3.0], [2.0, 1.0]],
+                    "offset": [0.1, -0.2],
+                }
+            }
+        }
+    )
+    assert sinusoid.task.qd.phase == ((0.0, 0.0), (0.0, 0.0))
+    path = tmp_path / "sinusoid.toml"
+    path.write_text(sinusoid.to_toml())
+    assert adparm.load_config(path) == sinusoid
+
+    samples = tmp_path / "data" / "qd.csv"
+    samples.parent.mkdir()
+    samples.write_text("t,qd1,qd2\n# a comment\n0,0,0\n1,0.5,0.2\n2,0.3,0.1\n3,0,0\n")
+    (tmp_path / "data" / "run.toml").write_text(
+        '[task.qd]\nkind = "samples"\nfile = "qd.csv"\n\n[sim]\nT = 3.0\n'
+    )
+    config = adparm.load_config(tmp_path / "data" / "run.toml")  # file relative to the TOML
+    assert config.task.qd.t == (0.0, 1.0, 2.0, 3.0)
+    assert config.task.qd.q[1] == (0.5, 0.2)
+    written = tmp_path / "written.toml"
+    written.write_text(config.to_toml())  # the samples inline, no file
+    again = adparm.load_config(written)
+    assert again.task.qd.file is None
+    assert (again.task.qd.t, again.task.qd.q) == (config.task.qd.t, config.task.qd.q)
+
+
+def test_sample_file_errors_name_the_line(tmp_path) -> None:
+    path = tmp_path / "qd.csv"
+    path.write_text("t,qd1,qd2\n0,0,0\n1,0.5\n")
+    with pytest.raises(ValueError, match=r"task.qd.file: .*qd.csv:3: expected 3 columns"):
+        adparm.SampledTrajectory(file=str(path))
+    path.write_text("0,0,0\n1,x,0\n")
+    with pytest.raises(ValueError, match=r"qd.csv:2: not numbers"):
+        adparm.SampledTrajectory(file=str(path))
+    with pytest.raises(ValueError, match="give either file or t and q"):
+        adparm.SampledTrajectory(file=str(path), t=(0.0, 1.0), q=((0, 0), (0, 0)))

@@ -4,6 +4,7 @@ A C++ core (adparm._core) integrates the closed loop of the paper; this package 
 runs it and returns NumPy arrays.
 """
 
+from .comparison import Comparison, compare
 from .config import (
     ActorConfig,
     Config,
@@ -29,6 +30,7 @@ from .optimal import (
     initial_error_state,
     optimal_value,
     optimal_weights,
+    solvable_cost,
 )
 from .report import write_report
 from .simulation import (
@@ -45,6 +47,7 @@ __version__ = "0.1.0"
 __all__ = [
     "BASIS_NAMES",
     "ActorConfig",
+    "Comparison",
     "Config",
     "ControlConfig",
     "ControllerConfig",
@@ -61,6 +64,7 @@ __all__ = [
     "SimulationResult",
     "SinusoidTrajectory",
     "TaskConfig",
+    "compare",
     "desired_state",
     "extrapolation_points",
     "hjb_residual",
@@ -71,5 +75,6 @@ __all__ = [
     "optimal_weights",
     "paper_config",
     "simulate",
+    "solvable_cost",
     "write_report",
 ]

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 _FloatArray: TypeAlias = NDArray[np.float64]
 
-#: Size of the closed loop's state [q (2), dq (2), Wc (8), Wa (8), Gamma (64), nu (2)].
+#: Size of the closed loop's state [q (2), dq (2), Wc (8), Wa (8), Gamma (64), nu (2), J (1)].
 STATE_SIZE: int
 
 # --- settings -----------------------------------------------------------------------------------
@@ -76,8 +76,28 @@ class ProbeSettings:
     @phases.setter
     def phases(self, value: ArrayLike) -> None: ...
 
+class TrajectoryKind:
+    constant: TrajectoryKind
+    sinusoid: TrajectoryKind
+    spline: TrajectoryKind
+
+class TrajectorySettings:
+    """kind, offset (2,); sinusoid: amplitude, frequency, phase (2, n); spline: breaks (n + 1,),
+    coefficients (n, 8)."""
+
+    kind: TrajectoryKind
+    offset: _FloatArray
+    amplitude: _FloatArray
+    frequency: _FloatArray
+    phase: _FloatArray
+    breaks: _FloatArray
+    coefficients: _FloatArray
+    def __init__(self) -> None: ...
+
 class TaskSettings:
-    """q0 (2,), dq0 (2,), qd (2,)."""
+    """q0 (2,), dq0 (2,), qd (TrajectorySettings)."""
+
+    qd: TrajectorySettings
 
     def __init__(self) -> None: ...
     @property
@@ -88,10 +108,6 @@ class TaskSettings:
     def dq0(self) -> _FloatArray: ...
     @dq0.setter
     def dq0(self, value: ArrayLike) -> None: ...
-    @property
-    def qd(self) -> _FloatArray: ...
-    @qd.setter
-    def qd(self, value: ArrayLike) -> None: ...
 
 class ControlSettings:
     """alpha1 (2, 2) and the RISE gains."""
@@ -103,6 +119,39 @@ class ControlSettings:
         """(2, 2)"""
     @alpha1.setter
     def alpha1(self, value: ArrayLike) -> None: ...
+
+class ControllerKind:
+    adp: ControllerKind
+    rise: ControllerKind
+    pd: ControllerKind
+    optimal: ControllerKind
+
+class ControllerSettings:
+    """kind, rise, kp (2, 2), kd (2, 2)."""
+
+    kind: ControllerKind
+    rise: bool
+    kp: _FloatArray
+    kd: _FloatArray
+    def __init__(self) -> None: ...
+
+class BasisKind:
+    paper: BasisKind
+    augmented: BasisKind
+
+class ExtrapolationMode:
+    fixed: ExtrapolationMode
+    grid: ExtrapolationMode
+    local: ExtrapolationMode
+
+class ExtrapolationSettings:
+    """points, box (4,), mode, seed."""
+
+    points: int
+    box: _FloatArray
+    mode: ExtrapolationMode
+    seed: int
+    def __init__(self) -> None: ...
 
 class SimSettings:
     """T, dt, record_every, divergence_bound."""
@@ -123,6 +172,9 @@ class Settings:
     control: ControlSettings
     critic: CriticSettings
     actor: ActorSettings
+    controller: ControllerSettings
+    basis: BasisKind
+    extrapolation: ExtrapolationSettings
     probe: ProbeSettings
     sim: SimSettings
     def __init__(self) -> None: ...
@@ -170,28 +222,43 @@ def simulate_open_loop(
 ) -> _FloatArray:
     """RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4)."""
 
-def basis(x: ArrayLike) -> tuple[_FloatArray, _FloatArray]:
-    """The paper basis at x (4,): phi (8,) and its Jacobian (8, 4)."""
+def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
+    """The desired state at times t (n,): rows [qd1, qd2, dqd1, dqd2, ddqd1, ddqd2] (n, 6)."""
+
+def basis(
+    kind: BasisKind, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
+) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
+    """A basis at x (4,) and desired qd, dqd (2,): phi (8,), d phi / dx (8, 4) and
+    (d phi / d qd) dqd (8,)."""
 
 def hjb_residual(
-    settings: Settings, x: ArrayLike, critic_weights: ArrayLike, actor_weights: ArrayLike
+    settings: Settings,
+    x: ArrayLike,
+    critic_weights: ArrayLike,
+    actor_weights: ArrayLike,
+    t: float,
 ) -> _FloatArray:
-    """HJB error of eq. (21) at each row of x (n, 4) for weights (8,); returns (n,)."""
+    """HJB error of eq. (21) at each row of x (n, 4) for weights (8,), with the desired state at
+    time t; returns (n,)."""
 
 # --- closed loop ----------------------------------------------------------------------------------
 
 def closed_loop_derivative(
     settings: Settings, t: float, state: ArrayLike
 ) -> tuple[_FloatArray, dict[str, _FloatArray | float]]:
-    """Right-hand side at t of state (86,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major),
-    nu (2)]; returns (rate (86,), outputs dict of e1, e2, tau, u_hat, mu, probe (2,) and
-    hjb_error (float))."""
+    """Right-hand side at t of state (87,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major),
+    nu (2), J]; local extrapolation points are drawn around this state first. Returns
+    (rate (87,), outputs dict of qd, e1, e2, tau, u, u_hat, mu, probe (2,) and hjb_error
+    (float))."""
 
 def initial_state(settings: Settings) -> _FloatArray:
-    """The closed loop's initial state (86,)."""
+    """The closed loop's initial state (87,)."""
+
+def extrapolation_points(settings: Settings) -> _FloatArray:
+    """The fixed or grid extrapolation points (N, 4) in x (zeros for mode local)."""
 
 class Simulation:
-    """The closed-loop run; advance(n) takes up to n RK4 steps."""
+    """The closed-loop run (basis from settings.basis); advance(n) takes up to n RK4 steps."""
 
     def __init__(self, settings: Settings) -> None: ...
     def advance(self, max_steps: int) -> int:
@@ -212,6 +279,7 @@ class Simulation:
         """Times (s) of the covariance resets so far."""
     @property
     def state(self) -> _FloatArray:
-        """Current closed-loop state (86,)."""
+        """Current closed-loop state (87,)."""
     def recording(self) -> dict[str, _FloatArray]:
-        """Recorded rows so far: dict of arrays t (n,), q ... (n, 2), weights (n, 8)."""
+        """Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2),
+        weights (n, 8)."""

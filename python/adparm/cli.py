@@ -1,4 +1,5 @@
-"""Command line: ``adparm reproduce`` and ``adparm run CONFIG`` (also ``python -m adparm``)."""
+"""Command line: ``adparm reproduce``, ``adparm run CONFIG`` and ``adparm compare [CONFIG]``
+(also ``python -m adparm``)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from .comparison import DEFAULT_KINDS, _controller_configs, compare
 from .config import Config, load_config, paper_config
 from .report import FIGURE_FORMATS, check_formats, write_report
 from .simulation import SimulationDiverged, SimulationResult, simulate
@@ -52,7 +54,59 @@ def _parser() -> argparse.ArgumentParser:
     run = commands.add_parser("run", help="run a TOML configuration and write the same artefacts")
     run.add_argument("config", type=Path, help="TOML file ([plant] [task] [cost] ... [sim])")
     common(run, "results")
+    comparison = commands.add_parser(
+        "compare",
+        help="run the same arm, task and initial state under several controllers and tabulate "
+        "cost, errors and torques",
+        description="Run adp (the learning run and a second run from its learned weights without "
+        "probing), rise, pd and optimal on the same arm, task and initial state; write "
+        "compare.md/csv/json, the figure compare.<format> and config.toml.",
+    )
+    comparison.add_argument(
+        "config",
+        type=Path,
+        nargs="?",
+        default=None,
+        help="TOML file (default: the paper's instance); controller.kind is replaced per run",
+    )
+    common(comparison, "compare")
+    comparison.add_argument(
+        "--kinds",
+        default=",".join(DEFAULT_KINDS),
+        help=f"controllers, comma-separated; default {','.join(DEFAULT_KINDS)}",
+    )
     return parser
+
+
+def _kinds(text: str) -> tuple[str, ...]:
+    return tuple(kind.strip() for kind in text.split(",") if kind.strip())
+
+
+def _compare(args: argparse.Namespace) -> int:
+    try:
+        config = paper_config() if args.config is None else load_config(args.config)
+        if args.T is not None:
+            config = config.updated({"sim": {"T": args.T}})
+        kinds = _kinds(args.kinds)
+        _controller_configs(config, kinds)  # every check before the first run
+    except (OSError, ValueError, TypeError) as error:
+        print(f"adparm compare: {error}", file=sys.stderr)
+        return 2
+    comparison = compare(config, kinds, progress=not args.no_progress)
+    out = Path(args.out)
+    comparison.save(out)
+    (out / "config.toml").write_text(config.to_toml())
+    if not args.no_figures:
+        from .plotting import save_figures
+
+        save_figures({"compare": comparison.plot()}, out, args.formats)
+    print(comparison.table_markdown(), end="")
+    figures = "" if args.no_figures else ", compare." + "/".join(args.formats)
+    print(f"wrote {out}/ (compare.md, compare.csv, compare.json, config.toml{figures})")
+    if comparison.diverged:
+        print(f"adparm compare: diverged: {', '.join(comparison.diverged)}", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _simulate(config: Config, progress: bool) -> tuple[SimulationResult, str | None]:
@@ -65,6 +119,8 @@ def _simulate(config: Config, progress: bool) -> tuple[SimulationResult, str | N
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``adparm`` command; returns the exit status."""
     args = _parser().parse_args(argv)
+    if args.command == "compare":
+        return _compare(args)
     try:
         config = paper_config() if args.command == "reproduce" else load_config(args.config)
         if args.T is not None:

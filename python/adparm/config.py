@@ -414,31 +414,41 @@ class ControlConfig:
             )
 
 
+#: The covariance-reset threshold used when critic.epsilon_T is left out (None).
+EPSILON_T_PROBING = 1e-6  # learning from the probing signal alone (README, "Probing")
+EPSILON_T_EXTRAPOLATION = 1e-3  # with Bellman-error extrapolation: the paper's printed value
+
+
 @dataclass(frozen=True)
 class CriticConfig:
     """Normalised least squares of eqs. (23)-(24): gain eta_c, normalisation nu,
     Gamma(0) = gamma0 I, reset to gamma0 I when lambda_min(Gamma) < epsilon_T.
 
-    Paper values except epsilon_T = 1e-6 (paper: 1e-3). With 1e-3 Gamma is reset every few tens
-    of ms under strong excitation, each window is too short to inform the weakly excited e1
-    direction, and the critic stalls 10-40 % off W*; see README, "Probing"."""
+    Paper values, except that epsilon_T (paper: 1e-3) left out (None) depends on where the
+    excitation comes from (Config.resolved_epsilon_T):
+    - 1e-6 when the critic learns from the probing signal alone (no extrapolation points). With
+      1e-3, Gamma is reset every few tens of ms under strong probing, each window is too short to
+      inform the weakly excited e1 direction, and the critic stalls 10-40 % off W* (README,
+      "Probing").
+    - the printed 1e-3 with Bellman-error extrapolation. There the information grows steadily, and
+      frequent resets keep the least-squares gain alive while the target (the value of the moving
+      actor) moves; with 1e-6 the gain decays and the critic can take minutes (README,
+      "Bellman-error extrapolation")."""
 
     eta_c: float = 800.0
     nu: float = 1.0
     gamma0: float = 100.0
-    epsilon_T: float = 1e-6
+    epsilon_T: float | None = None
 
     def __post_init__(self) -> None:
-        for key in ("eta_c", "nu", "epsilon_T"):
+        for key in ("eta_c", "nu"):
             object.__setattr__(self, key, _scalar(getattr(self, key), f"critic.{key}", minimum=0.0))
         object.__setattr__(
             self, "gamma0", _scalar(self.gamma0, "critic.gamma0", minimum=0.0, strict=True)
         )
-        if self.epsilon_T >= self.gamma0:
-            raise ValueError(
-                f"critic.epsilon_T: must be < critic.gamma0 = {self.gamma0:g}, "
-                f"got {self.epsilon_T:g}"
-            )
+        if self.epsilon_T is not None:
+            epsilon_T = _scalar(self.epsilon_T, "critic.epsilon_T", minimum=0.0)
+            object.__setattr__(self, "epsilon_T", epsilon_T)
 
 
 @dataclass(frozen=True)
@@ -685,6 +695,11 @@ class Config:
                 )
         model = self.model.resolve(self.plant)
         _check_arm(model["p1"], model["p2"], model["p3"], "model")
+        if self.resolved_epsilon_T >= self.critic.gamma0:
+            raise ValueError(
+                f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
+                f"got {self.resolved_epsilon_T:g}"
+            )
         qd = self.task.qd
         if isinstance(qd, SampledTrajectory) and qd.t[-1] < self.sim.T * (1.0 - 1e-12):
             raise ValueError(
@@ -723,6 +738,14 @@ class Config:
             }
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
+
+    @property
+    def resolved_epsilon_T(self) -> float:
+        """critic.epsilon_T, or its default for this run when left out: 1e-6 when learning from
+        the probing signal alone, the paper's 1e-3 with Bellman-error extrapolation."""
+        if self.critic.epsilon_T is not None:
+            return self.critic.epsilon_T
+        return EPSILON_T_EXTRAPOLATION if self.extrapolation.points > 0 else EPSILON_T_PROBING
 
     def to_toml(self) -> str:
         """The config as TOML text that load_config reads back to an equal config."""

@@ -10,7 +10,14 @@ from . import _core
 from .config import Config
 from .simulation import core_settings, desired_state
 
-__all__ = ["BASIS_NAMES", "hjb_residual", "initial_error_state", "optimal_value", "optimal_weights"]
+__all__ = [
+    "BASIS_NAMES",
+    "hjb_residual",
+    "initial_error_state",
+    "optimal_value",
+    "optimal_weights",
+    "solvable_cost",
+]
 
 #: The paper's basis phi(x), x = [e1; e2] (ERRATA ordering).
 BASIS_NAMES = (
@@ -81,6 +88,28 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             2.0 * p["p3"],
         ]
     )
+
+
+def solvable_cost(K: Any, alpha1: Any, R: Any) -> np.ndarray:
+    """The state weight Q (4 x 4) for which V* = x^T blockdiag(K, M(q)) x is the exact HJB
+    solution (ERRATA): Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1. Use it with
+    ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is known. K must be
+    symmetric positive definite; raises ValueError if the resulting Q is not positive definite
+    (then cost.Q would be refused)."""
+    K, alpha1, R = (np.asarray(v, dtype=float) for v in (K, alpha1, R))
+    for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
+        if value.shape != (2, 2) or not np.all(np.isfinite(value)):
+            raise ValueError(f"{name}: expected a finite 2 x 2 matrix, got {value.tolist()}")
+    if not np.allclose(K, K.T) or np.linalg.eigvalsh(K).min() <= 0.0:
+        raise ValueError(f"K: must be symmetric positive definite, got {K.tolist()}")
+    Q = np.block([[K @ alpha1 + alpha1.T @ K, -K], [-K, np.linalg.inv(R)]])
+    Q = 0.5 * (Q + Q.T)
+    if np.linalg.eigvalsh(Q).min() <= 0.0:
+        raise ValueError(
+            "K, alpha1, R: Q = [[K alpha1 + alpha1^T K, -K], [-K, R^-1]] is not positive definite; "
+            "increase alpha1 or decrease R"
+        )
+    return Q
 
 
 def _weights(value: Any, name: str) -> np.ndarray:

@@ -18,11 +18,13 @@ from .optimal import BASIS_NAMES, optimal_weights
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from .comparison import Comparison
     from .simulation import SimulationResult
 
 __all__ = [
     "FIGURES",
     "plot_actor_weights",
+    "plot_comparison",
     "plot_critic_weights",
     "plot_errors",
     "plot_result",
@@ -44,10 +46,10 @@ _RC = {
 }
 
 
-def _figure(rows: int = 1) -> Figure:
+def _figure(rows: int = 1, figsize: tuple[float, float] = _FIGSIZE) -> Figure:
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=_FIGSIZE, layout="constrained")
+    figure = Figure(figsize=figsize, layout="constrained")
     figure.subplots(rows, 1, sharex=True, squeeze=False)
     return figure
 
@@ -139,6 +141,56 @@ def plot_torques(result: SimulationResult) -> Figure:
         (result.probe, "probing signal (N m)", "probe$_{j}$"),
     ]
     return _joint_panels(result, "Applied torques and probing signal", panels, 0.8)
+
+
+def plot_comparison(comparison: Comparison, *, time_scale: str = "symlog") -> Figure:
+    """Controllers side by side (adparm.compare): tracking error e1 and applied torque tau of each
+    joint in four panels over a shared time axis, one line per controller (same colour in every
+    panel; optimal black dashed). The dotted line marks the end of the adp run's probing.
+
+    ``time_scale``: ``"symlog"`` (default: linear up to 1 s, logarithmic after, so that the
+    transients of the first second and the 100 s of probing both show) or ``"linear"``."""
+    import matplotlib
+
+    if time_scale not in ("symlog", "linear"):
+        raise ValueError(f"time_scale: expected 'symlog' or 'linear', got {time_scale!r}")
+    panels = [
+        ("e1", 0, "$e_{1,1}$ (rad)"),
+        ("e1", 1, "$e_{1,2}$ (rad)"),
+        ("tau", 0, "$\\tau_1$ (N m)"),
+        ("tau", 1, "$\\tau_2$ (N m)"),
+    ]
+    results = comparison.results
+    with matplotlib.rc_context(_RC):
+        figure = _figure(len(panels), figsize=(_FIGSIZE[0], 6.4))
+        colours = matplotlib.colormaps["tab10"].colors
+        for axes, (name, joint, ylabel) in zip(figure.axes, panels, strict=True):
+            for i, (label, result) in enumerate(results.items()):
+                reference = label == "optimal"  # black dashed, so that lines under it show
+                axes.plot(
+                    result.t,
+                    getattr(result, name)[:, joint],
+                    color="k" if reference else colours[i % len(colours)],
+                    lw=1.1 if reference else 0.9,
+                    ls="--" if reference else "-",
+                    label=label + ("" if result.status == "finished" else " (diverged)"),
+                )
+            if "adp" in results:
+                _mark_probe_end(axes, results["adp"])
+            axes.set_ylabel(ylabel)
+        last = figure.axes[-1]
+        if time_scale == "symlog":
+            last.set_xscale("symlog", linthresh=1.0)
+        ends = [result.t[-1] for result in results.values() if result.t.size]
+        if ends and max(ends) > 0.0:
+            last.set_xlim(0.0, max(ends))
+        scale_note = ", linear to 1 s, then logarithmic" if time_scale == "symlog" else ""
+        last.set_xlabel(f"time t (s{scale_note})")
+        figure.axes[0].legend(
+            loc="lower center", bbox_to_anchor=(0.5, 1.0), ncols=min(len(results), 5)
+        )
+        figure.suptitle("Controllers compared: tracking errors and applied torques")
+    return figure
 
 
 #: Figure name -> function; the names are the file stems written by save_figures.

@@ -68,8 +68,9 @@ def core_settings(config: Config) -> _core.Settings:
     settings.control = control
 
     critic = _core.CriticSettings()
-    for key in ("eta_c", "nu", "gamma0", "epsilon_T"):
+    for key in ("eta_c", "nu", "gamma0"):
         setattr(critic, key, getattr(config.critic, key))
+    critic.epsilon_T = config.resolved_epsilon_T
     settings.critic = critic
     actor = _core.ActorSettings()
     for key in ("eta_a1", "eta_a2", "weight_bound"):

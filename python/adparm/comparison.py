@@ -1,0 +1,296 @@
+"""Controllers side by side: the same arm, task and initial state under each controller kind.
+
+:func:`compare` runs ``adp`` (the online learning run as configured), ``adp (learned)`` (a second
+run from the same initial state that starts from the learning run's final weights, with probing
+off), ``rise`` (RISE feedback alone, u = 0), ``pd`` and ``optimal`` (u* = -R^-1 e2 of ERRATA.md),
+and tabulates the accumulated cost of eq. (10), tracking errors and torques of each run.
+
+The cost J = int_0^T x^T Q x + u^T R u charges the controller's input u only. The RISE term mu
+(``controller.rise``, on by default) also feeds back and rejects the disturbance, and its effort
+is not charged, so with RISE on a controller that leaves the work to mu (``rise``, ``pd``) can
+show a lower J than ``optimal``, which is optimal for the error system without mu.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import json
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .config import CONTROLLER_KINDS, Config
+from .simulation import SimulationDiverged, SimulationResult, simulate
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+    from matplotlib.figure import Figure
+
+__all__ = ["COMPARE_COLUMNS", "DEFAULT_KINDS", "LEARNED_LABEL", "Comparison", "compare"]
+
+#: The controller kinds :func:`compare` runs by default (all of them).
+DEFAULT_KINDS = ("adp", "rise", "pd", "optimal")
+
+#: Label of the second adp run (final weights of the learning run, no probing, still learning).
+LEARNED_LABEL = "adp (learned)"
+
+#: The keys of each row of :attr:`Comparison.rows`, in column order.
+COMPARE_COLUMNS = (
+    "controller",
+    "accumulated_cost",
+    "cost_vs_optimal",
+    "rms_e1",
+    "final_e1",
+    "peak_torque",
+    "t_end",
+    "wall_time",
+    "status",
+)
+
+# column -> (markdown header, format)
+_MARKDOWN = {
+    "controller": ("controller", "{}"),
+    "accumulated_cost": ("J (eq. 10)", "{:.6g}"),
+    "cost_vs_optimal": ("J / J_optimal - 1", "{:.3g}"),
+    "rms_e1": ("e1 RMS (rad)", "{:.3g}"),
+    "final_e1": ("e1 final (rad)", "{:.3g}"),
+    "peak_torque": ("tau peak (N m)", "{:.4g}"),
+    "t_end": ("t end (s)", "{:g}"),
+    "wall_time": ("wall time (s)", "{:.3g}"),
+    "status": ("status", "{}"),
+}
+
+
+def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
+    if isinstance(kinds, str):
+        kinds = (kinds,)
+    try:
+        kinds = tuple(kinds)
+    except TypeError as error:
+        raise TypeError(
+            f"kinds: expected a sequence of {', '.join(CONTROLLER_KINDS)}, got {kinds!r}"
+        ) from error
+    if not kinds:
+        raise ValueError(f"kinds: expected at least one of {', '.join(CONTROLLER_KINDS)}")
+    for kind in kinds:
+        if not isinstance(kind, str):
+            raise TypeError(
+                f"kinds: expected controller kinds as strings ({', '.join(CONTROLLER_KINDS)}), "
+                f"got {kind!r}"
+            )
+        if kind not in CONTROLLER_KINDS:
+            close = difflib.get_close_matches(kind, CONTROLLER_KINDS, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ValueError(
+                f"kinds: unknown controller kind {kind!r}{hint}; "
+                f"known kinds: {', '.join(CONTROLLER_KINDS)}"
+            )
+    duplicates = sorted({kind for kind in kinds if kinds.count(kind) > 1})
+    if duplicates:
+        named = ", ".join(repr(kind) for kind in duplicates)
+        raise ValueError(f"kinds: each kind at most once, got {named} more than once")
+    return kinds
+
+
+def _controller_configs(
+    config: Config, kinds: str | Iterable[str] = DEFAULT_KINDS
+) -> dict[str, Config]:
+    """The config of each kind (controller.kind replaced), checked before anything runs.
+    ValueError/TypeError for bad kinds or a kind the config cannot run."""
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    configs = {}
+    for kind in _check_kinds(kinds):
+        if kind == "rise" and not config.controller.rise:
+            raise ValueError(
+                "kinds: 'rise' is the RISE feedback alone and needs controller.rise = true, but "
+                "this configuration sets it false; leave 'rise' out of kinds"
+            )
+        configs[kind] = config.updated({"controller": {"kind": kind}})
+    return configs
+
+
+def _learned_config(config: Config, learning: SimulationResult) -> Config:
+    """``config`` (kind adp) started from the final weights of ``learning``, probing off."""
+    if learning.t.size == 0:  # pragma: no cover - the core always records t = 0
+        critic, actor = config.init.critic_weights, config.init.actor_weights
+    else:
+        critic, actor = learning.critic_weights[-1], learning.actor_weights[-1]
+    return config.updated(
+        {
+            "init": {"critic_weights": critic.tolist(), "actor_weights": actor.tolist()},
+            "probe": {"until": 0.0},
+        }
+    )
+
+
+def _run(config: Config, progress: bool) -> SimulationResult:
+    try:
+        return simulate(config, progress=progress)
+    except SimulationDiverged as error:
+        return error.result
+
+
+def _rms_norm(t: np.ndarray, values: np.ndarray) -> float:
+    """sqrt(1/T int |v(t)|^2 dt) over the recorded rows (trapezoid rule in t)."""
+    if t.size == 0:
+        return math.nan
+    squares = np.sum(values**2, axis=1)
+    span = t[-1] - t[0]
+    if span <= 0.0:
+        return float(np.sqrt(squares[-1]))
+    integral = np.sum(0.5 * (squares[1:] + squares[:-1]) * np.diff(t))
+    return float(np.sqrt(integral / span))
+
+
+def _row(label: str, result: SimulationResult, optimal_cost: float | None) -> dict[str, Any]:
+    empty = result.t.size == 0
+    cost = math.nan if empty else float(result.cost[-1])
+    return {
+        "controller": label,
+        "accumulated_cost": cost,
+        "cost_vs_optimal": (
+            None
+            if optimal_cost is None or result.status != "finished"
+            else cost / optimal_cost - 1.0
+        ),
+        "rms_e1": _rms_norm(result.t, result.e1),
+        "final_e1": math.nan if empty else float(np.linalg.norm(result.e1[-1])),
+        "peak_torque": math.nan if empty else float(np.abs(result.tau).max()),
+        "t_end": math.nan if empty else float(result.t[-1]),
+        "wall_time": float(result.wall_time),
+        "status": result.status,
+    }
+
+
+def _plain(value: Any) -> Any:
+    """None for non-finite floats (JSON has no NaN)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Runs of the same arm, task and initial state under several controllers.
+
+    ``results``: label -> SimulationResult (labels: the kinds, plus ``"adp (learned)"`` after
+    ``"adp"``). ``rows``: one dict per label, keys :data:`COMPARE_COLUMNS`:
+
+    - accumulated_cost: J = cost[-1], eq. (10);
+    - cost_vs_optimal: J / J_optimal - 1; None when ``optimal`` did not run, did not finish or
+      cost 0, and for a diverged run (its J covers a shorter time);
+    - rms_e1: sqrt(1/T int |e1|^2 dt) over the recorded rows (trapezoid rule), rad;
+    - final_e1: |e1| at the last row, rad;
+    - peak_torque: max |tau| over both joints and all rows, N m;
+    - t_end: the last recorded time (earlier than sim.T for a diverged run), s;
+    - wall_time (s) and status (finished or diverged) of the run."""
+
+    results: dict[str, SimulationResult]
+    rows: list[dict[str, Any]]
+
+    @property
+    def diverged(self) -> list[str]:
+        """Labels of the runs that diverged."""
+        return [row["controller"] for row in self.rows if row["status"] == "diverged"]
+
+    def table_markdown(self) -> str:
+        """The rows as a Markdown table (``-`` for a missing value), with a note on the cost."""
+        headers = [_MARKDOWN[column][0] for column in COMPARE_COLUMNS]
+        lines = [
+            "| " + " | ".join(headers) + " |",
+            "|" + "|".join("---" if i == 0 else "---:" for i in range(len(headers))) + "|",
+        ]
+        for row in self.rows:
+            cells = []
+            for column in COMPARE_COLUMNS:
+                value = _plain(row[column])
+                cells.append("-" if value is None else _MARKDOWN[column][1].format(value))
+            lines.append("| " + " | ".join(cells) + " |")
+        lines += [
+            "",
+            "J = int_0^T x^T Q x + u^T R u (eq. 10) charges the controller's input u (adp: "
+            "u_hat + probe); the RISE term mu is "
+            + ("on and is not charged." if self._rise() else "off.")
+            + " e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, tau peak = max |tau_j| over "
+            "both joints.",
+        ]
+        return "\n".join(lines) + "\n"
+
+    def _rise(self) -> bool:
+        return any(result.config.controller.rise for result in self.results.values())
+
+    def to_dataframe(self) -> pandas.DataFrame:
+        """The rows as a pandas DataFrame indexed by controller. Needs pandas."""
+        try:
+            import pandas
+        except ImportError as error:  # pragma: no cover - pandas is in the test extra
+            raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
+        frame = pandas.DataFrame(self.rows, columns=list(COMPARE_COLUMNS))
+        return frame.set_index("controller")
+
+    def to_json(self) -> dict[str, Any]:
+        """The content of compare.json: {"columns", "rows"}, non-finite numbers as null."""
+        rows = [{key: _plain(value) for key, value in row.items()} for row in self.rows]
+        return {"columns": list(COMPARE_COLUMNS), "rows": rows}
+
+    def save(self, directory: str | Path) -> list[Path]:
+        """Write compare.csv, compare.json and compare.md to ``directory``; returns the paths."""
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        paths = [directory / f"compare.{ext}" for ext in ("csv", "json", "md")]
+        with paths[0].open("w", newline="") as stream:
+            writer = csv.writer(stream, lineterminator="\n")
+            writer.writerow(COMPARE_COLUMNS)
+            for row in self.rows:
+                writer.writerow(
+                    ["" if _plain(row[c]) is None else _csv(row[c]) for c in COMPARE_COLUMNS]
+                )
+        paths[1].write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        paths[2].write_text("# adparm controller comparison\n\n" + self.table_markdown())
+        return paths
+
+    def plot(self, *, time_scale: str = "symlog") -> Figure:
+        """One figure: e1 and tau of each joint (four panels over a shared time axis, ``symlog``
+        or ``linear``), one line per controller (adparm.plotting.plot_comparison)."""
+        from .plotting import plot_comparison
+
+        return plot_comparison(self, time_scale=time_scale)
+
+
+def _csv(value: Any) -> str:
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+def compare(
+    config: Config,
+    kinds: str | Sequence[str] = DEFAULT_KINDS,
+    *,
+    progress: bool = False,
+) -> Comparison:
+    """Run ``config`` under each controller kind of ``kinds`` (adp, rise, pd, optimal) on the same
+    arm, task and initial state; only controller.kind changes.
+
+    ``adp`` gives two rows: ``"adp"``, the online learning run exactly as configured (probing
+    included), and ``"adp (learned)"``, a second run from the same initial state whose critic and
+    actor start at the learning run's final weights, with probing off (probe.until = 0) and
+    learning still on. A run that diverges is kept, with status "diverged" and its partial result.
+    Raises ValueError for an unknown or repeated kind (with a "did you mean" hint), or for
+    ``rise`` when controller.rise is false."""
+    configs = _controller_configs(config, kinds)
+    results: dict[str, SimulationResult] = {}
+    for kind, kind_config in configs.items():
+        results[kind] = _run(kind_config, progress)
+        if kind == "adp":
+            results[LEARNED_LABEL] = _run(_learned_config(kind_config, results[kind]), progress)
+    optimal = results.get("optimal")
+    optimal_cost = None
+    if optimal is not None and optimal.status == "finished" and optimal.cost[-1] > 0.0:
+        optimal_cost = float(optimal.cost[-1])
+    rows = [_row(label, result, optimal_cost) for label, result in results.items()]
+    return Comparison(results=results, rows=rows)

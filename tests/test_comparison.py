@@ -1,0 +1,235 @@
+"""adparm.compare: controllers side by side, its table, files, figure and ``adparm compare``."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import adparm
+from adparm.cli import main
+from adparm.comparison import COMPARE_COLUMNS, LEARNED_LABEL
+
+LABELS = ["adp", LEARNED_LABEL, "rise", "pd", "optimal"]
+
+
+@pytest.fixture(scope="module")
+def paper_comparison() -> adparm.Comparison:
+    return adparm.compare(adparm.paper_config())  # T = 150 s, about 0.6 s
+
+
+@pytest.fixture(scope="module")
+def short_comparison() -> adparm.Comparison:
+    return adparm.compare(adparm.paper_config().updated({"sim": {"T": 3.0}}))
+
+
+def _zero_weights(T: float) -> adparm.Config:
+    """Zero initial weights: the adp run diverges within milliseconds (ERRATA)."""
+    zeros = [0.0] * 8
+    return adparm.paper_config().updated(
+        {"init": {"critic_weights": zeros, "actor_weights": zeros}, "sim": {"T": T}}
+    )
+
+
+@pytest.mark.slow
+def test_learned_policy_costs_within_one_percent_of_the_optimal_one(paper_comparison) -> None:
+    c = paper_comparison
+    assert list(c.results) == LABELS and [row["controller"] for row in c.rows] == LABELS
+    rows = {row["controller"]: row for row in c.rows}
+    assert all(row["status"] == "finished" for row in c.rows)
+    learned = rows[LEARNED_LABEL]
+    assert abs(learned["cost_vs_optimal"]) < 0.01
+    assert learned["accumulated_cost"] == pytest.approx(rows["optimal"]["accumulated_cost"], 0.01)
+    assert rows["optimal"]["cost_vs_optimal"] == 0.0
+    # the learning run pays for its probe; the learned run is a fresh run from its final weights
+    assert rows["adp"]["accumulated_cost"] > 100.0 * rows["optimal"]["accumulated_cost"]
+    adp, second = c.results["adp"], c.results[LEARNED_LABEL]
+    np.testing.assert_array_equal(second.config.init.critic_weights, adp.critic_weights[-1])
+    np.testing.assert_array_equal(second.config.init.actor_weights, adp.actor_weights[-1])
+    np.testing.assert_array_equal(second.critic_weights[0], adp.critic_weights[-1])
+    assert second.config.probe.until == 0.0 and not np.any(second.probe)
+    assert adp.config == adparm.paper_config()  # the learning run exactly as configured
+    assert second.config.controller.kind == "adp" and second.t[-1] == pytest.approx(150.0)
+    # every run starts from the same state on the same arm and task
+    for label, result in c.results.items():
+        np.testing.assert_array_equal(result.q[0], adp.q[0], err_msg=label)
+        assert result.config.plant == adp.config.plant and result.config.task == adp.config.task
+        assert result.config.controller.kind == ("adp" if "adp" in label else label)
+
+
+def test_optimal_baseline_costs_the_optimal_value() -> None:
+    """Without disturbance and RISE, u* = -R^-1 e2 accumulates exactly V*(x0) (ERRATA)."""
+    config = adparm.paper_config().updated(
+        {"plant": {"disturbance": [0.0, 0.0]}, "controller": {"rise": False}, "sim": {"T": 60.0}}
+    )
+    comparison = adparm.compare(config, kinds=["optimal"])
+    result = comparison.results["optimal"]
+    assert list(comparison.results) == ["optimal"] and result.status == "finished"
+    x_end = np.hstack([result.e1[-1], result.e2[-1]])
+    assert np.linalg.norm(x_end) < 1e-10  # V*(x(T)) is negligible
+    value = adparm.optimal_value(config)
+    assert value > 100.0
+    # measured: relative difference 8e-13 (RK4 at dt = 1 ms)
+    assert comparison.rows[0]["accumulated_cost"] == pytest.approx(value, rel=1e-10, abs=0.0)
+    # with the disturbance and RISE on, the same policy's cost is clearly not V*
+    disturbed = adparm.compare(adparm.paper_config().updated({"sim": {"T": 60.0}}), ["optimal"])
+    assert abs(disturbed.rows[0]["accumulated_cost"] / value - 1.0) > 0.1
+
+
+def test_rows_agree_with_the_arrays(short_comparison) -> None:
+    c = short_comparison
+    assert list(c.results) == LABELS
+    optimal = c.results["optimal"].cost[-1]
+    trapezoid = getattr(np, "trapezoid", None) or np.trapz  # noqa: NPY201 (NumPy < 2)
+    for row in c.rows:
+        r = c.results[row["controller"]]
+        assert list(row) == list(COMPARE_COLUMNS)
+        assert row["accumulated_cost"] == r.cost[-1]
+        assert row["cost_vs_optimal"] == pytest.approx(r.cost[-1] / optimal - 1.0, rel=1e-14)
+        e1_norm = np.linalg.norm(r.e1, axis=1)
+        rms = np.sqrt(trapezoid(e1_norm**2, r.t) / (r.t[-1] - r.t[0]))
+        assert row["rms_e1"] == pytest.approx(rms, rel=1e-12)
+        assert min(e1_norm) < row["rms_e1"] < max(e1_norm)
+        assert row["final_e1"] == pytest.approx(np.linalg.norm(r.e1[-1]), rel=1e-15)
+        assert row["peak_torque"] == np.abs(r.tau).max()
+        assert row["t_end"] == r.t[-1] == pytest.approx(3.0)
+        assert row["wall_time"] == r.wall_time > 0.0 and row["status"] == r.status == "finished"
+    assert c.diverged == []
+    # both joints count: a stiff joint-2 gain makes joint 2 carry the peak torque
+    stiff = adparm.paper_config().updated(
+        {"sim": {"T": 1.0}, "controller": {"kp": [[0.0, 0.0], [0.0, 2000.0]]}}
+    )
+    pd = adparm.compare(stiff, ["pd"])
+    tau = pd.results["pd"].tau
+    assert np.abs(tau[:, 1]).max() > 1.1 * np.abs(tau[:, 0]).max()
+    assert pd.rows[0]["peak_torque"] == np.abs(tau[:, 1]).max()
+    assert pd.rows[0]["cost_vs_optimal"] is None  # optimal did not run
+
+
+def test_table_dataframe_and_files_hold_the_rows(short_comparison, tmp_path) -> None:
+    c = short_comparison
+    text = c.table_markdown()
+    lines = text.splitlines()
+    assert lines[0].startswith("| controller | J (eq. 10) |") and len(lines[0].split("|")) == 11
+    for row, line in zip(c.rows, lines[2:7], strict=True):
+        assert line.startswith(f"| {row['controller']} | {row['accumulated_cost']:.6g} |")
+        assert f"| {row['rms_e1']:.3g} |" in line and line.endswith("| finished |")
+    assert "RISE term mu is on" in text
+
+    frame = c.to_dataframe()
+    assert list(frame.index) == LABELS and list(frame.columns) == list(COMPARE_COLUMNS[1:])
+    assert frame.loc["pd", "peak_torque"] == c.rows[3]["peak_torque"]
+
+    paths = c.save(tmp_path / "out")
+    assert [p.name for p in paths] == ["compare.csv", "compare.json", "compare.md"]
+    with paths[0].open() as stream:
+        records = list(csv.DictReader(stream))
+    assert [r["controller"] for r in records] == LABELS
+    for record, row in zip(records, c.rows, strict=True):
+        for column in ("accumulated_cost", "cost_vs_optimal", "rms_e1", "peak_torque"):
+            assert float(record[column]) == row[column]  # repr round trip
+    data = json.loads(paths[1].read_text())
+    assert data["columns"] == list(COMPARE_COLUMNS) and data["rows"] == c.rows
+    assert c.table_markdown() in paths[2].read_text()
+
+
+def test_diverged_run_is_a_row_not_an_exception() -> None:
+    c = adparm.compare(_zero_weights(0.5), ["adp", "optimal"])
+    rows = {row["controller"]: row for row in c.rows}
+    assert rows["adp"]["status"] == "diverged" and rows["adp"]["t_end"] < 0.01
+    assert rows["adp"]["cost_vs_optimal"] is None  # its J covers 1 ms
+    assert rows["optimal"]["status"] == "finished" and rows["optimal"]["t_end"] == 0.5
+    assert "adp" in c.diverged and "optimal" not in c.diverged
+    assert rows["adp"]["accumulated_cost"] == c.results["adp"].cost[-1]
+
+
+def test_kinds_are_validated() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 0.1}})
+    with pytest.raises(ValueError, match=r"unknown controller kind 'pid' \(did you mean 'pd'\?\)"):
+        adparm.compare(config, ["adp", "pid"])
+    with pytest.raises(ValueError, match="unknown controller kind 'lqr'; known kinds: adp") as info:
+        adparm.compare(config, ["lqr"])
+    assert "did you mean" not in str(info.value)
+    with pytest.raises(ValueError, match="got 'optimal' more than once"):
+        adparm.compare(config, ["optimal", "pd", "optimal"])
+    with pytest.raises(ValueError, match="at least one"):
+        adparm.compare(config, [])
+    with pytest.raises(TypeError, match="kinds"):
+        adparm.compare(config, [1])
+    no_rise = config.updated({"controller": {"rise": False}})
+    with pytest.raises(ValueError, match="'rise' .* needs controller.rise = true"):
+        adparm.compare(no_rise)
+    assert list(adparm.compare(no_rise, ["pd", "optimal"]).results) == ["pd", "optimal"]
+    assert list(adparm.compare(config, "rise").results) == ["rise"]  # one kind as a string
+
+
+def test_figure_has_one_line_per_controller_in_each_panel(short_comparison) -> None:
+    figure = short_comparison.plot()
+    assert len(figure.axes) == 4
+    for axes in figure.axes:
+        lines = [line for line in axes.get_lines() if not line.get_label().startswith("_")]
+        assert [line.get_label() for line in lines] == LABELS
+        assert lines[-1].get_linestyle() == "--"  # optimal, dashed over adp (learned)
+        assert "(rad)" in axes.get_ylabel() or "(N m)" in axes.get_ylabel()
+    e1_1 = figure.axes[0].get_lines()[3]
+    np.testing.assert_array_equal(e1_1.get_ydata(), short_comparison.results["pd"].e1[:, 0])
+    tau_2 = figure.axes[3].get_lines()[0]
+    np.testing.assert_array_equal(tau_2.get_ydata(), short_comparison.results["adp"].tau[:, 1])
+    legend = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    assert legend == LABELS
+    assert figure.axes[0].get_shared_x_axes().joined(figure.axes[0], figure.axes[3])
+    assert "(s" in figure.axes[-1].get_xlabel() and figure.axes[-1].get_xscale() == "symlog"
+    assert short_comparison.plot(time_scale="linear").axes[-1].get_xscale() == "linear"
+    with pytest.raises(ValueError, match="time_scale"):
+        short_comparison.plot(time_scale="log")
+
+
+def test_cli_compare_writes_the_table_and_files(tmp_path, capsys) -> None:
+    out = tmp_path / "cmp"
+    args = ["compare", "--out", str(out), "--T", "1", "--no-progress", "--formats", "png"]
+    assert main(args) == 0
+    for name in ("compare.md", "compare.csv", "compare.json", "config.toml", "compare.png"):
+        assert (out / name).is_file(), name
+    assert (out / "compare.png").stat().st_size > 10_000 and not (out / "compare.svg").exists()
+    printed = capsys.readouterr().out
+    data = json.loads((out / "compare.json").read_text())
+    assert [row["controller"] for row in data["rows"]] == LABELS
+    assert all(row["t_end"] == pytest.approx(1.0) for row in data["rows"])
+    assert (out / "compare.md").read_text().endswith(printed.split("wrote")[0])
+    assert "| adp (learned) |" in printed and "| optimal |" in printed
+    assert adparm.load_config(out / "config.toml") == adparm.paper_config().updated(
+        {"sim": {"T": 1.0}}
+    )
+
+    config = tmp_path / "short.toml"
+    config.write_text('[sim]\nT = 0.5\n[controller]\nkind = "pd"\n')
+    args = ["compare", str(config), "--out", str(out), "--kinds", "pd, optimal"]
+    assert main([*args, "--no-figures", "--no-progress"]) == 0
+    data = json.loads((out / "compare.json").read_text())
+    assert [row["controller"] for row in data["rows"]] == ["pd", "optimal"]
+    assert data["rows"][1]["t_end"] == pytest.approx(0.5)
+
+
+def test_cli_compare_exit_codes(tmp_path, capsys) -> None:
+    out = tmp_path / "cmp"
+    common = ["--out", str(out), "--no-figures", "--no-progress"]
+    assert main(["compare", *common, "--kinds", "adp,pid"]) == 2
+    assert "did you mean 'pd'" in capsys.readouterr().err
+    assert not out.exists()  # nothing runs on bad arguments
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[critic]\neta_cc = 1\n")
+    assert main(["compare", str(bad), *common]) == 2
+    assert "did you mean 'eta_c'" in capsys.readouterr().err
+    assert main(["compare", str(tmp_path / "missing.toml"), *common]) == 2
+    assert main(["compare", *common, "--T", "-1"]) == 2
+    assert "sim.T" in capsys.readouterr().err
+
+    zero = tmp_path / "zero.toml"
+    zero.write_text(_zero_weights(0.2).to_toml())
+    assert main(["compare", str(zero), *common, "--kinds", "adp,pd"]) == 1
+    captured = capsys.readouterr()
+    assert "diverged: adp, adp (learned)" in captured.err and "| pd |" in captured.out
+    rows = json.loads((out / "compare.json").read_text())["rows"]
+    assert [row["status"] for row in rows] == ["diverged", "diverged", "finished"]
