@@ -82,11 +82,15 @@ def _kinds(text: str) -> tuple[str, ...]:
     return tuple(kind.strip() for kind in text.split(",") if kind.strip())
 
 
+def _config(args: argparse.Namespace) -> Config:
+    """The command's configuration (the paper's without a file) with --T applied."""
+    config = paper_config() if getattr(args, "config", None) is None else load_config(args.config)
+    return config if args.T is None else config.updated({"sim": {"T": args.T}})
+
+
 def _compare(args: argparse.Namespace) -> int:
     try:
-        config = paper_config() if args.config is None else load_config(args.config)
-        if args.T is not None:
-            config = config.updated({"sim": {"T": args.T}})
+        config = _config(args)
         kinds = _kinds(args.kinds)
         _controller_configs(config, kinds)  # every check before the first run
     except (OSError, ValueError, TypeError) as error:
@@ -122,9 +126,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "compare":
         return _compare(args)
     try:
-        config = paper_config() if args.command == "reproduce" else load_config(args.config)
-        if args.T is not None:
-            config = config.updated({"sim": {"T": args.T}})
+        config = _config(args)
     except (OSError, ValueError, TypeError) as error:
         print(f"adparm {args.command}: {error}", file=sys.stderr)
         return 2

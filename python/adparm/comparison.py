@@ -14,7 +14,6 @@ show a lower J than ``optimal``, which is optimal for the error system without m
 from __future__ import annotations
 
 import csv
-import difflib
 import json
 import math
 from collections.abc import Iterable, Sequence
@@ -24,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .config import CONTROLLER_KINDS, Config
+from .config import CONTROLLER_KINDS, Config, _hint
 from .simulation import SimulationDiverged, SimulationResult, simulate
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -84,10 +83,8 @@ def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
                 f"got {kind!r}"
             )
         if kind not in CONTROLLER_KINDS:
-            close = difflib.get_close_matches(kind, CONTROLLER_KINDS, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ValueError(
-                f"kinds: unknown controller kind {kind!r}{hint}; "
+                f"kinds: unknown controller kind {kind!r}{_hint(kind, CONTROLLER_KINDS)}; "
                 f"known kinds: {', '.join(CONTROLLER_KINDS)}"
             )
     duplicates = sorted({kind for kind in kinds if kinds.count(kind) > 1})

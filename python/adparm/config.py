@@ -12,7 +12,7 @@ import difflib
 import math
 import numbers
 import sys
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -249,11 +249,6 @@ class SinusoidTrajectory:
                     f"got {len(getattr(self, key)[0])}"
                 )
 
-    def at(self, t: float) -> np.ndarray:
-        """qd(t) (2,)."""
-        a, w, p = (np.array(getattr(self, k)) for k in ("amplitude", "frequency", "phase"))
-        return np.array(self.offset) + (a * np.sin(w * t + p)).sum(axis=1)
-
 
 @dataclass(frozen=True)
 class SampledTrajectory:
@@ -296,10 +291,6 @@ class SampledTrajectory:
         from scipy.interpolate import CubicSpline
 
         return CubicSpline(np.array(self.t), np.array(self.q), axis=0, bc_type=self.boundary)
-
-    def at(self, t: float) -> np.ndarray:
-        """qd(t) (2,)."""
-        return np.asarray(self.spline()(min(max(t, self.t[0]), self.t[-1])))
 
 
 def _read_samples(path: Path) -> tuple[Vector, Matrix]:
@@ -365,10 +356,6 @@ class TaskConfig:
     def is_set_point(self) -> bool:
         """Whether qd is constant."""
         return not isinstance(self.qd, (SinusoidTrajectory, SampledTrajectory))
-
-    def desired(self, t: float) -> np.ndarray:
-        """qd(t) (2,)."""
-        return np.array(self.qd) if self.is_set_point else self.qd.at(t)
 
 
 _PAPER_Q: Matrix = (
@@ -665,7 +652,7 @@ _SECTIONS: dict[str, type] = {
 }
 
 
-def _hint(name: str, choices: list[str]) -> str:
+def _hint(name: str, choices: Sequence[str]) -> str:
     close = difflib.get_close_matches(name, choices, n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
 

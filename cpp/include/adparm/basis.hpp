@@ -22,47 +22,43 @@
 
 namespace adparm {
 
-namespace detail {
-// The 8 functions and their x-Jacobian given c (cos q2 or cos x2) and dc_dx2 = d c / d x2.
-template <class Vector, class Jacobian>
-void quadratic_arm_basis(const Vec4& x, double c, double dc_dx2, Vector& phi, Jacobian& jacobian) {
-  const double x1 = x[0], x2 = x[1], x3 = x[2], x4 = x[3];
-  phi << x1 * x1, x2 * x2, x1 * x2, x3 * x3, x3 * x3 * c, x4 * x4, x3 * x4, x3 * x4 * c;
-  jacobian << 2.0 * x1, 0.0, 0.0, 0.0,           //
-      0.0, 2.0 * x2, 0.0, 0.0,                   //
-      x2, x1, 0.0, 0.0,                          //
-      0.0, 0.0, 2.0 * x3, 0.0,                   //
-      0.0, x3 * x3 * dc_dx2, 2.0 * x3 * c, 0.0,  //
-      0.0, 0.0, 0.0, 2.0 * x4,                   //
-      0.0, 0.0, x4, x3,                          //
-      0.0, x3 * x4 * dc_dx2, x4 * c, x3 * c;
-}
-}  // namespace detail
-
-struct PaperBasis {
+// Sizes, types and the 8 functions shared by both bases; c is cos x2 or cos q2, dc_dx2 = d c / d
+// x2.
+struct QuadraticArmBasis {
   static constexpr int kSize = 8;
   static constexpr int kStateDim = 4;
   using Vector = Eigen::Matrix<double, kSize, 1>;
   using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;  // d phi / d x
 
+ protected:
+  static void functions(const Vec4& x, double c, double dc_dx2, Vector& phi, Jacobian& jacobian) {
+    const double x1 = x[0], x2 = x[1], x3 = x[2], x4 = x[3];
+    phi << x1 * x1, x2 * x2, x1 * x2, x3 * x3, x3 * x3 * c, x4 * x4, x3 * x4, x3 * x4 * c;
+    jacobian << 2.0 * x1, 0.0, 0.0, 0.0,           //
+        0.0, 2.0 * x2, 0.0, 0.0,                   //
+        x2, x1, 0.0, 0.0,                          //
+        0.0, 0.0, 2.0 * x3, 0.0,                   //
+        0.0, x3 * x3 * dc_dx2, 2.0 * x3 * c, 0.0,  //
+        0.0, 0.0, 0.0, 2.0 * x4,                   //
+        0.0, 0.0, x4, x3,                          //
+        0.0, x3 * x4 * dc_dx2, x4 * c, x3 * c;
+  }
+};
+
+struct PaperBasis : QuadraticArmBasis {
   static void evaluate(const Vec4& x, const DesiredState&, Vector& phi, Jacobian& jacobian,
                        Vector& desired_rate) {
-    detail::quadratic_arm_basis(x, std::cos(x[1]), -std::sin(x[1]), phi, jacobian);
+    functions(x, std::cos(x[1]), -std::sin(x[1]), phi, jacobian);
     desired_rate.setZero();
   }
 };
 
-struct AugmentedBasis {
-  static constexpr int kSize = 8;
-  static constexpr int kStateDim = 4;
-  using Vector = Eigen::Matrix<double, kSize, 1>;
-  using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;  // d phi / d x
-
+struct AugmentedBasis : QuadraticArmBasis {
   static void evaluate(const Vec4& x, const DesiredState& desired, Vector& phi, Jacobian& jacobian,
                        Vector& desired_rate) {
     const double q2 = desired.q[1] - x[1];
     const double s = std::sin(q2);
-    detail::quadratic_arm_basis(x, std::cos(q2), s, phi, jacobian);
+    functions(x, std::cos(q2), s, phi, jacobian);
     // d phi / d qd2 = -d phi / d x2 for the two cos q2 functions
     desired_rate.setZero();
     desired_rate[4] = -x[2] * x[2] * s * desired.dq[1];

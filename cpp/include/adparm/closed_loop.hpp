@@ -116,9 +116,9 @@ class ClosedLoop {
   }
 
   // Called at the start of each step (and before the first evaluation): draws local
-  // extrapolation points around the current error state.
+  // extrapolation points around the current error state, or prepares fixed ones once.
   void begin_step(double t, const State& state) {
-    if (!extrapolation_.enabled()) return;
+    if (!extrapolation_.needs_begin_step()) return;
     const DesiredState desired = trajectory_(t);
     const TrackingErrors errors =
         tracking_errors(state.template segment<kDof>(kQ), state.template segment<kDof>(kDq),
@@ -221,6 +221,5 @@ class ClosedLoop {
 };
 
 using PaperClosedLoop = ClosedLoop<TwoLinkArm, PaperBasis>;
-using AugmentedClosedLoop = ClosedLoop<TwoLinkArm, AugmentedBasis>;
 
 }  // namespace adparm

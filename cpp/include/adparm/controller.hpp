@@ -1,9 +1,9 @@
 // The controller kind: which input u the loop applies to the error system dx = f(x) + g(x) u
 // (eq. 9), with the torque tau = h_hat + mu - u (mu the RISE term when controller.rise is on):
-//   adp      u = u_hat + probe(t)        (eq. 20 plus the probing signal); the critic and actor
-//   learn rise     u = 0                       (RISE and the feedforward alone) pd       u = -(kp
-//   e1 + kd de1)        (PD on e1, de1 = e2 - alpha1 e1) optimal  u = u* = -R^-1 e2            (the
-//   exact optimal policy of ERRATA, known model)
+//   adp      u = u_hat + probe(t)     (eq. 20 plus the probe; the critic and actor learn)
+//   rise     u = 0                    (RISE and the feedforward alone)
+//   pd       u = -(kp e1 + kd de1)    (PD on e1, de1 = e2 - alpha1 e1)
+//   optimal  u = u* = -R^-1 e2        (the exact optimal policy of ERRATA, known model)
 // Only adp learns and probes; for the others the weights and Gamma stay at their initial values.
 // A new kind is a new enumerator and a new case here; the loop calls input() and learns() only.
 #pragma once

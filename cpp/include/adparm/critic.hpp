@@ -41,11 +41,10 @@ class Critic {
   const CriticSettings& settings() const { return settings_; }
 
   // Adds one sample's share of eqs. (23)-(24) to the rates:
-  //   weight_rate -= w eta_c Gamma omega eps / rho,  gamma_rate -= w eta_c Gamma omega omega^T
-  //   Gamma / rho
+  //   weight_rate -= w eta_c Gamma omega eps / rho
+  //   gamma_rate  -= w eta_c Gamma omega omega^T Gamma / rho
   // with w = 1 for the trajectory and w = 1/N for each of N extrapolation points
-  // (extrapolation.hpp). Gamma is symmetric, so Gamma omega omega^T Gamma = (Gamma omega)(Gamma
-  // omega)^T.
+  // (extrapolation.hpp). Gamma is symmetric: Gamma omega omega^T Gamma = (Gamma omega)(...)^T.
   template <class CovarianceIn, class CovarianceOut>
   void add_rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma, double weight,
                  Vector& weight_rate, CovarianceOut&& gamma_rate) const {

@@ -87,14 +87,19 @@ class Extrapolation {
 
   long size() const { return settings_.points; }
   bool enabled() const { return settings_.points > 0; }
-  bool resamples() const { return enabled() && settings_.mode == ExtrapolationMode::local; }
+  // Whether begin_step() has work: local points to draw, or fixed points not yet prepared for a
+  // constant desired state.
+  bool needs_begin_step() const {
+    return enabled() &&
+           (settings_.mode == ExtrapolationMode::local || (constant_desired_ && !prepared_valid_));
+  }
   const Points& points() const { return points_; }
 
   // Start of a step at error state x: draws new local points; prepares points that are fixed for
   // the step when the desired state is constant.
   void begin_step(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
                   const DesiredState& desired) {
-    if (!enabled()) return;
+    if (!needs_begin_step()) return;
     if (settings_.mode == ExtrapolationMode::local) {
       draw(x);
       prepared_valid_ = false;
