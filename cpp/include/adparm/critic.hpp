@@ -9,7 +9,7 @@
 // Cholesky factor.
 #pragma once
 
-#include <Eigen/Cholesky>
+#include <cmath>
 
 #include "adparm/types.hpp"
 
@@ -48,19 +48,33 @@ class Critic {
   template <class CovarianceIn, class CovarianceOut>
   void add_rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma, double weight,
                  Vector& weight_rate, CovarianceOut&& gamma_rate) const {
-    const Vector gamma_omega = gamma * omega;
+    const Vector gamma_omega = gamma.lazyProduct(omega);  // unrolled; no GEMV call for 8 x 8
     const double gain = weight * settings_.eta_c / (1.0 + settings_.nu * omega.dot(gamma_omega));
     weight_rate.noalias() -= (gain * hjb_error) * gamma_omega;
     gamma_rate.noalias() -= gain * gamma_omega * gamma_omega.transpose();
   }
 
-  // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma).
+  // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): an in-place Cholesky
+  // factorisation of Gamma - epsilon_T I (lower triangle; Gamma is symmetric), fixed size, that
+  // stops at the first pivot that is not positive: about N^3 / 6 multiply-adds, no
+  // eigen-decomposition. A NaN or infinity reaches a pivot and fails the test.
   template <class CovarianceIn>
   bool needs_reset(const CovarianceIn& gamma) const {
-    Covariance shifted = gamma;
-    shifted.diagonal().array() -= settings_.epsilon_T;
-    const Eigen::LLT<Covariance> cholesky(shifted);
-    return cholesky.info() != Eigen::Success;
+    constexpr int n = Basis::kSize;
+    Covariance factor = gamma;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
+    for (int j = 0; j < n; ++j) {
+      double pivot = factor(j, j) - settings_.epsilon_T;
+      for (int k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
+      if (!(pivot > 0.0)) return true;  // also catches NaN
+      const double diagonal = std::sqrt(pivot);
+      factor(j, j) = diagonal;
+      for (int i = j + 1; i < n; ++i) {
+        double value = factor(i, j);
+        for (int k = 0; k < j; ++k) value -= factor(i, k) * factor(j, k);
+        factor(i, j) = value / diagonal;
+      }
+    }
+    return false;
   }
 
   Covariance initial_covariance() const { return settings_.gamma0 * Covariance::Identity(); }

@@ -30,6 +30,9 @@ class ProbingSignal {
     check_finite(settings.amplitude, "probe.amplitude");
     check_size(settings.phases, 2, settings.frequencies.size(), "probe.phases");
     check_finite(settings.phases, "probe.phases");
+    // sin(w t + p) = sin(w t) cos p + cos(w t) sin p: one sin/cos pair per frequency and time.
+    sin_weight_ = settings.amplitude.cwiseProduct(settings.phases.array().cos().matrix());
+    cos_weight_ = settings.amplitude.cwiseProduct(settings.phases.array().sin().matrix());
   }
 
   Vec2 operator()(double t) const {
@@ -37,8 +40,8 @@ class ProbingSignal {
     if (t >= settings_.until) return value;
     for (Eigen::Index k = 0; k < settings_.frequencies.size(); ++k) {
       const double angle = settings_.frequencies[k] * t;
-      value[0] += settings_.amplitude(0, k) * std::sin(angle + settings_.phases(0, k));
-      value[1] += settings_.amplitude(1, k) * std::sin(angle + settings_.phases(1, k));
+      const double s = std::sin(angle), c = std::cos(angle);
+      value += s * sin_weight_.col(k) + c * cos_weight_.col(k);
     }
     if (t < settings_.ramp) value *= t / settings_.ramp;
     return value;
@@ -46,6 +49,7 @@ class ProbingSignal {
 
  private:
   ProbeSettings settings_{};
+  Eigen::Matrix<double, 2, Eigen::Dynamic> sin_weight_, cos_weight_;  // 2 x frequencies.size()
 };
 
 }  // namespace adparm

@@ -17,11 +17,12 @@ struct Rk4Workspace {
   double begin_time = std::numeric_limits<double>::quiet_NaN();
 };
 
-// Advances x from t_begin to t_end (h = t_end - t_begin). If outputs is given, it receives the
-// system's outputs at (t_begin, x) computed by the first stage.
+// Advances x from t_begin to t_end (h = t_end - t_begin) into x_next, which may be x itself. If
+// outputs is given, it receives the system's outputs at (t_begin, x) computed by the first stage.
 template <class System>
-void rk4_step(const System& system, double t_begin, double t_end, typename System::State& x,
-              Rk4Workspace<System>& w, typename System::Outputs* outputs = nullptr) {
+void rk4_step(const System& system, double t_begin, double t_end, const typename System::State& x,
+              typename System::State& x_next, Rk4Workspace<System>& w,
+              typename System::Outputs* outputs = nullptr) {
   const double h = t_end - t_begin;
   if (!(w.begin_time == t_begin)) system.time_signals(t_begin, w.begin);
   system.time_signals(t_begin + 0.5 * h, w.middle);
@@ -34,10 +35,18 @@ void rk4_step(const System& system, double t_begin, double t_end, typename Syste
   system.derivative(w.middle, w.stage, w.k3, nullptr);
   w.stage = x + h * w.k3;
   system.derivative(w.end, w.stage, w.k4, nullptr);
-  x += (h / 6.0) * (w.k1 + 2.0 * w.k2 + 2.0 * w.k3 + w.k4);
+  x_next =
+      x + (h / 6.0) * (w.k1 + 2.0 * w.k2 + 2.0 * w.k3 + w.k4);  // coefficient-wise: x may alias
 
   std::swap(w.begin, w.end);
   w.begin_time = t_end;
+}
+
+// In place: x advances from t_begin to t_end.
+template <class System>
+void rk4_step(const System& system, double t_begin, double t_end, typename System::State& x,
+              Rk4Workspace<System>& w, typename System::Outputs* outputs = nullptr) {
+  rk4_step(system, t_begin, t_end, x, x, w, outputs);
 }
 
 }  // namespace adparm

@@ -63,33 +63,36 @@ class Simulation {
     if (sim_.T > system_.trajectory().end_time() * (1.0 + 1e-12))
       throw std::invalid_argument("task.qd: the samples end before sim.T");
     steps_ = static_cast<long>(steps);
-    state_ = system_.initial_state();
-    system_.begin_step(0.0, state_);
+    states_[0] = system_.initial_state();
+    system_.begin_step(0.0, states_[0]);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, System::kDof, System::kBasisSize);
-    record(0.0, state_);
+    record(0.0, states_[0]);
   }
 
-  // Advances at most max_steps steps; returns the number taken.
+  // Advances at most max_steps steps; returns the number taken. The state alternates between two
+  // buffers, so the last finite state survives a diverging step without a copy.
   long advance(long max_steps) {
     long taken = 0;
     while (status_ == RunStatus::running && taken < max_steps) {
       const double t_begin = step_ * sim_.dt;
       const double t_end = std::min((step_ + 1) * sim_.dt, sim_.T);
-      previous_state_ = state_;
-      rk4_step(system_, t_begin, t_end, state_, workspace_);
+      const State& previous = states_[current_];
+      State& state = states_[1 - current_];
+      rk4_step(system_, t_begin, t_end, previous, state, workspace_);
       ++step_;
       ++taken;
-      if (diverged(state_)) {
+      if (diverged(state)) {
         status_ = RunStatus::diverged;
         divergence_time_ = t_end;
-        // keep the last finite state as the final row
-        if ((step_ - 1) % sim_.record_every != 0) record(t_begin, previous_state_);
+        // keep the last finite state as the final row (and as state())
+        if ((step_ - 1) % sim_.record_every != 0) record(t_begin, previous);
         break;
       }
-      if (system_.reset_covariance_if_needed(state_)) reset_times_.push_back(t_end);
-      system_.begin_step(t_end, state_);  // for the next step (and the row recorded at t_end)
-      if (step_ % sim_.record_every == 0 || step_ == steps_) record(t_end, state_);
+      current_ = 1 - current_;
+      if (system_.reset_covariance_if_needed(state)) reset_times_.push_back(t_end);
+      system_.begin_step(t_end, state);  // for the next step (and the row recorded at t_end)
+      if (step_ % sim_.record_every == 0 || step_ == steps_) record(t_end, state);
       if (step_ == steps_) status_ = RunStatus::finished;
     }
     return taken;
@@ -100,7 +103,7 @@ class Simulation {
   long step() const { return step_; }
   double divergence_time() const { return divergence_time_; }
   const std::vector<double>& reset_times() const { return reset_times_; }
-  const State& state() const { return state_; }
+  const State& state() const { return states_[current_]; }
 
   // The recording so far, trimmed to the rows written.
   Recording recording() const {
@@ -110,9 +113,11 @@ class Simulation {
   }
 
  private:
+  // Non-finite anywhere (a NaN or an infinity makes the sum non-finite; a finite state's sum
+  // overflows only far beyond any bound), or |q|, |dq|, |Wc|, |Wa| above the bound.
   bool diverged(const State& state) const {
     const auto watched = state.template head<System::kGamma>();
-    return !state.allFinite() || watched.cwiseAbs().maxCoeff() > sim_.divergence_bound;
+    return !std::isfinite(state.sum()) || !(watched.cwiseAbs().maxCoeff() <= sim_.divergence_bound);
   }
 
   void record(double t, const State& state) {
@@ -146,7 +151,8 @@ class Simulation {
   SimSettings sim_;
   long steps_ = 0;
   long step_ = 0;
-  State state_, previous_state_;
+  State states_[2];  // the current state is states_[current_]
+  int current_ = 0;
   Rk4Workspace<System> workspace_;
   RunStatus status_ = RunStatus::running;
   double divergence_time_ = std::numeric_limits<double>::quiet_NaN();
