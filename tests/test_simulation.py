@@ -104,3 +104,37 @@ def test_result_checks_its_arrays(paper_result) -> None:
         arrays.pop(key)
     with pytest.raises(ValueError, match=r"q: expected shape"):
         adparm.SimulationResult(**arrays, config=paper_result.config)
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 10, 37])
+def test_chunked_runs_record_the_same_rows(chunk) -> None:
+    """A row due at a step's end is written from the next step's first RK4 stage, or when the
+    chunk ends there: chunk boundaries on and off the record step give identical recordings."""
+    from adparm import _core
+    from adparm.simulation import core_settings
+
+    config = adparm.paper_config().updated({"sim": {"T": 0.2, "record_every": 10}})
+    whole = _core.Simulation(core_settings(config))
+    whole.advance(whole.steps)
+    chunked = _core.Simulation(core_settings(config))
+    while chunked.status == "running":
+        chunked.advance(chunk)
+        rows = chunked.recording()["t"]
+        assert rows[-1] == pytest.approx(config.sim.dt * (chunked.step // 10) * 10)
+    expected, actual = whole.recording(), chunked.recording()
+    assert expected.keys() == actual.keys()
+    for name in expected:
+        np.testing.assert_array_equal(actual[name], expected[name], err_msg=name)
+
+
+def test_divergence_mid_chunk_keeps_the_last_finite_state_as_the_last_row() -> None:
+    config = adparm.paper_config().updated(
+        {"init": {"critic_weights": [0.0] * 8, "actor_weights": [0.0] * 8}, "sim": {"T": 5.0}}
+    )
+    for record_every in (1, 3, 10):
+        c = config.updated({"sim": {"record_every": record_every}})
+        with pytest.raises(adparm.SimulationDiverged) as caught:
+            adparm.simulate(c)
+        partial = caught.value.result
+        assert partial.t[-1] == pytest.approx(caught.value.time - c.sim.dt)
+        assert np.all(np.diff(partial.t) > 0.0)

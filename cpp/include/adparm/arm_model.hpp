@@ -31,11 +31,13 @@ struct TwoLinkArmParameters {
 
 // Model terms at one (q, dq), computed together so that cos q2 and sin q2 are evaluated once.
 struct TwoLinkArmTerms {
-  Mat2 mass;          // M(q)
-  Mat2 mass_inverse;  // M(q)^-1 in closed form
-  Mat2 coriolis;      // C(q, dq)
-  Vec2 gravity;       // G(q)
-  Vec2 friction;      // F(dq)
+  Mat2 mass;            // M(q)
+  Mat2 mass_inverse;    // M(q)^-1 in closed form
+  Mat2 coriolis;        // C(q, dq)
+  Vec2 gravity;         // G(q)
+  Vec2 friction;        // F(dq)
+  double cos_q2 = 1.0;  // cos q2 and sin q2, for a basis that uses them (basis.hpp)
+  double sin_q2 = 0.0;
 };
 
 class TwoLinkArm {
@@ -67,6 +69,8 @@ class TwoLinkArm {
     const Parameters& p = parameters_;
     const double c2 = std::cos(q[1]);
     const double s2 = std::sin(q[1]);
+    terms.cos_q2 = c2;
+    terms.sin_q2 = s2;
     const double m11 = p.p1 + 2.0 * p.p3 * c2;
     const double m12 = p.p2 + p.p3 * c2;
     const double m22 = p.p2;

@@ -3,7 +3,10 @@
 // d phi / dt that comes from qd moving, (d phi / d qd) dqd, which the HJB regressor omega needs.
 // A basis offers kSize, kStateDim, Vector, Jacobian and
 //   evaluate(x, desired, phi, jacobian, desired_rate)
-// and the loop takes it unchanged.
+//   evaluate(x, desired, terms, phi, jacobian, desired_rate)
+// and the loop takes it unchanged. The second form also receives the arm model's terms at the
+// matching joint state (q = qd - e1), which the loop has computed anyway, so that a basis built
+// on the arm (cos q2 of M(q)) need not evaluate them again.
 //
 // PaperBasis: the paper's 8 functions in the ERRATA's ordering,
 //   phi(x) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos x2, x4^2, x3 x4, x3 x4 cos x2]
@@ -51,18 +54,34 @@ struct PaperBasis : QuadraticArmBasis {
     functions(x, std::cos(x[1]), -std::sin(x[1]), phi, jacobian);
     desired_rate.setZero();
   }
+  template <class Terms>
+  static void evaluate(const Vec4& x, const DesiredState& desired, const Terms&, Vector& phi,
+                       Jacobian& jacobian, Vector& desired_rate) {
+    evaluate(x, desired, phi, jacobian, desired_rate);
+  }
 };
 
 struct AugmentedBasis : QuadraticArmBasis {
   static void evaluate(const Vec4& x, const DesiredState& desired, Vector& phi, Jacobian& jacobian,
                        Vector& desired_rate) {
     const double q2 = desired.q[1] - x[1];
-    const double s = std::sin(q2);
-    functions(x, std::cos(q2), s, phi, jacobian);
+    evaluate(x, desired, std::cos(q2), std::sin(q2), phi, jacobian, desired_rate);
+  }
+  // With the two-link arm's terms at q = qd - e1: their cos q2 and sin q2.
+  template <class Terms>
+  static void evaluate(const Vec4& x, const DesiredState& desired, const Terms& terms, Vector& phi,
+                       Jacobian& jacobian, Vector& desired_rate) {
+    evaluate(x, desired, terms.cos_q2, terms.sin_q2, phi, jacobian, desired_rate);
+  }
+
+ private:
+  static void evaluate(const Vec4& x, const DesiredState& desired, double cos_q2, double sin_q2,
+                       Vector& phi, Jacobian& jacobian, Vector& desired_rate) {
+    functions(x, cos_q2, sin_q2, phi, jacobian);  // d cos q2 / d x2 = sin q2
     // d phi / d qd2 = -d phi / d x2 for the two cos q2 functions
     desired_rate.setZero();
-    desired_rate[4] = -x[2] * x[2] * s * desired.dq[1];
-    desired_rate[7] = -x[2] * x[3] * s * desired.dq[1];
+    desired_rate[4] = -x[2] * x[2] * sin_q2 * desired.dq[1];
+    desired_rate[7] = -x[2] * x[3] * sin_q2 * desired.dq[1];
   }
 };
 

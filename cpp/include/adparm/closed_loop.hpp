@@ -144,8 +144,8 @@ class ClosedLoop {
     const typename Arm::Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
 
     HjbPoint<Basis, kDof> point;
-    prepare_hjb_point<Basis, kDof>(x, desired, error_system_.drift(x, model_terms),
-                                   model_terms.mass_inverse, cost_, point);
+    prepare_hjb_point<Basis, kDof>(x, desired, error_system_.drift(x, model_terms), model_terms,
+                                   cost_, point);
     HjbEvaluation<Basis, kDof> hjb;
     evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
 

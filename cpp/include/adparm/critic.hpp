@@ -51,7 +51,7 @@ class Critic {
     const Vector gamma_omega = gamma.lazyProduct(omega);  // unrolled; no GEMV call for 8 x 8
     const double gain = weight * settings_.eta_c / (1.0 + settings_.nu * omega.dot(gamma_omega));
     weight_rate.noalias() -= (gain * hjb_error) * gamma_omega;
-    gamma_rate.noalias() -= gain * gamma_omega * gamma_omega.transpose();
+    gamma_rate.noalias() -= (gain * gamma_omega).lazyProduct(gamma_omega.transpose());
   }
 
   // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): an in-place Cholesky
@@ -67,11 +67,12 @@ class Critic {
       for (int k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
       if (!(pivot > 0.0)) return true;  // also catches NaN
       const double diagonal = std::sqrt(pivot);
+      const double inverse = 1.0 / diagonal;  // one division per column
       factor(j, j) = diagonal;
       for (int i = j + 1; i < n; ++i) {
         double value = factor(i, j);
         for (int k = 0; k < j; ++k) value -= factor(i, k) * factor(j, k);
-        factor(i, j) = value / diagonal;
+        factor(i, j) = value * inverse;
       }
     }
     return false;

@@ -31,17 +31,16 @@ struct HjbEvaluation {
   double error = 0.0;  // eq. (21)
 };
 
-// The weight-free part at x, given the desired state, the drift f(x) and M^-1 of the model at the
-// matching joint state (g(x) = [0; M^-1]).
-template <class Basis, int Dof>
+// The weight-free part at x, given the desired state, the drift f(x) and the model terms at the
+// matching joint state (their M^-1 gives g(x) = [0; M^-1]; the basis may use them too).
+template <class Basis, int Dof, class Terms>
 void prepare_hjb_point(const Vec4& x, const DesiredState& desired, const Vec4& drift,
-                       const Eigen::Matrix<double, Dof, Dof>& mass_inverse,
-                       const QuadraticCost& cost, HjbPoint<Basis, Dof>& point) {
+                       const Terms& terms, const QuadraticCost& cost, HjbPoint<Basis, Dof>& point) {
   typename Basis::Vector phi;
   typename Basis::Jacobian jacobian;
-  Basis::evaluate(x, desired, phi, jacobian, point.drift_rate);
+  Basis::evaluate(x, desired, terms, phi, jacobian, point.drift_rate);
   point.drift_rate.noalias() += jacobian * drift;
-  point.input_gradient.noalias() = jacobian.template rightCols<Dof>() * mass_inverse;
+  point.input_gradient.noalias() = jacobian.template rightCols<Dof>() * terms.mass_inverse;
   point.state_cost = cost.state_cost(x);
 }
 
@@ -65,8 +64,7 @@ void prepare_hjb_point(const ErrorSystem<Arm>& system, const QuadraticCost& cost
   system.joint_state(x, desired, q, dq);
   typename Arm::Terms terms;
   system.model().compute(q, dq, terms);
-  prepare_hjb_point<Basis, Arm::kDof>(x, desired, system.drift(x, terms), terms.mass_inverse, cost,
-                                      point);
+  prepare_hjb_point<Basis, Arm::kDof>(x, desired, system.drift(x, terms), terms, cost, point);
 }
 
 // eq. (21) at an error state x with the desired state `desired`.

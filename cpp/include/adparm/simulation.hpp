@@ -71,7 +71,9 @@ class Simulation {
   }
 
   // Advances at most max_steps steps; returns the number taken. The state alternates between two
-  // buffers, so the last finite state survives a diverging step without a copy.
+  // buffers, so the last finite state survives a diverging step without a copy. A row due at a
+  // step's end is written from the next step's first RK4 stage, which evaluates the outputs at
+  // that very (t, state); the last row of a chunk is written before returning.
   long advance(long max_steps) {
     long taken = 0;
     while (status_ == RunStatus::running && taken < max_steps) {
@@ -79,21 +81,33 @@ class Simulation {
       const double t_end = std::min((step_ + 1) * sim_.dt, sim_.T);
       const State& previous = states_[current_];
       State& state = states_[1 - current_];
-      rk4_step(system_, t_begin, t_end, previous, state, workspace_);
+      const bool row_due = row_due_;
+      rk4_step(system_, t_begin, t_end, previous, state, workspace_,
+               row_due ? &row_outputs_ : nullptr);
+      if (row_due) record(t_begin, previous, row_outputs_);
+      row_due_ = false;
       ++step_;
       ++taken;
       if (diverged(state)) {
         status_ = RunStatus::diverged;
         divergence_time_ = t_end;
         // keep the last finite state as the final row (and as state())
-        if ((step_ - 1) % sim_.record_every != 0) record(t_begin, previous);
-        break;
+        if (!row_due && (step_ - 1) % sim_.record_every != 0) record(t_begin, previous);
+        return taken;
       }
       current_ = 1 - current_;
       if (system_.reset_covariance_if_needed(state)) reset_times_.push_back(t_end);
       system_.begin_step(t_end, state);  // for the next step (and the row recorded at t_end)
-      if (step_ % sim_.record_every == 0 || step_ == steps_) record(t_end, state);
-      if (step_ == steps_) status_ = RunStatus::finished;
+      if (step_ == steps_) {
+        record(t_end, state);
+        status_ = RunStatus::finished;
+      } else if (step_ % sim_.record_every == 0) {
+        row_due_ = true;
+      }
+    }
+    if (row_due_) {  // the chunk ends on a row: write it now, the caller may read the recording
+      record(step_ * sim_.dt, states_[current_]);
+      row_due_ = false;
     }
     return taken;
   }
@@ -121,11 +135,14 @@ class Simulation {
   }
 
   void record(double t, const State& state) {
-    typename System::Outputs outputs;
     typename System::State rate;
     typename System::TimeSignals signals;
     system_.time_signals(t, signals);
-    system_.derivative(signals, state, rate, &outputs);
+    system_.derivative(signals, state, rate, &row_outputs_);
+    record(t, state, row_outputs_);
+  }
+
+  void record(double t, const State& state, const typename System::Outputs& outputs) {
     Recording& r = recording_;
     const Eigen::Index i = r.rows++;
     r.t[i] = t;
@@ -154,6 +171,8 @@ class Simulation {
   State states_[2];  // the current state is states_[current_]
   int current_ = 0;
   Rk4Workspace<System> workspace_;
+  bool row_due_ = false;  // a row is due at the current state (written by the next step)
+  typename System::Outputs row_outputs_;
   RunStatus status_ = RunStatus::running;
   double divergence_time_ = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> reset_times_;
