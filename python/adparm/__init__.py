@@ -39,8 +39,10 @@ from .simulation import (
     desired_state,
     extrapolation_points,
     simulate,
+    simulate_batch,
 )
 from .storage import load_result
+from .sweep import SweepResult, grid_points, sweep
 
 __version__ = "0.1.0"
 
@@ -63,10 +65,12 @@ __all__ = [
     "SimulationDiverged",
     "SimulationResult",
     "SinusoidTrajectory",
+    "SweepResult",
     "TaskConfig",
     "compare",
     "desired_state",
     "extrapolation_points",
+    "grid_points",
     "hjb_residual",
     "initial_error_state",
     "load_config",
@@ -75,6 +79,8 @@ __all__ = [
     "optimal_weights",
     "paper_config",
     "simulate",
+    "simulate_batch",
     "solvable_cost",
+    "sweep",
     "write_report",
 ]

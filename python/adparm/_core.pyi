@@ -283,3 +283,18 @@ class Simulation:
     def recording(self) -> dict[str, _FloatArray]:
         """Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2),
         weights (n, 8)."""
+
+class Batch:
+    """Independent runs advanced in parallel C++ threads; run i is a Simulation."""
+
+    def __init__(self, settings: list[Settings]) -> None: ...
+    def __len__(self) -> int: ...
+    def advance(self, max_steps: int, threads: int) -> bool:
+        """Advance every running run by up to max_steps steps on `threads` threads (GIL
+        released); returns whether any is still running."""
+    @property
+    def running(self) -> bool: ...
+    def simulation(self, index: int) -> Simulation:
+        """Run `index` (a view that keeps the batch alive)."""
+    def seconds(self, index: int) -> float:
+        """Wall time spent advancing run `index`, s."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -24,7 +25,9 @@ __all__ = [
     "core_settings",
     "desired_state",
     "extrapolation_points",
+    "default_threads",
     "simulate",
+    "simulate_batch",
 ]
 
 # Steps per call into C++: the GIL is released inside a chunk and Python regains control between
@@ -259,12 +262,53 @@ class SimulationResult:
 class SimulationDiverged(RuntimeError):
     """A run whose state became non-finite or left sim.divergence_bound.
 
-    ``result`` holds what was recorded up to the last finite step; ``time`` is when it diverged."""
+    ``result`` holds what was recorded up to the last finite step; ``time`` is when it diverged.
+    From simulate_batch: ``index`` is the run's position in the batch and ``results`` holds every
+    run's result (None from simulate)."""
 
-    def __init__(self, message: str, result: SimulationResult, time: float) -> None:
+    def __init__(
+        self,
+        message: str,
+        result: SimulationResult,
+        time: float,
+        *,
+        index: int | None = None,
+        results: list[SimulationResult] | None = None,
+    ) -> None:
         super().__init__(message)
         self.result = result
         self.time = time
+        self.index = index
+        self.results = results
+
+
+def _result(run: _core.Simulation, config: Config, wall_time: float) -> SimulationResult:
+    return SimulationResult(
+        **run.recording(),
+        covariance_reset_times=np.array(run.reset_times),
+        config=config,
+        status=run.status,
+        wall_time=wall_time,
+    )
+
+
+def _divergence_message(run: _core.Simulation, config: Config) -> str:
+    return (
+        f"simulation diverged at t = {run.divergence_time:.6g} s (state non-finite or beyond "
+        f"sim.divergence_bound = {config.sim.divergence_bound:g}); the partial result is in "
+        "the exception's .result"
+    )
+
+
+def _progress_bar(total: float, unit: str, desc: str, enabled: bool) -> tqdm:
+    return tqdm(
+        total=total,
+        unit=unit,
+        unit_scale=True,
+        disable=not enabled,
+        desc=desc,
+        bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} " + unit + " [{elapsed}<{remaining}]",
+    )
 
 
 def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
@@ -276,31 +320,75 @@ def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
     run = _core.Simulation(settings)
     chunk = max(1000, run.steps // 200) if progress else CHUNK_STEPS
     start = time.perf_counter()
-    with tqdm(
-        total=round(config.sim.T, 6),
-        unit="s",
-        unit_scale=True,
-        disable=not progress,
-        desc="simulating",
-        bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]",
-    ) as bar:
+    with _progress_bar(round(config.sim.T, 6), "s", "simulating", progress) as bar:
         while run.status == "running":
             run.advance(chunk)
             bar.update(round(config.sim.T * run.step / run.steps, 6) - bar.n)
-    wall_time = time.perf_counter() - start
-    result = SimulationResult(
-        **run.recording(),
-        covariance_reset_times=np.array(run.reset_times),
-        config=config,
-        status=run.status,
-        wall_time=wall_time,
-    )
+    result = _result(run, config, time.perf_counter() - start)
     if run.status == "diverged":
-        raise SimulationDiverged(
-            f"simulation diverged at t = {run.divergence_time:.6g} s (state non-finite or beyond "
-            f"sim.divergence_bound = {config.sim.divergence_bound:g}); the partial result is in "
-            "the exception's .result",
-            result,
-            run.divergence_time,
-        )
+        raise SimulationDiverged(_divergence_message(run, config), result, run.divergence_time)
     return result
+
+
+def default_threads() -> int:
+    """The number of CPUs this process may run on (simulate_batch's default thread count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _check_threads(threads: int | None) -> int:
+    if threads is None:
+        return default_threads()
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
+        raise TypeError(f"threads: expected an integer >= 1 or None, got {threads!r}")
+    if threads < 1:
+        raise ValueError(f"threads: expected an integer >= 1 or None, got {threads!r}")
+    return int(threads)
+
+
+def simulate_batch(
+    configs: Iterable[Config],
+    *,
+    threads: int | None = None,
+    progress: bool = False,
+    on_divergence: str = "raise",
+) -> list[SimulationResult]:
+    """Simulate many independent runs in parallel C++ threads; one result per config, in order.
+
+    Each run gives bit-for-bit the result of ``simulate(config)``, whatever ``threads`` is (None:
+    every CPU this process may use). ``wall_time`` of each result is the time spent advancing that
+    run. ``progress=True`` shows a tqdm bar in steps over all runs. ``on_divergence``:
+    ``"raise"`` (default) lets every run end, then raises SimulationDiverged for the first run
+    that diverged, with ``.index`` and ``.results`` (all results); ``"keep"`` returns the
+    results, the diverged ones with ``status == "diverged"`` and their partial rows."""
+    if isinstance(configs, Config):
+        raise TypeError("configs: expected an iterable of adparm.Config, got one Config")
+    configs = list(configs)
+    for i, config in enumerate(configs):
+        if not isinstance(config, Config):
+            raise TypeError(f"configs[{i}]: expected adparm.Config, got {type(config).__name__}")
+    if on_divergence not in ("raise", "keep"):
+        raise ValueError(f"on_divergence: expected 'raise' or 'keep', got {on_divergence!r}")
+    workers = _check_threads(threads)
+    batch = _core.Batch([core_settings(config) for config in configs])
+    runs = [batch.simulation(i) for i in range(len(configs))]
+    total = sum(run.steps for run in runs)
+    with _progress_bar(total, "steps", "simulating", progress) as bar:
+        while batch.running:
+            batch.advance(CHUNK_STEPS, workers)
+            bar.update(sum(run.step for run in runs) - bar.n)
+    results = [_result(runs[i], config, batch.seconds(i)) for i, config in enumerate(configs)]
+    diverged = [i for i, run in enumerate(runs) if run.status == "diverged"]
+    if diverged and on_divergence == "raise":
+        i = diverged[0]
+        raise SimulationDiverged(
+            f"configs[{i}]: {_divergence_message(runs[i], configs[i])}; "
+            f"{len(diverged)} of {len(configs)} runs diverged, all results are in .results",
+            results[i],
+            runs[i].divergence_time,
+            index=i,
+            results=results,
+        )
+    return results

@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "adparm/basis.hpp"
+#include "adparm/batch.hpp"
 #include "adparm/hjb.hpp"
 #include "adparm/open_loop.hpp"
 #include "adparm/simulation.hpp"
@@ -333,6 +334,24 @@ void bind_simulation(py::module_& m) {
           "weights (n, 8).");
 }
 
+void bind_batch(py::module_& m) {
+  using AnyBatch = Batch<AnySimulation>;
+  py::class_<AnyBatch>(m, "Batch",
+                       "Independent runs advanced in parallel C++ threads; run i is a Simulation.")
+      .def(py::init<const std::vector<Settings>&>(), py::arg("settings"))
+      .def("__len__", &AnyBatch::size)
+      .def("advance", &AnyBatch::advance, py::arg("max_steps"), py::arg("threads"),
+           py::call_guard<py::gil_scoped_release>(),
+           "Advances every running run by up to max_steps steps on `threads` threads; returns "
+           "whether any is still running.")
+      .def_property_readonly("running", &AnyBatch::running)
+      .def(
+          "simulation", [](AnyBatch& b, std::size_t i) -> AnySimulation& { return b[i]; },
+          py::arg("index"), py::return_value_policy::reference_internal)
+      .def("seconds", &AnyBatch::seconds, py::arg("index"),
+           "Wall time spent advancing run `index`, s.");
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -344,4 +363,5 @@ PYBIND11_MODULE(_core, m) {
   bind_hjb(m);
   bind_closed_loop(m);
   bind_simulation(m);
+  bind_batch(m);
 }
