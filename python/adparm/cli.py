@@ -1,5 +1,5 @@
-"""Command line: ``adparm reproduce``, ``adparm run CONFIG`` and ``adparm compare [CONFIG]``
-(also ``python -m adparm``)."""
+"""Command line: ``adparm reproduce``, ``adparm run CONFIG``, ``adparm compare [CONFIG]`` and
+``adparm sweep [CONFIG] --grid section.key=v1,v2`` (also ``python -m adparm``)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .comparison import DEFAULT_KINDS, _controller_configs, compare
-from .config import Config, load_config, paper_config
+from .config import Config, load_config, paper_config, tomllib
 from .report import FIGURE_FORMATS, check_formats, write_report
 from .simulation import SimulationDiverged, SimulationResult, simulate
 
@@ -75,7 +75,64 @@ def _parser() -> argparse.ArgumentParser:
         default=",".join(DEFAULT_KINDS),
         help=f"controllers, comma-separated; default {','.join(DEFAULT_KINDS)}",
     )
+    sweeping = commands.add_parser(
+        "sweep",
+        help="run a grid of settings and tabulate the summary metrics of each point",
+        description="Run every combination of the --grid values from the configuration (the "
+        "paper's instance without a file) in parallel threads and write one row of summary "
+        "metrics per point.",
+    )
+    sweeping.add_argument("config", type=Path, nargs="?", default=None, help="base TOML file")
+    sweeping.add_argument(
+        "--grid",
+        action="append",
+        type=_grid_entry,
+        required=True,
+        metavar="SECTION.KEY=V1,V2,...",
+        help="values to try, as TOML values separated by commas, e.g. critic.eta_c=100,800 or "
+        "task.q0=[0.1,0.2],[0.5,-0.3]; repeat for more keys",
+    )
+    sweeping.add_argument(
+        "--out", type=Path, default=Path("sweep.csv"), help="table file: .csv, .json or .md"
+    )
+    sweeping.add_argument("--threads", type=int, default=None, help="threads (default: all CPUs)")
+    sweeping.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweeping.add_argument("--T", type=float, default=None, help="override the horizon sim.T (s)")
     return parser
+
+
+def _grid_entry(text: str) -> tuple[str, list]:
+    name, separator, values = text.partition("=")
+    if not separator or not name.strip() or not values.strip():
+        raise argparse.ArgumentTypeError(f"expected SECTION.KEY=V1,V2,..., got {text!r}")
+    try:
+        parsed = tomllib.loads(f"values = [{values}]")["values"]
+    except tomllib.TOMLDecodeError as error:
+        raise argparse.ArgumentTypeError(
+            f"{name.strip()}: expected TOML values separated by commas, got {values!r} ({error})"
+        ) from error
+    return name.strip(), parsed
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from .sweep import sweep
+
+    grid = dict(args.grid)
+    try:
+        if args.out.suffix not in (".csv", ".json", ".md"):
+            raise ValueError(f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}")
+        table = sweep(_config(args), grid, threads=args.threads, progress=not args.no_progress)
+    except (OSError, ValueError, TypeError) as error:
+        print(f"adparm sweep: {error}", file=sys.stderr)
+        return 2
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    table.save(args.out)
+    print(table.to_markdown(), end="")
+    print(f"wrote {args.out} ({len(table)} runs)")
+    diverged = sum(row["status"] == "diverged" for row in table)
+    if diverged:
+        print(f"adparm sweep: {diverged} of {len(table)} runs diverged", file=sys.stderr)
+    return 0
 
 
 def _kinds(text: str) -> tuple[str, ...]:
@@ -125,6 +182,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "compare":
         return _compare(args)
+    if args.command == "sweep":
+        return _sweep(args)
     try:
         config = _config(args)
     except (OSError, ValueError, TypeError) as error:

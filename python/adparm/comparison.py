@@ -13,7 +13,6 @@ show a lower J than ``optimal``, which is optimal for the error system without m
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from collections.abc import Iterable, Sequence
@@ -25,6 +24,7 @@ import numpy as np
 
 from .config import CONTROLLER_KINDS, Config, _hint
 from .simulation import SimulationDiverged, SimulationResult, simulate
+from .table import rows_dataframe, rows_json, rows_markdown, write_csv
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
@@ -165,13 +165,6 @@ def _row(label: str, result: SimulationResult, optimal_cost: float | None) -> di
     }
 
 
-def _plain(value: Any) -> Any:
-    """None for non-finite floats (JSON has no NaN)."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 @dataclass(frozen=True)
 class Comparison:
     """Runs of the same arm, task and initial state under several controllers.
@@ -198,17 +191,7 @@ class Comparison:
 
     def table_markdown(self) -> str:
         """The rows as a Markdown table (``-`` for a missing value), with a note on the cost."""
-        headers = [_MARKDOWN[column][0] for column in COMPARE_COLUMNS]
-        lines = [
-            "| " + " | ".join(headers) + " |",
-            "|" + "|".join("---" if i == 0 else "---:" for i in range(len(headers))) + "|",
-        ]
-        for row in self.rows:
-            cells = []
-            for column in COMPARE_COLUMNS:
-                value = _plain(row[column])
-                cells.append("-" if value is None else _MARKDOWN[column][1].format(value))
-            lines.append("| " + " | ".join(cells) + " |")
+        lines = [rows_markdown(COMPARE_COLUMNS, self.rows, _MARKDOWN).rstrip("\n")]
         lines += [
             "",
             "J = int_0^T x^T Q x + u^T R u (eq. 10) charges the controller's input u (adp: "
@@ -224,30 +207,18 @@ class Comparison:
 
     def to_dataframe(self) -> pandas.DataFrame:
         """The rows as a pandas DataFrame indexed by controller. Needs pandas."""
-        try:
-            import pandas
-        except ImportError as error:  # pragma: no cover - pandas is in the test extra
-            raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
-        frame = pandas.DataFrame(self.rows, columns=list(COMPARE_COLUMNS))
-        return frame.set_index("controller")
+        return rows_dataframe(COMPARE_COLUMNS, self.rows).set_index("controller")
 
     def to_json(self) -> dict[str, Any]:
         """The content of compare.json: {"columns", "rows"}, non-finite numbers as null."""
-        rows = [{key: _plain(value) for key, value in row.items()} for row in self.rows]
-        return {"columns": list(COMPARE_COLUMNS), "rows": rows}
+        return rows_json(COMPARE_COLUMNS, self.rows)
 
     def save(self, directory: str | Path) -> list[Path]:
         """Write compare.csv, compare.json and compare.md to ``directory``; returns the paths."""
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         paths = [directory / f"compare.{ext}" for ext in ("csv", "json", "md")]
-        with paths[0].open("w", newline="") as stream:
-            writer = csv.writer(stream, lineterminator="\n")
-            writer.writerow(COMPARE_COLUMNS)
-            for row in self.rows:
-                writer.writerow(
-                    ["" if _plain(row[c]) is None else _csv(row[c]) for c in COMPARE_COLUMNS]
-                )
+        write_csv(paths[0], COMPARE_COLUMNS, self.rows)
         paths[1].write_text(json.dumps(self.to_json(), indent=2) + "\n")
         paths[2].write_text("# adparm controller comparison\n\n" + self.table_markdown())
         return paths
@@ -258,10 +229,6 @@ class Comparison:
         from .plotting import plot_comparison
 
         return plot_comparison(self, time_scale=time_scale)
-
-
-def _csv(value: Any) -> str:
-    return repr(value) if isinstance(value, float) else str(value)
 
 
 def compare(

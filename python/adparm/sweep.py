@@ -1,0 +1,230 @@
+"""Parameter sweeps: every point of a grid of settings run from one base configuration, with one
+row of summary metrics per point.
+
+By default the runs go through :func:`adparm.simulate_batch` in this process (parallel C++
+threads, a few runs in memory at a time). Given an ``executor`` (anything with
+``concurrent.futures``' ``submit``: a ProcessPoolExecutor, or a dask.distributed Client's
+``client.get_executor()`` for a cluster), each point is submitted as one task that runs
+:func:`adparm.simulate` and returns its row, so only configs and rows cross the wire.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .config import _SECTIONS, Config, _hint
+from .simulation import SimulationResult, _check_threads, simulate_batch
+from .table import rows_dataframe, rows_json, rows_markdown, write_csv
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+
+__all__ = ["SWEEP_METRICS", "SweepResult", "grid_points", "sweep", "sweep_row"]
+
+#: The metrics of each row (from adparm.summary.summarize), after the grid's own columns.
+SWEEP_METRICS = (
+    "status",
+    "t_end",
+    "critic_relative_error",
+    "actor_relative_error",
+    "critic_relative_error_at_claim",
+    "critic_time_within_tolerance",
+    "actor_time_within_tolerance",
+    "final_e1_norm",
+    "accumulated_cost",
+    "covariance_resets",
+    "wall_time",
+)
+
+# Runs held in memory at once per thread by the in-process sweep (each keeps its recording until
+# it is summarised).
+_RUNS_PER_THREAD = 8
+
+
+def _check_grid(grid: Mapping[str, Any]) -> dict[str, list[Any]]:
+    if not isinstance(grid, Mapping):
+        raise TypeError(
+            "grid: expected a mapping {'section.key': [values]}, e.g. "
+            f"{{'critic.eta_c': [100, 800]}}, got {type(grid).__name__}"
+        )
+    if not grid:
+        raise ValueError("grid: expected at least one 'section.key': [values] entry")
+    checked = {}
+    for name, values in grid.items():
+        if not isinstance(name, str) or name.count(".") != 1:
+            raise ValueError(
+                f"grid: key {name!r} must be 'section.key', e.g. 'critic.eta_c' or 'task.q0'"
+            )
+        section, key = name.split(".")
+        if section not in _SECTIONS:
+            raise ValueError(
+                f"grid[{name!r}]: unknown config section {section!r}"
+                f"{_hint(section, list(_SECTIONS))}; known sections: {', '.join(_SECTIONS)}"
+            )
+        keys = [f.name for f in dataclasses.fields(_SECTIONS[section])]
+        if key not in keys:
+            raise ValueError(
+                f"grid[{name!r}]: unknown key {key!r} in [{section}]{_hint(key, keys)}; "
+                f"known keys: {', '.join(keys)}"
+            )
+        if isinstance(values, (str, bytes, Mapping)) or not isinstance(
+            values, (Sequence, np.ndarray)
+        ):
+            raise TypeError(
+                f"grid[{name!r}]: expected a list of values to try, got {type(values).__name__}"
+            )
+        values = list(values)
+        if not values:
+            raise ValueError(f"grid[{name!r}]: expected at least one value")
+        checked[name] = [v.tolist() if isinstance(v, np.ndarray) else v for v in values]
+    return checked
+
+
+def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:
+    """Every combination of the grid's values, as {'section.key': value} dicts; the last key
+    varies fastest (itertools.product order)."""
+    checked = _check_grid(grid)
+    combinations = itertools.product(*checked.values())
+    return [dict(zip(checked, values, strict=True)) for values in combinations]
+
+
+def _point_config(base: Config, point: Mapping[str, Any]) -> Config:
+    changes: dict[str, dict[str, Any]] = {}
+    for name, value in point.items():
+        section, key = name.split(".")
+        changes.setdefault(section, {})[key] = value
+    try:
+        return base.updated(changes)
+    except (ValueError, TypeError) as error:
+        raise type(error)(f"grid point {point}: {error}") from error
+
+
+def _metrics(result: SimulationResult, tolerance: float) -> dict[str, Any]:
+    summary = result.summary(tolerance=tolerance)
+    return {name: summary.get(name) for name in SWEEP_METRICS}
+
+
+def sweep_row(config: Config, tolerance: float = 0.02) -> dict[str, Any]:
+    """The metrics of one run of ``config`` (the task an executor runs; a diverged run gives its
+    partial result's metrics with status "diverged")."""
+    return _metrics(simulate_batch([config], threads=1, on_divergence="keep")[0], tolerance)
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """One row per grid point: the point's values (columns ``parameters``, e.g.
+    ``critic.eta_c``), then :data:`SWEEP_METRICS`. ``table["column"]`` is a NumPy array of that
+    column (dtype object when it holds lists, strings or missing values)."""
+
+    parameters: tuple[str, ...]
+    rows: tuple[dict[str, Any], ...]
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return (*self.parameters, *SWEEP_METRICS)
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        return iter(self.rows)
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        if column not in self.columns:
+            raise KeyError(
+                f"{column!r}: not a column{_hint(column, self.columns)}; columns: "
+                + ", ".join(self.columns)
+            )
+        values = [row[column] for row in self.rows]
+        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+            return np.array(values, dtype=float)
+        out = np.empty(len(values), dtype=object)
+        out[:] = values
+        return out
+
+    def to_markdown(self) -> str:
+        return rows_markdown(self.columns, self.rows)
+
+    def to_json(self) -> dict[str, Any]:
+        return rows_json(self.columns, self.rows)
+
+    def to_dataframe(self) -> pandas.DataFrame:
+        """The table as a pandas DataFrame. Needs pandas."""
+        return rows_dataframe(self.columns, self.rows)
+
+    def save(self, path: str | Path) -> Path:
+        """Write ``.csv`` (lists as JSON text), ``.json`` or ``.md``, by the file's suffix."""
+        path = Path(path)
+        if path.suffix == ".csv":
+            return write_csv(path, self.columns, self.rows)
+        if path.suffix == ".json":
+            path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        elif path.suffix == ".md":
+            path.write_text("# adparm sweep\n\n" + self.to_markdown())
+        else:
+            raise ValueError(f"path: expected a .csv, .json or .md file, got {str(path)!r}")
+        return path
+
+
+def sweep(
+    base_config: Config,
+    grid: Mapping[str, Sequence[Any]],
+    executor: Any = None,
+    *,
+    threads: int | None = None,
+    tolerance: float = 0.02,
+    progress: bool = False,
+) -> SweepResult:
+    """Run ``base_config`` at every point of ``grid`` and tabulate the summary metrics.
+
+    ``grid`` maps 'section.key' to the values to try, e.g. ``{"critic.eta_c": [100, 800],
+    "probe.amplitude": [[50, 20], [71, 23]], "task.q0": [[0.1, 0.2], [0.5, -0.3]]}``; the
+    points are all combinations (the last key varies fastest). Every point's config is built and
+    checked before anything runs. Without ``executor`` the runs go through
+    :func:`adparm.simulate_batch` on ``threads`` threads; with one (``submit``-style, e.g.
+    ``ProcessPoolExecutor()`` or a dask ``Client(...).get_executor()``) each point is one task.
+    Runs that diverge are kept as rows with status "diverged". ``tolerance`` is that of the
+    time-within-tolerance metrics."""
+    if not isinstance(base_config, Config):
+        raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
+    if not 0.0 < tolerance < 1.0:
+        raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
+    points = grid_points(grid)
+    configs = [_point_config(base_config, point) for point in points]
+    parameters = tuple(points[0])
+    if executor is None:
+        metrics = _run_in_process(configs, _check_threads(threads), tolerance, progress)
+    else:
+        if not callable(getattr(executor, "submit", None)):
+            raise TypeError(
+                "executor: expected a concurrent.futures-style executor with submit(), got "
+                f"{type(executor).__name__}"
+            )
+        futures = [executor.submit(sweep_row, config, tolerance) for config in configs]
+        metrics = [future.result() for future in tqdm(futures, disable=not progress, desc="sweep")]
+    rows = tuple({**point, **row} for point, row in zip(points, metrics, strict=True))
+    return SweepResult(parameters=parameters, rows=rows)
+
+
+def _run_in_process(
+    configs: list[Config], threads: int, tolerance: float, progress: bool
+) -> list[dict[str, Any]]:
+    group = threads * _RUNS_PER_THREAD
+    metrics: list[dict[str, Any]] = []
+    with tqdm(total=len(configs), disable=not progress, desc="sweep", unit="run") as bar:
+        for start in range(0, len(configs), group):
+            results = simulate_batch(
+                configs[start : start + group], threads=threads, on_divergence="keep"
+            )
+            metrics += [_metrics(result, tolerance) for result in results]
+            bar.update(len(results))
+    return metrics

@@ -1,0 +1,173 @@
+"""adparm.sweep: a parameter grid run in-process or on an executor (thread pool, dask)."""
+
+from __future__ import annotations
+
+import json
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import adparm
+from adparm.sweep import SWEEP_METRICS
+
+BASE = adparm.paper_config().updated({"sim": {"T": 1.0}})
+GRID = {
+    "critic.eta_c": [100.0, 800.0],
+    "task.q0": [[0.1598, 0.2257], [0.5, -0.3]],
+    "probe.amplitude": [[71.0, 23.0]],
+}
+
+
+def without_wall_time(table: adparm.SweepResult) -> list[dict]:
+    return [{k: v for k, v in row.items() if k != "wall_time"} for row in table]
+
+
+@pytest.fixture(scope="module")
+def table() -> adparm.SweepResult:
+    return adparm.sweep(BASE, GRID, threads=2)
+
+
+def test_grid_points_are_every_combination_last_key_fastest() -> None:
+    points = adparm.grid_points({"critic.eta_c": [1, 2, 3], "sim.dt": np.array([1e-3, 2e-3])})
+    assert len(points) == 6
+    assert points[0] == {"critic.eta_c": 1, "sim.dt": 1e-3}
+    assert points[1] == {"critic.eta_c": 1, "sim.dt": 2e-3}
+    assert points[-1] == {"critic.eta_c": 3, "sim.dt": 2e-3}
+
+
+def test_rows_are_the_summaries_of_one_by_one_runs(table) -> None:
+    assert len(table) == 4
+    assert table.parameters == tuple(GRID)
+    assert table.columns == (*GRID, *SWEEP_METRICS)
+    for row, point in zip(table, adparm.grid_points(GRID), strict=True):
+        config = BASE.updated(
+            {
+                "critic": {"eta_c": point["critic.eta_c"]},
+                "task": {"q0": point["task.q0"]},
+                "probe": {"amplitude": point["probe.amplitude"]},
+            }
+        )
+        summary = adparm.simulate(config).summary()
+        assert {k: row[k] for k in point} == point
+        for name in SWEEP_METRICS:
+            if name != "wall_time":
+                assert row[name] == summary[name], name
+        assert row["wall_time"] > 0.0
+
+
+def test_columns_as_arrays(table) -> None:
+    np.testing.assert_array_equal(table["critic.eta_c"], [100.0, 100.0, 800.0, 800.0])
+    assert table["critic_relative_error"].dtype == float
+    assert table["status"].tolist() == ["finished"] * 4
+    assert table["task.q0"][1] == [0.5, -0.3]
+    with pytest.raises(KeyError, match="did you mean 'critic_relative_error'"):
+        table["critic_relative_eror"]
+
+
+def test_thread_pool_executor_gives_the_same_rows(table) -> None:
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        pooled = adparm.sweep(BASE, GRID, executor=pool)
+    assert without_wall_time(pooled) == without_wall_time(table)
+
+
+def test_dask_local_cluster_gives_the_same_rows(table) -> None:
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        on_dask = adparm.sweep(BASE, GRID, executor=client.get_executor())
+    assert without_wall_time(on_dask) == without_wall_time(table)
+
+
+def test_diverged_points_are_rows() -> None:
+    grid = {"init.critic_weights": [[0.0] * 8], "init.actor_weights": [[0.0] * 8, [1.0] * 8]}
+    table = adparm.sweep(BASE, grid, threads=1)
+    assert table["status"].tolist() == ["diverged", "finished"]
+    assert table["t_end"][0] < 0.1
+
+
+def test_save_and_export(table, tmp_path) -> None:
+    csv = table.save(tmp_path / "sweep.csv").read_text().splitlines()
+    assert csv[0].split(",")[:4] == ["critic.eta_c", "task.q0", "probe.amplitude", "status"]
+    assert len(csv) == 5 and '"[0.5, -0.3]"' in csv[2]
+    data = json.loads(table.save(tmp_path / "sweep.json").read_text())
+    assert data["columns"] == list(table.columns)
+    assert data["rows"][1]["task.q0"] == [0.5, -0.3]
+    assert "| critic.eta_c |" in table.save(tmp_path / "sweep.md").read_text()
+    frame = table.to_dataframe()
+    assert list(frame.columns) == list(table.columns) and len(frame) == 4
+    with pytest.raises(ValueError, match=r"path: expected a .csv, .json or .md file"):
+        table.save(tmp_path / "sweep.txt")
+
+
+@pytest.mark.parametrize(
+    ("grid", "error", "match"),
+    [
+        ([("critic.eta_c", [1])], TypeError, "grid: expected a mapping"),
+        ({}, ValueError, "grid: expected at least one"),
+        ({"eta_c": [1]}, ValueError, "must be 'section.key'"),
+        ({"critc.eta_c": [1]}, ValueError, "did you mean 'critic'"),
+        (
+            {"critic.eta": [1]},
+            ValueError,
+            r"unknown key 'eta' in \[critic\] \(did you mean 'eta_c'",
+        ),
+        ({"critic.eta_c": 800}, TypeError, "expected a list of values to try, got int"),
+        ({"critic.eta_c": "800"}, TypeError, "expected a list of values to try, got str"),
+        ({"critic.eta_c": []}, ValueError, "expected at least one value"),
+        (
+            {"critic.eta_c": [800, -1]},
+            ValueError,
+            r"grid point \{'critic.eta_c': -1\}: critic.eta_c",
+        ),
+        ({"task.q0": [[0.1]]}, ValueError, "task.q0"),
+    ],
+)
+def test_bad_grids_are_refused_before_anything_runs(grid, error, match) -> None:
+    with pytest.raises(error, match=match):
+        adparm.sweep(BASE, grid)
+
+
+def test_bad_arguments_are_refused() -> None:
+    with pytest.raises(TypeError, match="base_config: expected adparm.Config"):
+        adparm.sweep({"critic": {}}, GRID)
+    with pytest.raises(TypeError, match="executor: expected a concurrent.futures-style"):
+        adparm.sweep(BASE, GRID, executor=object())
+    with pytest.raises(ValueError, match="tolerance"):
+        adparm.sweep(BASE, GRID, tolerance=2.0)
+    with pytest.raises(ValueError, match="threads"):
+        adparm.sweep(BASE, GRID, threads=0)
+
+
+def test_cli_sweep_writes_the_table(tmp_path, capsys) -> None:
+    from adparm.cli import main
+
+    out = tmp_path / "runs" / "sweep.json"
+    argv = ["sweep", "--grid", "critic.eta_c=100,800", "--grid", "task.q0=[0.1,0.2],[0.5,-0.3]"]
+    assert main([*argv, "--T", "0.5", "--threads", "2", "--out", str(out), "--no-progress"]) == 0
+    rows = json.loads(out.read_text())["rows"]
+    assert [(r["critic.eta_c"], r["task.q0"]) for r in rows] == [
+        (100, [0.1, 0.2]),
+        (100, [0.5, -0.3]),
+        (800, [0.1, 0.2]),
+        (800, [0.5, -0.3]),
+    ]
+    assert all(r["t_end"] == 0.5 for r in rows)
+    assert "| critic.eta_c | task.q0 |" in capsys.readouterr().out
+
+
+def test_cli_sweep_reports_bad_grids(capsys) -> None:
+    from adparm.cli import main
+
+    assert main(["sweep", "--grid", "critic.eta=1,2"]) == 2
+    assert "did you mean 'eta_c'" in capsys.readouterr().err
+    assert main(["sweep", "--grid", "critic.eta_c=1", "--out", "sweep.txt"]) == 2
+    assert "--out: expected a .csv, .json or .md file" in capsys.readouterr().err
+    for bad in ("critic.eta_c", "critic.eta_c=[1"):
+        with pytest.raises(SystemExit):
+            main(["sweep", "--grid", bad])
+        assert "argument --grid" in capsys.readouterr().err
