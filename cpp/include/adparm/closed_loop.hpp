@@ -183,7 +183,7 @@ class ClosedLoop {
 
     rate.template segment<kDof>(kQ) = dq;
     rate.template segment<kDof>(kDq) = Arm::acceleration(plant_terms, dq, tau, signals.disturbance);
-    rate[kCost] = cost_(x, u);  // eq. (10)
+    rate[kCost] = point.state_cost + cost_.input_cost(u);  // eq. (10): x^T Q x + u^T R u
 
     if (outputs != nullptr) {
       outputs->errors = errors;
