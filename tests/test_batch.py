@@ -70,6 +70,14 @@ def test_batch_equals_one_by_one_runs(configs, one_by_one, threads) -> None:
         assert batched.wall_time > 0.0
 
 
+def test_batch_over_many_chunks_equals_one_by_one_runs(configs, one_by_one, monkeypatch) -> None:
+    """Runs of different lengths, advanced in many short chunks (returns to Python between)."""
+    monkeypatch.setattr(adparm.simulation, "CHUNK_STEPS", 50)
+    results = adparm.simulate_batch(configs, threads=2, progress=False)
+    for alone, batched in zip(one_by_one, results, strict=True):
+        assert_same_run(alone, batched)
+
+
 def test_batch_is_deterministic_and_takes_any_iterable(configs) -> None:
     first = adparm.simulate_batch(iter(configs), threads=2)
     second = adparm.simulate_batch(tuple(configs), threads=2)

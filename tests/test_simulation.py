@@ -107,20 +107,26 @@ def test_result_checks_its_arrays(paper_result) -> None:
 
 
 @pytest.mark.parametrize("chunk", [1, 3, 10, 37])
-def test_chunked_runs_record_the_same_rows(chunk) -> None:
+@pytest.mark.parametrize(("T", "record_every"), [(0.2, 10), (0.1037, 7)])
+def test_chunked_runs_record_the_same_rows(chunk, T, record_every) -> None:
     """A row due at a step's end is written from the next step's first RK4 stage, or when the
-    chunk ends there: chunk boundaries on and off the record step give identical recordings."""
+    chunk ends there: chunk boundaries on and off the record step, and a last step shortened to
+    end at T, give identical recordings."""
     from adparm import _core
     from adparm.simulation import core_settings
 
-    config = adparm.paper_config().updated({"sim": {"T": 0.2, "record_every": 10}})
+    config = adparm.paper_config().updated({"sim": {"T": T, "record_every": record_every}})
     whole = _core.Simulation(core_settings(config))
     whole.advance(whole.steps)
     chunked = _core.Simulation(core_settings(config))
     while chunked.status == "running":
         chunked.advance(chunk)
         rows = chunked.recording()["t"]
-        assert rows[-1] == pytest.approx(config.sim.dt * (chunked.step // 10) * 10)
+        if chunked.status == "running":
+            last = config.sim.dt * (chunked.step // record_every) * record_every
+            assert rows[-1] == pytest.approx(last)
+        else:
+            assert rows[-1] == pytest.approx(T)
     expected, actual = whole.recording(), chunked.recording()
     assert expected.keys() == actual.keys()
     for name in expected:
@@ -138,3 +144,15 @@ def test_divergence_mid_chunk_keeps_the_last_finite_state_as_the_last_row() -> N
         partial = caught.value.result
         assert partial.t[-1] == pytest.approx(caught.value.time - c.sim.dt)
         assert np.all(np.diff(partial.t) > 0.0)
+    # the core's state after divergence is the last finite one, that of the last row
+    from adparm import _core
+    from adparm.simulation import core_settings
+
+    run = _core.Simulation(core_settings(config))
+    run.advance(run.steps)
+    assert run.status == "diverged"
+    state, last = run.state, run.recording()
+    assert np.all(np.isfinite(state))
+    np.testing.assert_array_equal(state[0:2], last["q"][-1])
+    np.testing.assert_array_equal(state[4:12], last["critic_weights"][-1])
+    assert run.step * config.sim.dt == pytest.approx(run.divergence_time)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import json
 from concurrent.futures import ThreadPoolExecutor
 
@@ -90,10 +91,30 @@ def test_diverged_points_are_rows() -> None:
     assert table["t_end"][0] < 0.1
 
 
+def test_table_values_of_any_kind_are_written_as_json(tmp_path) -> None:
+    """Grid values that are tables (a task.qd trajectory), arrays or NumPy numbers."""
+    sinusoid = {"kind": "sinusoid", "amplitude": [0.1, 0.0], "frequency": [1.0, 1.0]}
+    samples = {"kind": "samples", "t": np.array([0.0, 1.0]), "q": np.array([[0, 0], [0.1, 0.1]])}
+    grid = {"task.qd": [sinusoid, samples], "critic.eta_c": np.array([100, 800])}
+    base = BASE.updated({"sim": {"T": 0.05}})
+    table = adparm.sweep(base, grid, threads=2)
+    assert table["critic.eta_c"].dtype == float
+    assert type(table.rows[0]["critic.eta_c"]) is int
+    data = json.loads(table.save(tmp_path / "qd.json").read_text())
+    assert data["rows"][0]["task.qd"] == sinusoid
+    assert data["rows"][2]["task.qd"]["q"] == [[0, 0], [0.1, 0.1]]
+    with table.save(tmp_path / "qd.csv").open() as stream:
+        rows = list(csv.DictReader(stream))
+    assert len(rows) == 4
+    assert json.loads(rows[0]["task.qd"]) == sinusoid
+    assert json.loads(rows[3]["task.qd"])["t"] == [0.0, 1.0]
+    assert '{"kind": "sinusoid"' in table.to_markdown()
+
+
 def test_save_and_export(table, tmp_path) -> None:
-    csv = table.save(tmp_path / "sweep.csv").read_text().splitlines()
-    assert csv[0].split(",")[:4] == ["critic.eta_c", "task.q0", "probe.amplitude", "status"]
-    assert len(csv) == 5 and '"[0.5, -0.3]"' in csv[2]
+    lines = table.save(tmp_path / "sweep.csv").read_text().splitlines()
+    assert lines[0].split(",")[:4] == ["critic.eta_c", "task.q0", "probe.amplitude", "status"]
+    assert len(lines) == 5 and '"[0.5, -0.3]"' in lines[2]
     data = json.loads(table.save(tmp_path / "sweep.json").read_text())
     assert data["columns"] == list(table.columns)
     assert data["rows"][1]["task.q0"] == [0.5, -0.3]
@@ -125,6 +146,8 @@ def test_save_and_export(table, tmp_path) -> None:
             r"grid point \{'critic.eta_c': -1\}: critic.eta_c",
         ),
         ({"task.q0": [[0.1]]}, ValueError, "task.q0"),
+        ({"critic.eta_c": np.array(5.0)}, TypeError, "got a 0-d array"),
+        ({"init.critic_weights": [[1.0] * 8, "ones"]}, TypeError, r"grid point .*critic_weights"),
     ],
 )
 def test_bad_grids_are_refused_before_anything_runs(grid, error, match) -> None:
@@ -160,14 +183,34 @@ def test_cli_sweep_writes_the_table(tmp_path, capsys) -> None:
     assert "| critic.eta_c | task.q0 |" in capsys.readouterr().out
 
 
+def test_unreadable_trajectory_file_is_a_value_error_naming_the_point(tmp_path) -> None:
+    binary = tmp_path / "qd.csv"
+    binary.write_bytes(bytes(range(256)))
+    with pytest.raises(ValueError, match=r"grid point .*task.qd"):
+        adparm.sweep(BASE, {"task.qd": [{"kind": "samples", "file": str(binary)}]})
+
+
 def test_cli_sweep_reports_bad_grids(capsys) -> None:
     from adparm.cli import main
 
     assert main(["sweep", "--grid", "critic.eta=1,2"]) == 2
     assert "did you mean 'eta_c'" in capsys.readouterr().err
+    assert main(["sweep", "--grid", "critic.eta_c=1", "--grid", "critic.eta_c=2,3"]) == 2
+    assert "critic.eta_c given more than once" in capsys.readouterr().err
     assert main(["sweep", "--grid", "critic.eta_c=1", "--out", "sweep.txt"]) == 2
     assert "--out: expected a .csv, .json or .md file" in capsys.readouterr().err
     for bad in ("critic.eta_c", "critic.eta_c=[1"):
         with pytest.raises(SystemExit):
             main(["sweep", "--grid", bad])
         assert "argument --grid" in capsys.readouterr().err
+
+
+def test_cli_sweep_exit_status_1_when_a_run_diverges(tmp_path, capsys) -> None:
+    from adparm.cli import main
+
+    grid = ["--grid", "init.actor_weights=[0,0,0,0,0,0,0,0],[1,1,1,1,1,1,1,1]"]
+    argv = ["sweep", *grid, "--grid", "init.critic_weights=[0,0,0,0,0,0,0,0]", "--T", "0.2"]
+    assert main([*argv, "--out", str(tmp_path / "s.csv"), "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    assert "1 of 2 runs diverged" in captured.err and "| diverged |" in captured.out
+    assert (tmp_path / "s.csv").read_text().count("diverged") == 1

@@ -279,13 +279,15 @@ class Simulation:
         """Times (s) of the covariance resets so far."""
     @property
     def state(self) -> _FloatArray:
-        """Current closed-loop state (87,)."""
+        """Current closed-loop state (87,); after divergence, the last finite state (that of
+        the last recorded row), while ``step`` counts the diverging step too."""
     def recording(self) -> dict[str, _FloatArray]:
         """Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2),
         weights (n, 8)."""
 
 class Batch:
-    """Independent runs advanced in parallel C++ threads; run i is a Simulation."""
+    """Independent runs advanced in parallel C++ threads; run i is a Simulation. Not for use
+    from several Python threads at once: advance() releases the GIL while the runs change."""
 
     def __init__(self, settings: list[Settings]) -> None: ...
     def __len__(self) -> int: ...

@@ -80,7 +80,8 @@ def _parser() -> argparse.ArgumentParser:
         help="run a grid of settings and tabulate the summary metrics of each point",
         description="Run every combination of the --grid values from the configuration (the "
         "paper's instance without a file) in parallel threads and write one row of summary "
-        "metrics per point.",
+        "metrics per point. Exit status: 0, 1 if a run diverged (its row is kept), 2 for a bad "
+        "grid or configuration.",
     )
     sweeping.add_argument("config", type=Path, nargs="?", default=None, help="base TOML file")
     sweeping.add_argument(
@@ -89,8 +90,9 @@ def _parser() -> argparse.ArgumentParser:
         type=_grid_entry,
         required=True,
         metavar="SECTION.KEY=V1,V2,...",
-        help="values to try, as TOML values separated by commas, e.g. critic.eta_c=100,800 or "
-        "task.q0=[0.1,0.2],[0.5,-0.3]; repeat for more keys",
+        help="values to try, as TOML values separated by commas, e.g. critic.eta_c=100,800, "
+        'task.q0=[0.1,0.2],[0.5,-0.3] or (strings in quotes) \'controller.kind="adp","pd"\'; '
+        "one --grid per key",
     )
     sweeping.add_argument(
         "--out", type=Path, default=Path("sweep.csv"), help="table file: .csv, .json or .md"
@@ -117,21 +119,29 @@ def _grid_entry(text: str) -> tuple[str, list]:
 def _sweep(args: argparse.Namespace) -> int:
     from .sweep import sweep
 
-    grid = dict(args.grid)
     try:
+        names = [name for name, _ in args.grid]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            raise ValueError(
+                f"--grid: {', '.join(repeated)} given more than once; list all its values in one "
+                "--grid"
+            )
         if args.out.suffix not in (".csv", ".json", ".md"):
             raise ValueError(f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}")
-        table = sweep(_config(args), grid, threads=args.threads, progress=not args.no_progress)
+        config = _config(args)
+        table = sweep(config, dict(args.grid), threads=args.threads, progress=not args.no_progress)
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        table.save(args.out)
     except (OSError, ValueError, TypeError) as error:
         print(f"adparm sweep: {error}", file=sys.stderr)
         return 2
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    table.save(args.out)
     print(table.to_markdown(), end="")
     print(f"wrote {args.out} ({len(table)} runs)")
     diverged = sum(row["status"] == "diverged" for row in table)
     if diverged:
         print(f"adparm sweep: {diverged} of {len(table)} runs diverged", file=sys.stderr)
+        return 1
     return 0
 
 

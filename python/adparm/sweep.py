@@ -4,8 +4,9 @@ row of summary metrics per point.
 By default the runs go through :func:`adparm.simulate_batch` in this process (parallel C++
 threads, a few runs in memory at a time). Given an ``executor`` (anything with
 ``concurrent.futures``' ``submit``: a ProcessPoolExecutor, or a dask.distributed Client's
-``client.get_executor()`` for a cluster), each point is submitted as one task that runs
-:func:`adparm.simulate` and returns its row, so only configs and rows cross the wire.
+``client.get_executor()`` for a cluster), each point is submitted as one task that runs it alone
+(:func:`sweep_row`, the same numbers as :func:`adparm.simulate`) and returns its row, so only
+configs and rows cross the wire.
 """
 
 from __future__ import annotations
@@ -82,10 +83,14 @@ def _check_grid(grid: Mapping[str, Any]) -> dict[str, list[Any]]:
             raise TypeError(
                 f"grid[{name!r}]: expected a list of values to try, got {type(values).__name__}"
             )
+        if isinstance(values, np.ndarray) and values.ndim == 0:
+            raise TypeError(f"grid[{name!r}]: expected a list of values to try, got a 0-d array")
         values = list(values)
         if not values:
             raise ValueError(f"grid[{name!r}]: expected at least one value")
-        checked[name] = [v.tolist() if isinstance(v, np.ndarray) else v for v in values]
+        # NumPy values as plain Python numbers and lists (for the table and its files)
+        numpy = (np.ndarray, np.generic)
+        checked[name] = [v.tolist() if isinstance(v, numpy) else v for v in values]
     return checked
 
 
@@ -104,8 +109,10 @@ def _point_config(base: Config, point: Mapping[str, Any]) -> Config:
         changes.setdefault(section, {})[key] = value
     try:
         return base.updated(changes)
-    except (ValueError, TypeError) as error:
-        raise type(error)(f"grid point {point}: {error}") from error
+    except TypeError as error:
+        raise TypeError(f"grid point {point}: {error}") from error
+    except ValueError as error:
+        raise ValueError(f"grid point {point}: {error}") from error
 
 
 def _metrics(result: SimulationResult, tolerance: float) -> dict[str, Any]:
@@ -191,18 +198,20 @@ def sweep(
     points are all combinations (the last key varies fastest). Every point's config is built and
     checked before anything runs. Without ``executor`` the runs go through
     :func:`adparm.simulate_batch` on ``threads`` threads; with one (``submit``-style, e.g.
-    ``ProcessPoolExecutor()`` or a dask ``Client(...).get_executor()``) each point is one task.
+    ``ProcessPoolExecutor()`` or a dask ``Client(...).get_executor()``) each point is one task
+    and ``threads`` is not used (the executor sets the parallelism).
     Runs that diverge are kept as rows with status "diverged". ``tolerance`` is that of the
     time-within-tolerance metrics."""
     if not isinstance(base_config, Config):
         raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
     if not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
+    workers = _check_threads(threads)
     points = grid_points(grid)
     configs = [_point_config(base_config, point) for point in points]
     parameters = tuple(points[0])
     if executor is None:
-        metrics = _run_in_process(configs, _check_threads(threads), tolerance, progress)
+        metrics = _run_in_process(configs, workers, tolerance, progress)
     else:
         if not callable(getattr(executor, "submit", None)):
             raise TypeError(

@@ -1,6 +1,7 @@
 """Rows of metrics (one dict per row) written as CSV, JSON and Markdown, shared by
 :class:`adparm.Comparison` and :class:`adparm.SweepResult`. Non-finite numbers become null in
-JSON and empty cells in CSV; lists and tuples are written as JSON text in CSV."""
+JSON and empty cells in CSV; lists, tuples, arrays and tables (e.g. a ``task.qd`` trajectory)
+are written as JSON text in CSV and Markdown cells."""
 
 from __future__ import annotations
 
@@ -18,13 +19,19 @@ __all__ = ["plain", "rows_dataframe", "rows_json", "rows_markdown", "write_csv"]
 
 
 def plain(value: Any) -> Any:
-    """JSON-ready: None for non-finite floats (JSON has no NaN), lists for tuples and arrays."""
+    """JSON-ready: None for non-finite floats (JSON has no NaN); lists for tuples and arrays;
+    dicts for mappings and for the trajectory dataclasses of a config."""
+    from .config import _plain as config_plain
+
+    value = config_plain(value)  # SinusoidTrajectory, SampledTrajectory -> dict
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if hasattr(value, "tolist"):  # NumPy scalars and arrays
         return plain(value.tolist())
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): plain(v) for k, v in value.items()}
     return value
 
 
@@ -34,7 +41,7 @@ def _cell(value: Any) -> str:
         return ""
     if isinstance(value, float):
         return repr(value)
-    if isinstance(value, list):
+    if isinstance(value, (list, dict)):
         return json.dumps(value)
     return str(value)
 
@@ -80,6 +87,8 @@ def rows_markdown(
                 cells.append(formats[column][1].format(value))
             elif isinstance(value, float):
                 cells.append(f"{value:.4g}")
+            elif isinstance(value, dict):
+                cells.append(json.dumps(value))
             else:
                 cells.append(str(value))
         lines.append("| " + " | ".join(cells) + " |")

@@ -81,7 +81,7 @@ class TwoLinkArm {
     const double h = p.p3 * s2;
     terms.coriolis << -h * dq[1], -h * (dq[0] + dq[1]), h * dq[0], 0.0;
     const double c1 = std::cos(q[0]), s1 = std::sin(q[0]);
-    const double c12 = c1 * c2 - s1 * s2;  // cos(q1 + q2) without a third call
+    const double c12 = c1 * c2 - s1 * s2;  // cos(q1 + q2): two sincos calls in all, not three
     terms.gravity << p.g1 * c1 + p.g2 * c12, p.g2 * c12;
     terms.friction = p.coulomb * sign(dq) + p.viscous * dq;
   }

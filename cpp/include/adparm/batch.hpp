@@ -56,14 +56,19 @@ class Batch {
     std::vector<std::exception_ptr> errors(workers);
     std::vector<std::thread> pool;
     pool.reserve(workers);
-    for (std::size_t w = 0; w < workers; ++w) {
-      pool.emplace_back([this, &next, &errors, w, max_steps] {
-        try {
-          work(next, max_steps);
-        } catch (...) {
-          errors[w] = std::current_exception();
-        }
-      });
+    try {
+      for (std::size_t w = 0; w < workers; ++w) {
+        pool.emplace_back([this, &next, &errors, w, max_steps] {
+          try {
+            work(next, max_steps);
+          } catch (...) {
+            errors[w] = std::current_exception();
+          }
+        });
+      }
+    } catch (...) {  // a thread could not start: finish with those that did, then report
+      for (std::thread& thread : pool) thread.join();
+      throw;
     }
     for (std::thread& thread : pool) thread.join();
     for (const std::exception_ptr& error : errors)
