@@ -84,6 +84,21 @@ def test_dask_local_cluster_gives_the_same_rows(table) -> None:
     assert without_wall_time(on_dask) == without_wall_time(table)
 
 
+def test_a_list_of_points_runs_as_given() -> None:
+    """Monte Carlo: random initial positions, drawn once, reproducible from the seed."""
+    draws = np.random.default_rng(7).uniform(-0.5, 0.5, size=(3, 2))
+    points = [{"task.q0": q0, "critic.eta_c": 400.0} for q0 in draws]
+    table = adparm.sweep(BASE, points, threads=2)
+    assert table.parameters == ("task.q0", "critic.eta_c")
+    assert table["task.q0"].tolist() == draws.tolist()
+    for row, q0 in zip(table, draws, strict=True):
+        config = BASE.updated({"task": {"q0": q0}, "critic": {"eta_c": 400.0}})
+        assert (
+            row["critic_relative_error"]
+            == adparm.simulate(config).summary()["critic_relative_error"]
+        )
+
+
 def test_diverged_points_are_rows() -> None:
     grid = {"init.critic_weights": [[0.0] * 8], "init.actor_weights": [[0.0] * 8, [1.0] * 8]}
     table = adparm.sweep(BASE, grid, threads=1)
@@ -128,7 +143,11 @@ def test_save_and_export(table, tmp_path) -> None:
 @pytest.mark.parametrize(
     ("grid", "error", "match"),
     [
-        ([("critic.eta_c", [1])], TypeError, "grid: expected a mapping"),
+        (5, TypeError, "grid: expected a mapping .* or a list of points"),
+        ([("critic.eta_c", [1])], TypeError, r"grid\[0\]: expected a point"),
+        ([], ValueError, "grid: expected at least one point"),
+        ([{"task.q0": [0.1, 0.2]}, {"task.q": [0.1, 0.2]}], ValueError, r"grid\[1\]\['task.q'\]"),
+        ([{"task.q0": [0.1, 0.2]}, {"task.dq0": [0, 0]}], ValueError, "the same keys as grid"),
         ({}, ValueError, "grid: expected at least one"),
         ({"eta_c": [1]}, ValueError, "must be 'section.key'"),
         ({"critc.eta_c": [1]}, ValueError, "did you mean 'critic'"),

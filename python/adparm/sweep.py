@@ -51,55 +51,89 @@ SWEEP_METRICS = (
 _RUNS_PER_THREAD = 8
 
 
-def _check_grid(grid: Mapping[str, Any]) -> dict[str, list[Any]]:
-    if not isinstance(grid, Mapping):
-        raise TypeError(
-            "grid: expected a mapping {'section.key': [values]}, e.g. "
-            f"{{'critic.eta_c': [100, 800]}}, got {type(grid).__name__}"
+def _check_name(name: Any, where: str) -> None:
+    if not isinstance(name, str) or name.count(".") != 1:
+        raise ValueError(
+            f"{where}: key {name!r} must be 'section.key', e.g. 'critic.eta_c' or 'task.q0'"
         )
+    section, key = name.split(".")
+    if section not in _SECTIONS:
+        raise ValueError(
+            f"{where}[{name!r}]: unknown config section {section!r}"
+            f"{_hint(section, list(_SECTIONS))}; known sections: {', '.join(_SECTIONS)}"
+        )
+    keys = [f.name for f in dataclasses.fields(_SECTIONS[section])]
+    if key not in keys:
+        raise ValueError(
+            f"{where}[{name!r}]: unknown key {key!r} in [{section}]{_hint(key, keys)}; "
+            f"known keys: {', '.join(keys)}"
+        )
+
+
+def _plain_value(value: Any) -> Any:
+    """NumPy values as plain Python numbers and lists (for the table and its files)."""
+    return value.tolist() if isinstance(value, (np.ndarray, np.generic)) else value
+
+
+def _is_list(values: Any) -> bool:
+    if isinstance(values, np.ndarray):
+        return values.ndim > 0
+    return isinstance(values, Sequence) and not isinstance(values, (str, bytes))
+
+
+def _check_grid(grid: Mapping[str, Any]) -> dict[str, list[Any]]:
     if not grid:
         raise ValueError("grid: expected at least one 'section.key': [values] entry")
     checked = {}
     for name, values in grid.items():
-        if not isinstance(name, str) or name.count(".") != 1:
-            raise ValueError(
-                f"grid: key {name!r} must be 'section.key', e.g. 'critic.eta_c' or 'task.q0'"
-            )
-        section, key = name.split(".")
-        if section not in _SECTIONS:
-            raise ValueError(
-                f"grid[{name!r}]: unknown config section {section!r}"
-                f"{_hint(section, list(_SECTIONS))}; known sections: {', '.join(_SECTIONS)}"
-            )
-        keys = [f.name for f in dataclasses.fields(_SECTIONS[section])]
-        if key not in keys:
-            raise ValueError(
-                f"grid[{name!r}]: unknown key {key!r} in [{section}]{_hint(key, keys)}; "
-                f"known keys: {', '.join(keys)}"
-            )
-        if isinstance(values, (str, bytes, Mapping)) or not isinstance(
-            values, (Sequence, np.ndarray)
-        ):
-            raise TypeError(
-                f"grid[{name!r}]: expected a list of values to try, got {type(values).__name__}"
-            )
-        if isinstance(values, np.ndarray) and values.ndim == 0:
-            raise TypeError(f"grid[{name!r}]: expected a list of values to try, got a 0-d array")
+        _check_name(name, "grid")
+        if not _is_list(values):
+            got = "a 0-d array" if isinstance(values, np.ndarray) else type(values).__name__
+            raise TypeError(f"grid[{name!r}]: expected a list of values to try, got {got}")
         values = list(values)
         if not values:
             raise ValueError(f"grid[{name!r}]: expected at least one value")
-        # NumPy values as plain Python numbers and lists (for the table and its files)
-        numpy = (np.ndarray, np.generic)
-        checked[name] = [v.tolist() if isinstance(v, numpy) else v for v in values]
+        checked[name] = [_plain_value(v) for v in values]
     return checked
 
 
-def grid_points(grid: Mapping[str, Sequence[Any]]) -> list[dict[str, Any]]:
-    """Every combination of the grid's values, as {'section.key': value} dicts; the last key
-    varies fastest (itertools.product order)."""
-    checked = _check_grid(grid)
-    combinations = itertools.product(*checked.values())
-    return [dict(zip(checked, values, strict=True)) for values in combinations]
+def _check_points(points: Sequence[Any]) -> list[dict[str, Any]]:
+    if not points:
+        raise ValueError("grid: expected at least one point")
+    checked = []
+    for i, point in enumerate(points):
+        if not isinstance(point, Mapping) or not point:
+            raise TypeError(
+                f"grid[{i}]: expected a point {{'section.key': value}}, got {point!r:.60}"
+            )
+        for name in point:
+            _check_name(name, f"grid[{i}]")
+        if i > 0 and set(point) != set(checked[0]):
+            raise ValueError(
+                f"grid[{i}]: every point must set the same keys as grid[0] "
+                f"({', '.join(checked[0])}), got {', '.join(point)}"
+            )
+        checked.append({name: _plain_value(point[name]) for name in (checked or [point])[0]})
+    return checked
+
+
+def grid_points(grid: Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]]) -> list[dict]:
+    """The points of a grid as {'section.key': value} dicts.
+
+    ``grid`` is either a mapping {'section.key': [values]}, whose points are every combination
+    of the values (the last key varies fastest, itertools.product order), or a list of points
+    [{'section.key': value}, ...] taken as they are (e.g. Monte Carlo draws), all with the same
+    keys."""
+    if isinstance(grid, Mapping):
+        checked = _check_grid(grid)
+        combinations = itertools.product(*checked.values())
+        return [dict(zip(checked, values, strict=True)) for values in combinations]
+    if _is_list(grid):
+        return _check_points(list(grid))
+    raise TypeError(
+        "grid: expected a mapping {'section.key': [values]}, e.g. {'critic.eta_c': [100, 800]}, "
+        f"or a list of points [{{'section.key': value}}], got {type(grid).__name__}"
+    )
 
 
 def _point_config(base: Config, point: Mapping[str, Any]) -> Config:
@@ -184,7 +218,7 @@ class SweepResult:
 
 def sweep(
     base_config: Config,
-    grid: Mapping[str, Sequence[Any]],
+    grid: Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]],
     executor: Any = None,
     *,
     threads: int | None = None,
@@ -195,12 +229,15 @@ def sweep(
 
     ``grid`` maps 'section.key' to the values to try, e.g. ``{"critic.eta_c": [100, 800],
     "probe.amplitude": [[50, 20], [71, 23]], "task.q0": [[0.1, 0.2], [0.5, -0.3]]}``; the
-    points are all combinations (the last key varies fastest). Every point's config is built and
-    checked before anything runs. Without ``executor`` the runs go through
-    :func:`adparm.simulate_batch` on ``threads`` threads; with one (``submit``-style, e.g.
-    ``ProcessPoolExecutor()`` or a dask ``Client(...).get_executor()``) each point is one task
-    and ``threads`` is not used (the executor sets the parallelism).
-    Runs that diverge are kept as rows with status "diverged". ``tolerance`` is that of the
+    points are all combinations (the last key varies fastest). It can also be a list of points
+    with the same keys, e.g. ``[{"task.q0": q0} for q0 in draws]`` for a Monte Carlo study.
+    Every point's config is built and checked before anything runs.
+
+    Without ``executor`` the runs go through :func:`adparm.simulate_batch` on ``threads``
+    threads. With one (``submit``-style, e.g. ``ProcessPoolExecutor()`` or a dask
+    ``Client(...).get_executor()``) each point is one task and ``threads`` is not used (the
+    executor sets the parallelism). Runs that diverge are kept as rows with status "diverged".
+    ``tolerance`` is that of the
     time-within-tolerance metrics."""
     if not isinstance(base_config, Config):
         raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
