@@ -67,7 +67,8 @@ struct LoopTiming {
 double critic_error(const adparm::AnySimulation& simulation) {
   Eigen::Matrix<double, 8, 1> optimal;
   optimal << 4, 6, -8, 5, 2, 1, 2, 2;
-  const Eigen::VectorXd weights = simulation.state().segment<8>(4);
+  const Eigen::VectorXd weights =
+      simulation.state().segment<8>(adparm::PaperClosedLoop::kCriticWeights);
   return (weights - optimal).norm() / optimal.norm();
 }
 

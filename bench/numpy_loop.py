@@ -233,3 +233,19 @@ class NumpyPaperLoop:
             state = self.step(k * self.dt, state)
             states[k + 1] = state
         return states
+
+
+def recorded_pairs(
+    config: adparm.Config, states: np.ndarray
+) -> tuple[np.ndarray, dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """The NumPy ``states`` (steps + 1, 87) of ``run(steps)`` beside ``adparm.simulate`` over the
+    same horizon, at the core's recorded rows: the step index of each row, and for each array of
+    ``FIELDS`` the pair (NumPy, core)."""
+    steps = states.shape[0] - 1
+    result = adparm.simulate(config.updated({"sim": {"T": steps * config.sim.dt}}))
+    index = np.rint(np.asarray(result.t) / config.sim.dt).astype(int)
+    pairs = {
+        name: (states[index][:, entries], np.asarray(getattr(result, name)))
+        for name, entries in FIELDS.items()
+    }
+    return index, pairs

@@ -40,6 +40,13 @@ def random_optimal_config(rng: np.random.Generator) -> adparm.Config:
     )
 
 
+def assert_same_arrays(a: adparm.SimulationResult, b: adparm.SimulationResult) -> None:
+    """Every recorded array of two results (those of SimulationResult.to_dict()) bit for bit."""
+    for name, value in a.to_dict().items():
+        if name not in ("status", "wall_time"):
+            np.testing.assert_array_equal(value, getattr(b, name), err_msg=name)
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261125)

@@ -7,32 +7,14 @@ import pytest
 
 import adparm
 
-ARRAYS = (
-    "t",
-    "q",
-    "dq",
-    "qd",
-    "e1",
-    "e2",
-    "tau",
-    "u",
-    "u_hat",
-    "mu",
-    "probe",
-    "critic_weights",
-    "actor_weights",
-    "hjb_error",
-    "cost",
-    "covariance_reset_times",
-)
+from conftest import assert_same_arrays
 
 DIVERGING = {"init": {"critic_weights": [0.0] * 8, "actor_weights": [0.0] * 8}}
 
 
 def assert_same_run(a: adparm.SimulationResult, b: adparm.SimulationResult) -> None:
     assert a.status == b.status
-    for name in ARRAYS:
-        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert_same_arrays(a, b)
 
 
 @pytest.fixture(scope="module")

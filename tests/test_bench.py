@@ -21,12 +21,10 @@ STEPS = 300
 
 def assert_matches_core(config: adparm.Config, steps: int = STEPS) -> None:
     states = numpy_loop.NumpyPaperLoop(config).run(steps)
-    result = adparm.simulate(config.updated({"sim": {"T": steps * config.sim.dt}}))
-    index = np.rint(np.asarray(result.t) / config.sim.dt).astype(int)
+    index, pairs = numpy_loop.recorded_pairs(config, states)
     assert index[-1] == steps
     np.testing.assert_array_equal(index[:-1] % config.sim.record_every, 0)
-    for name, entries in numpy_loop.FIELDS.items():
-        ours, core = states[index][:, entries], np.asarray(getattr(result, name))
+    for name, (ours, core) in pairs.items():
         assert np.allclose(ours, core, rtol=1e-10, atol=1e-9), (
             f"{name}: max |difference| {np.abs(ours - core).max():.3e}"
         )

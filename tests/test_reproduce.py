@@ -13,6 +13,8 @@ import adparm
 from adparm.cli import main
 from adparm.summary import accumulated_cost, deviations, summarize, summary_markdown
 
+from conftest import assert_same_arrays
+
 
 @pytest.fixture(scope="module")
 def short_result() -> adparm.SimulationResult:
@@ -115,22 +117,7 @@ def test_summary_without_known_optimum() -> None:
 def test_save_and_load_round_trip(short_result, tmp_path) -> None:
     path = short_result.save(tmp_path / "run.npz")
     loaded = adparm.load_result(path)
-    for name in (
-        "t",
-        "q",
-        "dq",
-        "e1",
-        "e2",
-        "tau",
-        "u_hat",
-        "mu",
-        "probe",
-        "critic_weights",
-        "actor_weights",
-        "hjb_error",
-        "covariance_reset_times",
-    ):
-        np.testing.assert_array_equal(getattr(loaded, name), getattr(short_result, name))
+    assert_same_arrays(loaded, short_result)
     assert loaded.config == short_result.config
     assert loaded.status == short_result.status and loaded.wall_time == short_result.wall_time
     with pytest.raises(ValueError, match="path: expected a .npz or .csv"):

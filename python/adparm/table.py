@@ -12,6 +12,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .config import _plain as config_plain
+
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
@@ -21,8 +23,6 @@ __all__ = ["plain", "rows_dataframe", "rows_json", "rows_markdown", "write_csv"]
 def plain(value: Any) -> Any:
     """JSON-ready: None for non-finite floats (JSON has no NaN); lists for tuples and arrays;
     dicts for mappings and for the trajectory dataclasses of a config."""
-    from .config import _plain as config_plain
-
     value = config_plain(value)  # SinusoidTrajectory, SampledTrajectory -> dict
     if isinstance(value, float) and not math.isfinite(value):
         return None
