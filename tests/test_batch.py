@@ -54,7 +54,8 @@ def test_batch_equals_one_by_one_runs(configs, one_by_one, threads) -> None:
 
 def test_batch_over_many_chunks_equals_one_by_one_runs(configs, one_by_one, monkeypatch) -> None:
     """Runs of different lengths, advanced in many short chunks (returns to Python between)."""
-    monkeypatch.setattr(adparm.simulation, "CHUNK_STEPS", 50)
+    monkeypatch.setattr(adparm.simulation, "CALL_SECONDS", 0.0)
+    monkeypatch.setattr(adparm.simulation, "MIN_CALL_STEPS", 50)
     results = adparm.simulate_batch(configs, threads=2, progress=False)
     for alone, batched in zip(one_by_one, results, strict=True):
         assert_same_run(alone, batched)

@@ -35,6 +35,7 @@ from .optimal import (
 from .report import write_report
 from .simulation import (
     SimulationDiverged,
+    SimulationInterrupted,
     SimulationResult,
     desired_state,
     extrapolation_points,
@@ -63,6 +64,7 @@ __all__ = [
     "SampledTrajectory",
     "SimConfig",
     "SimulationDiverged",
+    "SimulationInterrupted",
     "SimulationResult",
     "SinusoidTrajectory",
     "SweepResult",

@@ -8,10 +8,10 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .comparison import DEFAULT_KINDS, _controller_configs, compare
+from .comparison import DEFAULT_KINDS, Comparison, _controller_configs, compare
 from .config import Config, load_config, paper_config, tomllib
 from .report import FIGURE_FORMATS, check_formats, write_report
-from .simulation import SimulationDiverged, SimulationResult, simulate
+from .simulation import SimulationInterrupted, SimulationResult, _simulate_keeping_divergence
 
 __all__ = ["main"]
 
@@ -130,8 +130,14 @@ def _sweep(args: argparse.Namespace) -> int:
         if args.out.suffix not in (".csv", ".json", ".md"):
             raise ValueError(f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}")
         config = _config(args)
-        table = sweep(config, dict(args.grid), threads=args.threads, progress=not args.no_progress)
         args.out.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            table = sweep(
+                config, dict(args.grid), threads=args.threads, progress=not args.no_progress
+            )
+        except SimulationInterrupted as interrupt:
+            interrupt.result.save(args.out)
+            return _interrupted("sweep", interrupt, f"{args.out} ({len(interrupt.result)} runs)")
         table.save(args.out)
     except (OSError, ValueError, TypeError) as error:
         print(f"adparm sweep: {error}", file=sys.stderr)
@@ -163,7 +169,20 @@ def _compare(args: argparse.Namespace) -> int:
     except (OSError, ValueError, TypeError) as error:
         print(f"adparm compare: {error}", file=sys.stderr)
         return 2
-    comparison = compare(config, kinds, progress=not args.no_progress)
+    try:
+        comparison = compare(config, kinds, progress=not args.no_progress)
+    except SimulationInterrupted as interrupt:
+        written = _write_comparison(args, config, interrupt.result)
+        return _interrupted("compare", interrupt, written)
+    print(_write_comparison(args, config, comparison))
+    if comparison.diverged:
+        print(f"adparm compare: diverged: {', '.join(comparison.diverged)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _write_comparison(args: argparse.Namespace, config: Config, comparison: Comparison) -> str:
+    """Writes the comparison's files and prints its table; returns what was written."""
     out = Path(args.out)
     comparison.save(out)
     (out / "config.toml").write_text(config.to_toml())
@@ -173,18 +192,22 @@ def _compare(args: argparse.Namespace) -> int:
         save_figures({"compare": comparison.plot()}, out, args.formats)
     print(comparison.table_markdown(), end="")
     figures = "" if args.no_figures else ", compare." + "/".join(args.formats)
-    print(f"wrote {out}/ (compare.md, compare.csv, compare.json, config.toml{figures})")
-    if comparison.diverged:
-        print(f"adparm compare: diverged: {', '.join(comparison.diverged)}", file=sys.stderr)
-        return 1
-    return 0
+    return f"wrote {out}/ (compare.md, compare.csv, compare.json, config.toml{figures})"
 
 
-def _simulate(config: Config, progress: bool) -> tuple[SimulationResult, str | None]:
-    try:
-        return simulate(config, progress=progress), None
-    except SimulationDiverged as error:
-        return error.result, str(error)
+def _interrupted(command: str, interrupt: SimulationInterrupted, written: str) -> int:
+    """Reports a Ctrl-C after the partial results were written; the exit status of SIGINT."""
+    print(f"adparm {command}: {interrupt}; kept what was done: {written}", file=sys.stderr)
+    return 130
+
+
+def _write_run(args: argparse.Namespace, result: SimulationResult) -> dict:
+    """Writes the report of a run (finished, diverged or interrupted); returns its summary."""
+    summary = result.summary()
+    write_report(
+        result, args.out, formats=args.formats, figures=not args.no_figures, summary=summary
+    )
+    return summary
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -199,11 +222,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, ValueError, TypeError) as error:
         print(f"adparm {args.command}: {error}", file=sys.stderr)
         return 2
-    result, failure = _simulate(config, progress=not args.no_progress)
-    summary = result.summary()
-    write_report(
-        result, args.out, formats=args.formats, figures=not args.no_figures, summary=summary
-    )
+    try:
+        result, failure = _simulate_keeping_divergence(config, progress=not args.no_progress)
+    except SimulationInterrupted as interrupt:
+        _write_run(args, interrupt.result)
+        return _interrupted(args.command, interrupt, f"{args.out}/")
+    summary = _write_run(args, result)
     print(f"wrote {args.out}/ (summary.md, summary.json, result.npz, result.csv, figures)")
     error = summary.get("critic_relative_error")
     if error is not None:

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .config import CONTROLLER_KINDS, Config, _hint
-from .simulation import SimulationDiverged, SimulationResult, simulate
+from .simulation import SimulationInterrupted, SimulationResult, _simulate_keeping_divergence
 from .table import rows_dataframe, rows_json, rows_markdown, write_csv
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -126,13 +126,6 @@ def _learned_config(config: Config, learning: SimulationResult) -> Config:
     )
 
 
-def _run(config: Config, progress: bool) -> SimulationResult:
-    try:
-        return simulate(config, progress=progress)
-    except SimulationDiverged as error:
-        return error.result
-
-
 def _rms_norm(t: np.ndarray, values: np.ndarray) -> float:
     """sqrt(1/T int |v(t)|^2 dt) over the recorded rows (trapezoid rule in t)."""
     if t.size == 0:
@@ -179,7 +172,7 @@ class Comparison:
     - final_e1: |e1| at the last row, rad;
     - peak_torque: max |tau| over both joints and all rows, N m;
     - t_end: the last recorded time (earlier than sim.T for a diverged run), s;
-    - wall_time (s) and status (finished or diverged) of the run."""
+    - wall_time (s) and status (finished, diverged or interrupted) of the run."""
 
     results: dict[str, SimulationResult]
     rows: list[dict[str, Any]]
@@ -245,13 +238,34 @@ def compare(
     actor start at the learning run's final weights, with probing off (probe.until = 0) and
     learning still on. A run that diverges is kept, with status "diverged" and its partial result.
     Raises ValueError for an unknown or repeated kind (with a "did you mean" hint), or for
-    ``rise`` when controller.rise is false."""
+    ``rise`` when controller.rise is false. Ctrl-C raises SimulationInterrupted, whose ``.result``
+    is the Comparison of the runs so far (the one interrupted with status "interrupted")."""
     configs = _controller_configs(config, kinds)
     results: dict[str, SimulationResult] = {}
-    for kind, kind_config in configs.items():
-        results[kind] = _run(kind_config, progress)
-        if kind == "adp":
-            results[LEARNED_LABEL] = _run(_learned_config(kind_config, results[kind]), progress)
+    label = ""
+    try:
+        for kind, kind_config in configs.items():
+            label = kind
+            results[label] = _run(kind_config, progress)
+            if kind == "adp":
+                label = LEARNED_LABEL
+                results[label] = _run(_learned_config(kind_config, results[kind]), progress)
+    except KeyboardInterrupt as interrupt:
+        if isinstance(interrupt, SimulationInterrupted):
+            results[label] = interrupt.result
+        raise SimulationInterrupted(
+            f"comparison interrupted during the {label!r} run; the runs so far are in the "
+            "exception's .result",
+            _comparison(results),
+        ) from None
+    return _comparison(results)
+
+
+def _run(config: Config, progress: bool) -> SimulationResult:
+    return _simulate_keeping_divergence(config, progress)[0]
+
+
+def _comparison(results: dict[str, SimulationResult]) -> Comparison:
     optimal = results.get("optimal")
     optimal_cost = None
     if optimal is not None and optimal.status == "finished" and optimal.cost[-1] > 0.0:

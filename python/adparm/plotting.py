@@ -173,7 +173,7 @@ def plot_comparison(comparison: Comparison, *, time_scale: str = "symlog") -> Fi
                     color="k" if reference else colours[i % len(colours)],
                     lw=1.1 if reference else 0.9,
                     ls="--" if reference else "-",
-                    label=label + ("" if result.status == "finished" else " (diverged)"),
+                    label=label + ("" if result.status == "finished" else f" ({result.status})"),
                 )
             if "adp" in results:
                 _mark_probe_end(axes, results["adp"])

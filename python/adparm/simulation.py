@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import math
 import os
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -21,6 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "SimulationDiverged",
+    "SimulationInterrupted",
     "SimulationResult",
     "core_settings",
     "desired_state",
@@ -30,9 +32,12 @@ __all__ = [
     "simulate_batch",
 ]
 
-# Steps per call into C++: the GIL is released inside a chunk and Python regains control between
-# chunks (for progress reporting and Ctrl-C).
-CHUNK_STEPS = 50_000
+# The C++ core advances a run in chunks of steps, with the GIL released; Python regains control
+# between chunks, to update the progress bar and to act on Ctrl-C. The chunk length adapts so that
+# one call lasts about CALL_SECONDS, whatever a step costs (extrapolation points, batch size).
+CALL_SECONDS = 0.05
+FIRST_CALL_STEPS = 1_000
+MIN_CALL_STEPS = 100
 
 
 def core_settings(config: Config) -> _core.Settings:
@@ -153,6 +158,10 @@ def extrapolation_points(config: Config) -> np.ndarray:
     return np.array(_core.extrapolation_points(core_settings(config)))
 
 
+#: A result's status: the run reached sim.T, diverged (SimulationDiverged), was stopped by Ctrl-C
+#: (SimulationInterrupted) or is still running (a result read from a run in progress).
+STATUSES = ("finished", "diverged", "interrupted", "running")
+
 _ARRAYS_2 = ("q", "dq", "qd", "e1", "e2", "tau", "u", "u_hat", "mu", "probe")
 _ARRAYS_N = ("critic_weights", "actor_weights")
 
@@ -205,8 +214,8 @@ class SimulationResult:
         resets = np.array(self.covariance_reset_times, dtype=float).reshape(-1)
         resets.flags.writeable = False
         object.__setattr__(self, "covariance_reset_times", resets)
-        if self.status not in ("finished", "diverged", "running"):
-            raise ValueError(f"status: expected finished, diverged or running, got {self.status!r}")
+        if self.status not in STATUSES:
+            raise ValueError(f"status: expected one of {', '.join(STATUSES)}, got {self.status!r}")
 
     @property
     def covariance_resets(self) -> int:
@@ -282,12 +291,28 @@ class SimulationDiverged(RuntimeError):
         self.results = results
 
 
+class SimulationInterrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT, or anything raising KeyboardInterrupt) stopped a call between two chunks.
+
+    It is a KeyboardInterrupt, so a script that does not catch it stops as usual. ``result``
+    holds what the call would have returned, up to where it stopped: from simulate, the
+    SimulationResult of the rows recorded so far (status "interrupted"); from simulate_batch, the
+    list of results (runs not done have status "interrupted"); from sweep, the SweepResult of the
+    points done; from compare, the Comparison of the controllers run so far. ``time`` is the
+    simulated time reached (simulate; None otherwise)."""
+
+    def __init__(self, message: str, result: Any, time: float | None = None) -> None:
+        super().__init__(message)
+        self.result = result
+        self.time = time
+
+
 def _result(run: _core.Simulation, config: Config, wall_time: float) -> SimulationResult:
     return SimulationResult(
         **run.recording(),
         covariance_reset_times=np.array(run.reset_times),
         config=config,
-        status=run.status,
+        status="interrupted" if run.status == "running" else run.status,
         wall_time=wall_time,
     )
 
@@ -311,23 +336,84 @@ def _progress_bar(total: float, unit: str, desc: str, enabled: bool) -> tqdm:
     )
 
 
+class _Pacer:
+    """Calls ``advance(steps)`` with a number of steps adapted after each call so that a call
+    lasts about CALL_SECONDS (at most 8 times more or fewer steps than the call before)."""
+
+    def __init__(self) -> None:
+        self.steps = max(MIN_CALL_STEPS, FIRST_CALL_STEPS)
+
+    def advance(self, advance: Callable[[int], Any]) -> None:
+        start = time.perf_counter()
+        advance(self.steps)
+        wanted = self.steps * CALL_SECONDS / max(time.perf_counter() - start, 1e-9)
+        self.steps = int(max(MIN_CALL_STEPS, min(wanted, 8 * self.steps, 10**9)))
+
+
+# Values of one recorded row besides the weights: t, hjb_error, cost and ten joint series of 2.
+_ROW_VALUES = 3 + 2 * len(_ARRAYS_2)
+
+
+def _check_memory(configs: list[Config]) -> None:
+    """Refuse runs whose recordings would not fit in half of this machine's memory."""
+    try:
+        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return
+    needed = 0
+    for config in configs:
+        steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
+        rows = steps // config.sim.record_every + 2
+        width = _ROW_VALUES + len(config.init.critic_weights) + len(config.init.actor_weights)
+        needed += 8 * rows * width
+    if needed > memory // 2:
+        which = "the runs' recordings" if len(configs) > 1 else "the recording"
+        raise ValueError(
+            f"sim.record_every: {which} would take {needed / 2**30:.3g} GiB, more than half of "
+            f"this machine's {memory / 2**30:.3g} GiB; record fewer rows (a larger "
+            "sim.record_every or a shorter sim.T)"
+        )
+
+
 def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
     """Simulate the closed loop of ``config`` in the C++ core (fixed-step RK4).
 
     ``progress=True`` shows a tqdm progress bar in simulated seconds. Raises SimulationDiverged
-    (with the partial result) if the state diverges."""
+    (with the partial result) if the state diverges, and SimulationInterrupted (with the rows
+    recorded so far) on Ctrl-C, which is acted on between two chunks of about CALL_SECONDS."""
     settings = core_settings(config)
+    _check_memory([config])
     run = _core.Simulation(settings)
-    chunk = max(1000, run.steps // 200) if progress else CHUNK_STEPS
+    pacer = _Pacer()
     start = time.perf_counter()
-    with _progress_bar(round(config.sim.T, 6), "s", "simulating", progress) as bar:
-        while run.status == "running":
-            run.advance(chunk)
-            bar.update(round(config.sim.T * run.step / run.steps, 6) - bar.n)
+    try:
+        with _progress_bar(round(config.sim.T, 6), "s", "simulating", progress) as bar:
+            while run.status == "running":
+                pacer.advance(run.advance)
+                bar.update(round(config.sim.T * run.step / run.steps, 6) - bar.n)
+    except KeyboardInterrupt:
+        result = _result(run, config, time.perf_counter() - start)
+        reached = config.sim.T * run.step / run.steps
+        raise SimulationInterrupted(
+            f"simulation interrupted at t = {reached:.6g} s of sim.T = {config.sim.T:g} s; the "
+            f"{result.t.size} rows recorded so far are in the exception's .result",
+            result,
+            reached,
+        ) from None
     result = _result(run, config, time.perf_counter() - start)
     if run.status == "diverged":
         raise SimulationDiverged(_divergence_message(run, config), result, run.divergence_time)
     return result
+
+
+def _simulate_keeping_divergence(
+    config: Config, progress: bool = False
+) -> tuple[SimulationResult, str | None]:
+    """simulate(config) and None, or a diverged run's partial result and the error message."""
+    try:
+        return simulate(config, progress=progress), None
+    except SimulationDiverged as error:
+        return error.result, str(error)
 
 
 def default_threads() -> int:
@@ -364,7 +450,8 @@ def simulate_batch(
     thousands of runs, see :func:`adparm.sweep`, which keeps only summary rows. ``on_divergence``:
     ``"raise"`` (default) lets every run end, then raises SimulationDiverged for the first run
     that diverged, with ``.index`` and ``.results`` (all results); ``"keep"`` returns the
-    results, the diverged ones with ``status == "diverged"`` and their partial rows."""
+    results, the diverged ones with ``status == "diverged"`` and their partial rows. Ctrl-C
+    raises SimulationInterrupted, whose ``.result`` lists every run's result so far."""
     if isinstance(configs, Config):
         raise TypeError("configs: expected an iterable of adparm.Config, got one Config")
     configs = list(configs)
@@ -374,15 +461,25 @@ def simulate_batch(
     if on_divergence not in ("raise", "keep"):
         raise ValueError(f"on_divergence: expected 'raise' or 'keep', got {on_divergence!r}")
     workers = _check_threads(threads)
-    batch = _core.Batch([core_settings(config) for config in configs])
+    settings = [core_settings(config) for config in configs]
+    _check_memory(configs)
+    batch = _core.Batch(settings)
     runs = [batch.simulation(i) for i in range(len(configs))]
     total = sum(run.steps for run in runs)
-    # about CHUNK_STEPS steps per thread between two returns to Python (progress, Ctrl-C)
-    chunk = max(1_000, CHUNK_STEPS * workers // max(1, len(runs)))
-    with _progress_bar(total, "steps", "simulating", progress) as bar:
-        while batch.running:
-            batch.advance(chunk, workers)
-            bar.update(sum(run.step for run in runs) - bar.n)
+    pacer = _Pacer()  # steps per run and call
+    try:
+        with _progress_bar(total, "steps", "simulating", progress) as bar:
+            while batch.running:
+                pacer.advance(lambda steps: batch.advance(steps, workers))
+                bar.update(sum(run.step for run in runs) - bar.n)
+    except KeyboardInterrupt:
+        results = [_result(runs[i], c, batch.seconds(i)) for i, c in enumerate(configs)]
+        done = sum(result.status != "interrupted" for result in results)
+        raise SimulationInterrupted(
+            f"batch interrupted with {done} of {len(configs)} runs done; every run's result so "
+            "far is in the exception's .result",
+            results,
+        ) from None
     results = [_result(runs[i], config, batch.seconds(i)) for i, config in enumerate(configs)]
     diverged = [i for i, run in enumerate(runs) if run.status == "diverged"]
     if diverged and on_divergence == "raise":

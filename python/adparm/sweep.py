@@ -23,7 +23,12 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .config import _SECTIONS, Config, _hint
-from .simulation import SimulationResult, _check_threads, simulate_batch
+from .simulation import (
+    SimulationInterrupted,
+    SimulationResult,
+    _check_threads,
+    simulate_batch,
+)
 from .table import rows_dataframe, rows_json, rows_markdown, write_csv
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -237,8 +242,9 @@ def sweep(
     threads. With one (``submit``-style, e.g. ``ProcessPoolExecutor()`` or a dask
     ``Client(...).get_executor()``) each point is one task and ``threads`` is not used (the
     executor sets the parallelism). Runs that diverge are kept as rows with status "diverged".
-    ``tolerance`` is that of the
-    time-within-tolerance metrics."""
+    ``tolerance`` is that of the time-within-tolerance metrics. Ctrl-C raises
+    SimulationInterrupted, whose ``.result`` is the SweepResult of the points done so far (an
+    executor's tasks not yet started are cancelled)."""
     if not isinstance(base_config, Config):
         raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
     if not 0.0 < tolerance < 1.0:
@@ -247,30 +253,70 @@ def sweep(
     points = grid_points(grid)
     configs = [_point_config(base_config, point) for point in points]
     parameters = tuple(points[0])
-    if executor is None:
-        metrics = _run_in_process(configs, workers, tolerance, progress)
-    else:
-        if not callable(getattr(executor, "submit", None)):
-            raise TypeError(
-                "executor: expected a concurrent.futures-style executor with submit(), got "
-                f"{type(executor).__name__}"
-            )
-        futures = [executor.submit(sweep_row, config, tolerance) for config in configs]
-        metrics = [future.result() for future in tqdm(futures, disable=not progress, desc="sweep")]
-    rows = tuple({**point, **row} for point, row in zip(points, metrics, strict=True))
+    if executor is not None and not callable(getattr(executor, "submit", None)):
+        raise TypeError(
+            "executor: expected a concurrent.futures-style executor with submit(), got "
+            f"{type(executor).__name__}"
+        )
+    done: dict[int, dict[str, Any]] = {}  # point index -> metrics, as the runs finish
+    try:
+        if executor is None:
+            rows = _run_in_process(configs, workers, tolerance, progress)
+        else:
+            rows = _run_on_executor(executor, configs, tolerance, progress)
+        for index, row in rows:
+            done[index] = row
+    except KeyboardInterrupt:
+        table = _table(parameters, points, done)
+        raise SimulationInterrupted(
+            f"sweep interrupted with {len(done)} of {len(points)} points done; their rows are in "
+            "the exception's .result",
+            table,
+        ) from None
+    return _table(parameters, points, done)
+
+
+def _table(
+    parameters: tuple[str, ...], points: list[dict[str, Any]], done: Mapping[int, dict[str, Any]]
+) -> SweepResult:
+    rows = tuple({**points[i], **done[i]} for i in sorted(done))
     return SweepResult(parameters=parameters, rows=rows)
 
 
 def _run_in_process(
     configs: list[Config], threads: int, tolerance: float, progress: bool
-) -> list[dict[str, Any]]:
+) -> Iterator[tuple[int, dict[str, Any]]]:
+    """(point index, metrics) of every run, group by group of simulate_batch runs."""
     group = threads * _RUNS_PER_THREAD
-    metrics: list[dict[str, Any]] = []
     with tqdm(total=len(configs), disable=not progress, desc="sweep", unit="run") as bar:
         for start in range(0, len(configs), group):
-            results = simulate_batch(
-                configs[start : start + group], threads=threads, on_divergence="keep"
-            )
-            metrics += [_metrics(result, tolerance) for result in results]
+            try:
+                results = simulate_batch(
+                    configs[start : start + group], threads=threads, on_divergence="keep"
+                )
+            except SimulationInterrupted as interrupt:  # keep the runs of the group that ended
+                for i, result in enumerate(interrupt.result):
+                    if result.status != "interrupted":
+                        yield start + i, _metrics(result, tolerance)
+                raise
+            for i, result in enumerate(results):
+                yield start + i, _metrics(result, tolerance)
             bar.update(len(results))
-    return metrics
+
+
+def _run_on_executor(
+    executor: Any, configs: list[Config], tolerance: float, progress: bool
+) -> Iterator[tuple[int, dict[str, Any]]]:
+    """(point index, metrics) of every task, in order; Ctrl-C cancels the tasks not started and
+    keeps those that ended."""
+    futures = [executor.submit(sweep_row, config, tolerance) for config in configs]
+    try:
+        for i, future in enumerate(tqdm(futures, disable=not progress, desc="sweep")):
+            yield i, future.result()
+    except KeyboardInterrupt:
+        for future in futures:
+            future.cancel()
+        for i, future in enumerate(futures):
+            if future.done() and not future.cancelled() and future.exception() is None:
+                yield i, future.result()
+        raise

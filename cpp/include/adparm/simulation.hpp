@@ -31,10 +31,15 @@ struct Recording {
     for (Rows* m : weight_series()) m->resize(capacity, basis_size);
   }
 
-  void shrink_to_rows() {
-    for (Eigen::VectorXd* v : series()) v->conservativeResize(rows);
-    for (Rows* m : joint_series()) m->conservativeResize(rows, m->cols());
-    for (Rows* m : weight_series()) m->conservativeResize(rows, m->cols());
+  // A copy of the rows written (not of the whole capacity, which a long run interrupted early
+  // leaves mostly unwritten).
+  Recording written() const {
+    Recording out;
+    out.rows = rows;
+    copy_rows(series(), out.series());
+    copy_rows(joint_series(), out.joint_series());
+    copy_rows(weight_series(), out.weight_series());
+    return out;
   }
 
  private:
@@ -43,6 +48,16 @@ struct Recording {
     return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
   }
   std::array<Rows*, 2> weight_series() { return {&critic_weights, &actor_weights}; }
+  std::array<const Eigen::VectorXd*, 3> series() const { return {&t, &hjb_error, &cost}; }
+  std::array<const Rows*, 10> joint_series() const {
+    return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
+  }
+  std::array<const Rows*, 2> weight_series() const { return {&critic_weights, &actor_weights}; }
+
+  template <class From, class To>
+  void copy_rows(const From& from, const To& to) const {
+    for (std::size_t i = 0; i < from.size(); ++i) *to[i] = from[i]->topRows(rows);
+  }
 };
 
 template <class Arm, class Basis>
@@ -120,11 +135,7 @@ class Simulation {
   const State& state() const { return states_[current_]; }
 
   // The recording so far, trimmed to the rows written.
-  Recording recording() const {
-    Recording out = recording_;
-    out.shrink_to_rows();
-    return out;
-  }
+  Recording recording() const { return recording_.written(); }
 
  private:
   // Non-finite anywhere (a NaN or an infinity makes the sum non-finite; a finite state's sum
