@@ -7,6 +7,7 @@ import pytest
 
 import adparm
 
+from conftest import assert_same_arrays
 from numpy_reference import arm_terms, plant_parameters
 
 
@@ -54,9 +55,31 @@ def test_recorded_probe_and_torque_are_consistent(paper_result) -> None:
 
 
 def test_same_config_gives_identical_results(paper_result) -> None:
-    again = adparm.simulate(adparm.paper_config())
-    for name in ("q", "dq", "tau", "critic_weights", "actor_weights", "hjb_error"):
-        np.testing.assert_array_equal(getattr(again, name), getattr(paper_result, name))
+    assert_same_arrays(paper_result, adparm.simulate(adparm.paper_config()))
+    # random extrapolation points drawn anew at every step, from the same seed
+    local = adparm.paper_config().updated(
+        {"sim": {"T": 2.0}, "extrapolation": {"points": 10, "mode": "local", "seed": 7}}
+    )
+    assert_same_arrays(adparm.simulate(local), adparm.simulate(local))
+
+
+def test_leaving_the_divergence_bound_stops_the_run() -> None:
+    # W* has entries up to 8 while Wc(0) = 1: a bound of 5 is crossed as the critic learns
+    config = adparm.paper_config().updated({"sim": {"T": 20.0, "divergence_bound": 5.0}})
+    with pytest.raises(adparm.SimulationDiverged, match="sim.divergence_bound = 5") as caught:
+        adparm.simulate(config)
+    partial = caught.value.result
+    assert 0.0 < partial.t[-1] <= caught.value.time < 20.0
+    for name in ("q", "dq", "critic_weights", "actor_weights"):
+        assert np.abs(getattr(partial, name)).max() <= 5.0, name
+
+
+def test_recordings_larger_than_memory_are_refused_before_running() -> None:
+    huge = adparm.paper_config().updated({"sim": {"T": 1e7, "record_every": 1}})  # 1e10 rows
+    with pytest.raises(ValueError, match="sim.record_every: the recording would take"):
+        adparm.simulate(huge)
+    with pytest.raises(ValueError, match="sim.record_every: the runs' recordings would take"):
+        adparm.simulate_batch([adparm.paper_config(), huge])
 
 
 def test_zero_initial_weights_are_inadmissible() -> None:
