@@ -80,6 +80,12 @@ def test_empty_batch_and_default_threads() -> None:
     assert adparm.simulation.default_threads() >= 1
 
 
+def test_more_threads_than_runs_or_than_a_c_int() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 0.2}})
+    results = adparm.simulate_batch([config, config], threads=2**40)
+    assert_same_run(results[0], results[1])
+
+
 def test_diverged_run_raises_after_the_others_finish(configs) -> None:
     bad = configs[0].updated(DIVERGING)
     with pytest.raises(adparm.SimulationDiverged, match=r"configs\[1\]: simulation diverged") as e:

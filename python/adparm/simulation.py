@@ -460,7 +460,7 @@ def simulate_batch(
             raise TypeError(f"configs[{i}]: expected adparm.Config, got {type(config).__name__}")
     if on_divergence not in ("raise", "keep"):
         raise ValueError(f"on_divergence: expected 'raise' or 'keep', got {on_divergence!r}")
-    workers = _check_threads(threads)
+    workers = min(_check_threads(threads), max(1, len(configs)))  # no idle threads
     settings = [core_settings(config) for config in configs]
     _check_memory(configs)
     batch = _core.Batch(settings)
