@@ -4,8 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import settings
 
 import adparm
+
+# Hypothesis profiles. "ci", the default: reproducible (derandomized, which also turns the example
+# database off) and sized so that tests/test_fuzz.py adds about 9 s to `pytest` on two cores.
+# "fuzz": 10,000 random examples per test, for a dedicated run (several minutes):
+#     pytest tests/test_fuzz.py --hypothesis-profile=fuzz
+# (hypothesis' pytest plugin loads the profile given by --hypothesis-profile after this file.)
+settings.register_profile("ci", derandomize=True, deadline=None, max_examples=300)
+settings.register_profile("fuzz", max_examples=10_000, deadline=None)
+settings.load_profile("ci")
 
 
 def random_optimal_config(rng: np.random.Generator) -> adparm.Config:

@@ -94,7 +94,8 @@ def random_config(
                 "qd": qd,
             },
             "control": {
-                "alpha1": rng.uniform(0.5, 5, (2, 2)),
+                # diagonal above the off-diagonal entries: -alpha1 Hurwitz (config refuses others)
+                "alpha1": rng.uniform(0.5, 5, (2, 2)) + 5.0 * np.eye(2),
                 "ks": rng.uniform(0, 20),
                 "alpha2": rng.uniform(0, 3),
                 "beta1": rng.uniform(0, 2),

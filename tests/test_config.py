@@ -226,11 +226,133 @@ def test_round_trip_through_dict() -> None:
             "task.qd.file: cannot read",
         ),
         ({"critic": {"gamma0": 1e-7}}, ValueError, "critic.epsilon_T: must be < critic.gamma0"),
+        # arrays hold real numbers only: no strings, bools, complex numbers, None or ragged rows
+        ({"task": {"q0": ["1", 0.0]}}, TypeError, r"task.q0: expected an array of numbers .*str"),
+        ({"task": {"q0": [True, 0.0]}}, TypeError, r"task.q0: expected an array .*holds bool"),
+        ({"cost": {"R": [[1j, 0], [0, 1]]}}, TypeError, "cost.R: .*holds complex"),
+        ({"plant": {"disturbance": [None, 0.1]}}, TypeError, "plant.disturbance: .*NoneType"),
+        ({"init": {"actor_weights": np.ones(8, bool)}}, TypeError, "init.actor_weights: expected"),
+        ({"cost": {"R": [[1, 0], [0]]}}, TypeError, "cost.R: expected an array of numbers"),
+        ({"probe": {"amplitude": [[1, 2], [3]]}}, TypeError, "probe.amplitude: expected an array"),
+        ({"task": {"qd": {"kind": "sinusoid", "amplitude": [[1], []]}}}, TypeError, "task.qd.amp"),
+        # numbers beyond the float range are not finite (they raised OverflowError)
+        ({"critic": {"eta_c": 10**400}}, ValueError, "critic.eta_c: must be finite"),
+        ({"task": {"q0": [10**400, 0]}}, ValueError, "task.q0: must be finite"),
+        ({"plant": {"p2": 1e200}}, ValueError, "plant.p1, plant.p2, plant.p3: M.*and finite"),
+        ({"plant": {"p1": 1e200, "p2": 1e200}}, ValueError, r"plant.p1, .*got nan\)"),
+        # integers with an upper bound
+        ({"sim": {"record_every": 10**30}}, ValueError, "sim.record_every: must be <= 10_000_000"),
+        ({"extrapolation": {"points": 10**6 + 1}}, ValueError, "extrapolation.points: must be <="),
+        ({"sim": {"dt": 1e-12}}, ValueError, r"sim.dt: sim.T / sim.dt = 1.5e\+14 steps"),
+        # names that are no strings
+        ({1: {}}, TypeError, "config: section names must be strings, got int 1"),
+        ({"sim": {None: 1}}, TypeError, r"\[sim\]: key names must be strings, got NoneType"),
+        ({"task": {"qd": {"kind": "sinusoid", 2: 1}}}, TypeError, r"\[task.qd\]: key names"),
+        ({"task": {"qd": {"kind": 0}}}, TypeError, "task.qd.kind: expected one of .*got 0"),
+        # -alpha1 Hurwitz (de1 = -alpha1 e1 + e2 stable)
+        ({"control": {"alpha1": [[1, 2], [2, 1]]}}, ValueError, "control.alpha1: every eigen"),
+        ({"control": {"alpha1": [[0, 1], [-1, 0]]}}, ValueError, "control.alpha1: every eigen"),
+        ({"control": {"alpha1": np.zeros((2, 2))}}, ValueError, "control.alpha1: every eigen"),
+        (
+            {"cost": {"Q": np.diag([1e300, 1e300, 1e300, -1e300])}},
+            ValueError,
+            "cost.Q: must be pos",
+        ),
+        ({"cost": {"R": [[1e300, 1e300], [0, 1e300]]}}, ValueError, "cost.R: must be symmetric"),
+        # samples: a path the OS refuses, and splines that overflow
+        (
+            {"task": {"qd": {"kind": "samples", "file": "qd\0.csv"}}},
+            ValueError,
+            "task.qd.file: cannot read",
+        ),
+        (
+            {"task": {"qd": {"kind": "samples", "t": [-1e308, 1e308], "q": [[0, 0], [1, 1]]}}},
+            ValueError,
+            "task.qd.t: the samples must span a finite time, got -1e[+]308 to 1e[+]308",
+        ),
+        (
+            {
+                "task": {
+                    "qd": {
+                        "kind": "samples",
+                        "t": [0, 1e-300, 200],
+                        "q": [[0, 0], [1e300, 0], [0, 0]],
+                    }
+                }
+            },
+            ValueError,
+            "task.qd.q: the cubic spline through the samples overflows",
+        ),
     ],
 )
 def test_bad_input_names_the_field(data, error, message) -> None:
     with pytest.raises(error, match=message):
         adparm.Config.from_dict(data)
+
+
+def test_numpy_values_are_accepted() -> None:
+    c = adparm.Config.from_dict(
+        {
+            "controller": {"rise": np.bool_(False), "kp": np.float32(2.0)},
+            "sim": {"record_every": np.int64(3), "T": np.float64(2.0)},
+            "task": {"q0": np.array([1, 2], dtype=np.int32)},
+            "cost": {"R": np.eye(2, dtype=np.float32)},
+        }
+    )
+    assert c.controller.rise is False and c.controller.kp == 2.0
+    assert c.sim.record_every == 3 and type(c.sim.record_every) is int
+    assert c.task.q0 == (1.0, 2.0) and c.cost.R == ((1.0, 0.0), (0.0, 1.0))
+
+
+def test_from_dict_refuses_a_base_that_is_no_config() -> None:
+    with pytest.raises(TypeError, match="base: expected adparm.Config or None, got dict"):
+        adparm.Config.from_dict({}, base={})  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        # what config refuses, the core refuses too (settings built directly)
+        (lambda s: setattr(s, "Q", np.diag([1.0, 1.0, 1.0, -1.0])), "cost.Q: must be positive def"),
+        (lambda s: setattr(s, "Q", np.diag([1.0, 1.0, 1.0, 0.0])), "cost.Q: must be positive def"),
+        (lambda s: setattr(s, "R", np.zeros((2, 2))), "cost.R: must be positive definite"),
+        (lambda s: setattr(s, "R", [[1e300, 1e300], [0, 1e300]]), "cost.R: must be symmetric"),
+        (lambda s: setattr(s.control, "alpha1", [[1, 2], [2, 1]]), "control.alpha1: every eigen"),
+        (lambda s: setattr(s.control, "alpha1", [[0, 1], [-1, 0]]), "control.alpha1: every eigen"),
+        (lambda s: setattr(s.control, "alpha1", np.zeros((2, 2))), "control.alpha1: every eigen"),
+        (lambda s: setattr(s.plant, "p2", 1e200), "plant.p1, p2, p3: M.*and finite"),
+        (lambda s: (setattr(s.model, "p1", 1e200), setattr(s.model, "p2", 1e200)), "model.p1, p2"),
+        (
+            lambda s: setattr(s.extrapolation, "points", 10**6 + 1),
+            "extrapolation.points: must be <=",
+        ),
+    ],
+)
+def test_core_refuses_what_config_refuses(change, message) -> None:
+    settings = core_settings(adparm.paper_config())
+    change(settings)
+    with pytest.raises(ValueError, match=message):
+        _core.Simulation(settings)
+    # and Python refuses the same values before any C++ runs
+    with pytest.raises(ValueError, match=message.split(":")[0].split(",")[0]):
+        adparm.Config.from_dict(_python_changes(settings))
+
+
+def _python_changes(settings: _core.Settings) -> dict:
+    paper = core_settings(adparm.paper_config())
+    changes: dict = {}
+    for name in ("Q", "R"):
+        if not np.array_equal(getattr(settings, name), getattr(paper, name)):
+            changes["cost"] = {name: getattr(settings, name)}
+    if not np.array_equal(settings.control.alpha1, paper.control.alpha1):
+        changes["control"] = {"alpha1": settings.control.alpha1}
+    for section in ("plant", "model"):
+        for key in ("p1", "p2"):
+            if getattr(getattr(settings, section), key) != getattr(getattr(paper, section), key):
+                changes.setdefault(section, {})[key] = getattr(getattr(settings, section), key)
+    if settings.extrapolation.points != paper.extrapolation.points:
+        changes["extrapolation"] = {"points": settings.extrapolation.points}
+    return changes
 
 
 def test_load_config_reports_invalid_toml(tmp_path) -> None:

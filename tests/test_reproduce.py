@@ -190,6 +190,18 @@ def test_cli_run_reads_a_config_and_reports_divergence(tmp_path, capsys) -> None
     assert "did you mean 'eta_c'" in capsys.readouterr().err
 
 
+def test_cli_run_writes_a_run_that_diverges_before_its_first_row(tmp_path, capsys) -> None:
+    # gravity of 1e308: the torque overflows at t = 0, so not even the first row is written
+    config = tmp_path / "huge.toml"
+    config.write_text("[plant]\ng1 = 1e308\ng2 = 1e308\n[sim]\nT = 1.0\n")
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out), "--no-progress"]) == 1
+    assert "diverged at t = 0 s" in capsys.readouterr().err
+    partial = adparm.load_result(out / "result.npz")
+    assert partial.status == "diverged" and partial.t.size == 0
+    assert (out / "summary.md").is_file() and (out / "result.csv").is_file()
+
+
 def test_python_dash_m_runs_the_cli(tmp_path) -> None:
     completed = subprocess.run(
         [

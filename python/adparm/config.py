@@ -51,10 +51,37 @@ Matrix = tuple[tuple[float, ...], ...]
 # --- field checks: each names the field ("section.key") and what it expects -------------------
 
 
+def _text(value: Any, limit: int = 120) -> str:
+    """repr(value) cut to ``limit`` characters, for messages (never raises)."""
+    try:
+        text = repr(value)
+    except Exception:  # e.g. an int of more than 4300 digits
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _name(name: str, limit: int = 80) -> str:
+    """A section or key name as given, cut to ``limit`` characters."""
+    return name if len(name) <= limit else name[: limit - 3] + "..."
+
+
+def _int_text(value: int) -> str:
+    """str(value), or its size for an integer too long to print (Python refuses str() beyond 4300
+    digits)."""
+    if value.bit_length() < 128:
+        return str(value)
+    sign = "a negative" if value < 0 else "an"
+    return f"{sign} integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+
+
 def _scalar(value: Any, name: str, *, minimum: float | None = None, strict: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name}: expected a number, got {type(value).__name__} {value!r}")
-    value = float(value)
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__} {_text(value)}")
+    try:
+        value = float(value)
+    except OverflowError:  # an int or Fraction beyond the float range
+        text = _int_text(int(value)) if isinstance(value, numbers.Integral) else _text(value)
+        raise ValueError(f"{name}: must be finite, got {text}") from None
     if not math.isfinite(value):
         raise ValueError(f"{name}: must be finite, got {value}")
     if minimum is not None and (value <= minimum if strict else value < minimum):
@@ -63,47 +90,83 @@ def _scalar(value: Any, name: str, *, minimum: float | None = None, strict: bool
     return value
 
 
-def _integer(value: Any, name: str, *, minimum: int) -> int:
+def _integer(value: Any, name: str, *, minimum: int, maximum: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
-    if int(value) < minimum:
-        raise ValueError(f"{name}: must be >= {minimum}, got {int(value)}")
-    return int(value)
+        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {_text(value)}")
+    value = int(value)
+    if value < minimum:
+        raise ValueError(f"{name}: must be >= {minimum}, got {_int_text(value)}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name}: must be <= {maximum:_}, got {_int_text(value)}")
+    return value
 
 
 def _boolean(value: Any, name: str) -> bool:
-    if not isinstance(value, bool):
-        raise TypeError(f"{name}: expected true or false, got {type(value).__name__} {value!r}")
-    return value
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(
+            f"{name}: expected true or false, got {type(value).__name__} {_text(value)}"
+        )
+    return bool(value)
 
 
 def _choice(value: Any, name: str, choices: tuple[str, ...]) -> str:
     if not isinstance(value, str):
-        raise TypeError(f"{name}: expected one of {', '.join(choices)}, got {value!r}")
+        raise TypeError(f"{name}: expected one of {', '.join(choices)}, got {_text(value)}")
     if value not in choices:
         raise ValueError(
-            f"{name}: expected one of {', '.join(choices)}, got {value!r}{_hint(value, choices)}"
+            f"{name}: expected one of {', '.join(choices)}, got {_text(value)}"
+            f"{_hint(value, choices)}"
         )
     return value
 
 
+def _is_number(value: Any) -> bool:
+    """A real number that is not a bool (nor numpy's bool_)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
 def _array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
-    if isinstance(value, (str, bytes, Mapping)) or isinstance(value, bool):
-        raise TypeError(f"{name}: expected an array of shape {_shape_text(shape)}, got {value!r}")
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise TypeError(
-            f"{name}: expected an array of numbers of shape {_shape_text(shape)}, got {value!r}"
-        ) from error
-    if array.ndim != len(shape) or any(
-        expected is not None and actual != expected
-        for actual, expected in zip(array.shape, shape, strict=False)
+    """A finite float array of ``shape`` (None: any length) from nested lists or an array of
+    real numbers; strings, bools, complex numbers, None and mappings are refused (TypeError),
+    as are ragged lists."""
+    expected = f"an array of numbers of shape {_shape_text(shape)}"
+    if isinstance(value, (str, bytes, Mapping, bool, np.bool_)) or value is None:
+        raise TypeError(f"{name}: expected {expected}, got {_text(value)}")
+    if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
+        raw = value  # its dtype tells the truth: no bool or string hides inside
+    else:
+        # dtype object keeps every element as given (np.asarray(..., dtype=float) would turn
+        # "1" and True into 1.0); a ragged list becomes an array of lists, refused below
+        try:
+            raw = np.array(value, dtype=object)
+        except (TypeError, ValueError) as error:
+            raise TypeError(f"{name}: expected {expected}, got {_text(value)}") from error
+        for element in raw.flat:
+            if not _is_number(element):
+                raise TypeError(
+                    f"{name}: expected {expected}, got {_text(value)} (holds "
+                    f"{type(element).__name__} {_text(element, 40)})"
+                )
+    if raw.ndim != len(shape) or any(
+        size is not None and actual != size for actual, size in zip(raw.shape, shape, strict=False)
     ):
-        raise ValueError(f"{name}: expected shape {_shape_text(shape)}, got {tuple(array.shape)}")
+        raise ValueError(f"{name}: expected shape {_shape_text(shape)}, got {tuple(raw.shape)}")
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):  # long double beyond float: inf
+            array = raw.astype(float)
+    except OverflowError:  # an int beyond the float range
+        raise ValueError(f"{name}: must be finite, got {_text(value)}") from None
     if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name}: must be finite, got {array.tolist()}")
+        raise ValueError(f"{name}: must be finite, got {_text(array.tolist())}")
     return array
+
+
+def _ndim(value: Any) -> int:
+    """np.ndim, or -1 for what is no array (a ragged list): the checks then name the field."""
+    try:
+        return int(np.ndim(value))
+    except (TypeError, ValueError):
+        return -1
 
 
 def _shape_text(shape: tuple[int | None, ...]) -> str:
@@ -117,30 +180,35 @@ def _shape_text(shape: tuple[int | None, ...]) -> str:
 
 def _rows(value: Any, name: str, columns: int | None) -> Matrix:
     """A (2,) vector (one column) or a (2, n) matrix, as a (2, n) matrix."""
-    if np.ndim(value) == 1:
+    if _ndim(value) == 1:
         return tuple((v,) for v in _vector(value, name, 2))
     return _matrix(value, name, 2, columns)
 
 
 def _gain(value: Any, name: str) -> float | Matrix:
     """A number (times the identity) or a 2 x 2 matrix."""
-    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+    if _is_number(value):
         return _scalar(value, name)
     return _matrix(value, name, 2, 2)
 
 
 def _check_keys(values: Mapping[str, Any], keys: list[str], where: str) -> None:
     for key in values:
+        if not isinstance(key, str):
+            raise TypeError(
+                f"[{where}]: key names must be strings, got {type(key).__name__} {_text(key)}; "
+                f"known keys of [{where}]: {', '.join(keys)}"
+            )
         if key not in keys:
             raise ValueError(
-                f"unknown key {where}.{key}{_hint(key, keys)}; known keys of [{where}]: "
+                f"unknown key {where}.{_name(key)}{_hint(key, keys)}; known keys of [{where}]: "
                 f"{', '.join(keys)}"
             )
 
 
 def _vector(value: Any, name: str, size: int | None) -> Vector:
-    if isinstance(value, bool) or isinstance(value, numbers.Real):
-        raise TypeError(f"{name}: expected a list of {size or 'n'} numbers, got {value!r}")
+    if isinstance(value, (bool, np.bool_, numbers.Real)):
+        raise TypeError(f"{name}: expected a list of {size or 'n'} numbers, got {_text(value)}")
     return tuple(float(v) for v in _array(value, name, (size,)))
 
 
@@ -149,20 +217,49 @@ def _matrix(value: Any, name: str, rows: int | None, cols: int | None) -> Matrix
 
 
 def _symmetric_positive_definite(matrix: Matrix, name: str) -> None:
+    """The C++ core's test (cost.hpp), on matrix / max|entry| so that no square overflows:
+    symmetric to 1e-12 (relative, Frobenius norm), and positive definite: a Cholesky factor
+    exists."""
     array = np.array(matrix)
-    if not np.allclose(array, array.T, rtol=1e-12, atol=1e-12):
-        raise ValueError(f"{name}: must be symmetric, got {array.tolist()}")
-    if np.linalg.eigvalsh(array).min() <= 0.0:
-        raise ValueError(f"{name}: must be positive definite, got {array.tolist()}")
+    scale = np.abs(array).max()
+    scaled = array / scale if scale > 0.0 else array
+    if np.sum((scaled - scaled.T) ** 2) > 1e-24 * np.sum(scaled**2):
+        raise ValueError(f"{name}: must be symmetric, got {_text(array.tolist(), 300)}")
+    try:
+        np.linalg.cholesky(scaled)
+        positive_definite = scale > 0.0
+    except np.linalg.LinAlgError:
+        positive_definite = False
+    if not positive_definite:
+        raise ValueError(f"{name}: must be positive definite, got {_text(array.tolist(), 300)}")
 
 
 def _check_arm(p1: float, p2: float, p3: float, section: str) -> None:
+    """M(q) > 0 for every q: p2 > 0 and det M = p1 p2 - p2^2 - p3^2 cos^2 q2 > 0. The core
+    (arm_model.hpp) computes the same expression and refuses it when it overflows."""
     if p2 <= 0.0:
         raise ValueError(f"{section}.p2: must be > 0, got {p2:g}")
-    if p1 * p2 - p2**2 - p3**2 <= 0.0:
+    det = p1 * p2 - p2 * p2 - p3 * p3  # inf - inf = nan for huge values: refused too
+    if not (det > 0.0 and math.isfinite(det)):
         raise ValueError(
             f"{section}.p1, {section}.p2, {section}.p3: M(q) must be positive definite for every q "
-            f"(need p1 p2 - p2^2 - p3^2 > 0, got {p1 * p2 - p2**2 - p3**2:g})"
+            f"(need p1 p2 - p2^2 - p3^2 > 0 and finite, got {det:g})"
+        )
+
+
+def _check_hurwitz(alpha1: Matrix, name: str) -> None:
+    """-alpha1 Hurwitz: every eigenvalue of alpha1 has a positive real part, i.e. (2 x 2) trace > 0
+    and det > 0, evaluated on alpha1 / max|entry| exactly as the core does (closed_loop.hpp)."""
+    scale = max(abs(v) for row in alpha1 for v in row)
+    hurwitz = False
+    if scale > 0.0:
+        (a, b), (c, d) = ((v / scale for v in row) for row in alpha1)
+        hurwitz = a + d > 0.0 and a * d - b * c > 0.0
+    if not hurwitz:
+        eigenvalues = ", ".join(f"{v:.3g}" for v in np.linalg.eigvals(np.array(alpha1)))
+        raise ValueError(
+            f"{name}: every eigenvalue must have a positive real part (-alpha1 Hurwitz, else "
+            f"e1 in de1 = -alpha1 e1 + e2 grows), got eigenvalues {eigenvalues}"
         )
 
 
@@ -269,22 +366,43 @@ class SampledTrajectory:
     def __post_init__(self) -> None:
         if self.file is not None:
             if not isinstance(self.file, (str, Path)):
-                raise TypeError(f"task.qd.file: expected a path, got {self.file!r}")
-            if len(self.t) or len(self.q):
+                raise TypeError(f"task.qd.file: expected a path, got {_text(self.file)}")
+            if not (_empty(self.t) and _empty(self.q)):
                 raise ValueError("task.qd: give either file or t and q, not both")
             t, q = _read_samples(Path(self.file))
             object.__setattr__(self, "file", str(self.file))
             object.__setattr__(self, "t", t)
             object.__setattr__(self, "q", q)
         object.__setattr__(self, "t", _vector(self.t, "task.qd.t", None))
-        object.__setattr__(self, "q", _matrix(self.q, "task.qd.q", len(self.t), 2))
+        q = _matrix(self.q, "task.qd.q", None, 2)
+        if len(q) != len(self.t):
+            raise ValueError(
+                f"task.qd.q: expected shape ({len(self.t)}, 2), one row per time in task.qd.t, "
+                f"got ({len(q)}, 2)"
+            )
+        object.__setattr__(self, "q", q)
         if len(self.t) < 2:
             raise ValueError(f"task.qd.t: expected at least 2 samples, got {len(self.t)}")
-        if np.any(np.diff(self.t) <= 0.0):
+        if not all(b > a for a, b in zip(self.t, self.t[1:], strict=False)):
             raise ValueError("task.qd.t: sample times must be strictly increasing")
         if self.t[0] > 0.0:
             raise ValueError(f"task.qd.t: the first sample must be at t <= 0, got {self.t[0]:g}")
+        if not math.isfinite(self.t[-1] - self.t[0]):
+            raise ValueError(
+                f"task.qd.t: the samples must span a finite time, got {self.t[0]:g} to "
+                f"{self.t[-1]:g}"
+            )
         _choice(self.boundary, "task.qd.boundary", ("not-a-knot", "clamped", "natural"))
+        try:
+            with np.errstate(all="ignore"):
+                finite = bool(np.all(np.isfinite(self.spline().c)))
+        except ValueError:  # scipy: "`dydx` must contain only finite values"
+            finite = False
+        if not finite:
+            raise ValueError(
+                "task.qd.q: the cubic spline through the samples overflows (values too large, or "
+                "samples too close in time for their values)"
+            )
 
     def spline(self) -> Any:
         """The scipy CubicSpline through the samples (axis 0 is time)."""
@@ -293,10 +411,14 @@ class SampledTrajectory:
         return CubicSpline(np.array(self.t), np.array(self.q), axis=0, bc_type=self.boundary)
 
 
+def _empty(value: Any) -> bool:
+    return isinstance(value, (tuple, list)) and len(value) == 0
+
+
 def _read_samples(path: Path) -> tuple[Vector, Matrix]:
     try:
         lines = path.read_text().splitlines()
-    except OSError as error:
+    except (OSError, ValueError) as error:  # ValueError: a NUL in the path, not UTF-8 text
         raise ValueError(f"task.qd.file: cannot read {str(path)!r}: {error}") from error
     rows = []
     for number, line in enumerate(lines, start=1):
@@ -329,7 +451,10 @@ def _trajectory(value: Any) -> Trajectory:
     if not isinstance(value, Mapping):
         return _vector(value, "task.qd", 2)
     values = dict(value)
-    kind = _choice(values.pop("kind", None) or "", "task.qd.kind", tuple(_TRAJECTORIES))
+    kinds = tuple(_TRAJECTORIES)
+    if "kind" not in values:
+        raise ValueError(f"task.qd.kind: expected one of {', '.join(kinds)}, got nothing")
+    kind = _choice(values.pop("kind"), "task.qd.kind", kinds)
     cls = _TRAJECTORIES[kind]
     _check_keys(values, [f.name for f in dataclasses.fields(cls)], "task.qd")
     return cls(**values)
@@ -384,6 +509,9 @@ class CostConfig:
 class ControlConfig:
     """alpha1 of eq. (7) (the paper's "alpha") and the RISE gains of eqs. (27)-(28).
 
+    -alpha1 must be Hurwitz (every eigenvalue of alpha1 with a positive real part), else the
+    error e1 of de1 = -alpha1 e1 + e2 grows; ERRATA's conditions (Q > 0) imply it.
+
     The paper prints no RISE gains. Defaults: ks = 10, alpha2 = 1, beta1 = 0.5, which satisfies
     condition (29) for the paper's disturbance (|tau_d| <= 0.1, |dtau_d/dt| <= 0.1, so
     zeta1 + zeta2 / alpha2 = 0.2 < 0.5)."""
@@ -395,6 +523,7 @@ class ControlConfig:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha1", _matrix(self.alpha1, "control.alpha1", 2, 2))
+        _check_hurwitz(self.alpha1, "control.alpha1")
         for key in ("ks", "alpha2", "beta1"):
             object.__setattr__(
                 self, key, _scalar(getattr(self, key), f"control.{key}", minimum=0.0)
@@ -499,9 +628,9 @@ class ProbeConfig:
         )
         n = len(self.frequencies)
         amplitude = self.amplitude
-        if isinstance(amplitude, numbers.Real) and not isinstance(amplitude, bool):
+        if _is_number(amplitude):
             amplitude = (amplitude, amplitude)
-        if np.ndim(amplitude) == 2:
+        if _ndim(amplitude) == 2:
             amplitude = _matrix(amplitude, "probe.amplitude", 2, n)
         else:
             amplitude = _vector(amplitude, "probe.amplitude", 2)
@@ -553,7 +682,7 @@ class ControllerConfig:
     def __post_init__(self) -> None:
         _choice(self.kind, "controller.kind", CONTROLLER_KINDS)
         _choice(self.basis, "controller.basis", BASIS_KINDS)
-        _boolean(self.rise, "controller.rise")
+        object.__setattr__(self, "rise", _boolean(self.rise, "controller.rise"))
         if self.kind == "rise" and not self.rise:
             raise ValueError(
                 "controller.rise: kind = 'rise' is the RISE feedback alone, so rise must be true"
@@ -567,13 +696,22 @@ class ControllerConfig:
         return value * np.eye(2) if isinstance(value, float) else np.array(value)
 
 
+#: The most extrapolation points a run may have. A point costs about 180 ns per RK4 step, so a
+#: million of them take about 0.2 s per step: some 8 hours for the paper's 150 s at dt = 1 ms.
+MAX_POINTS = 10**6
+#: The largest sim.record_every: a run has at most 1e10 steps, so a larger value would change
+#: nothing (only the first and the last step are recorded), and this one fits the core's integer.
+MAX_RECORD_EVERY = 10**10
+
+
 @dataclass(frozen=True)
 class ExtrapolationConfig:
     """Bellman-error extrapolation: the critic and actor laws also average their terms over the
-    HJB error at ``points`` extra states x (0: off, the paper). ``mode``: ``fixed`` (points drawn
-    once, uniform in [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points
-    redrawn every step, uniform in x(t) + [-box, box]). ``box``: half-widths in x = [e1; e2], one
-    number or 4. ``seed`` (0 <= seed < 2^32) seeds MT19937, drawn in the order of NumPy's
+    HJB error at ``points`` extra states x (0: off, the paper; at most MAX_POINTS = 10^6, which
+    already takes about 0.2 s per RK4 step). ``mode``: ``fixed`` (points drawn once, uniform in
+    [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points redrawn every
+    step, uniform in x(t) + [-box, box]). ``box``: half-widths in x = [e1; e2], one number or 4.
+    ``seed`` (0 <= seed < 2^32) seeds MT19937, drawn in the order of NumPy's
     ``RandomState(seed).random_sample((points, 4))``."""
 
     points: int = 0
@@ -582,8 +720,12 @@ class ExtrapolationConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "points", _integer(self.points, "extrapolation.points", minimum=0))
-        if isinstance(self.box, numbers.Real) and not isinstance(self.box, bool):
+        object.__setattr__(
+            self,
+            "points",
+            _integer(self.points, "extrapolation.points", minimum=0, maximum=MAX_POINTS),
+        )
+        if _is_number(self.box):
             box: float | Vector = _scalar(self.box, "extrapolation.box", minimum=0.0, strict=True)
         else:
             box = _vector(self.box, "extrapolation.box", 4)
@@ -593,7 +735,7 @@ class ExtrapolationConfig:
         _choice(self.mode, "extrapolation.mode", EXTRAPOLATION_MODES)
         object.__setattr__(self, "seed", _integer(self.seed, "extrapolation.seed", minimum=0))
         if self.seed >= 2**32:
-            raise ValueError(f"extrapolation.seed: must be < 2^32, got {self.seed}")
+            raise ValueError(f"extrapolation.seed: must be < 2^32, got {_int_text(self.seed)}")
         if self.mode == "grid":
             m = round(self.points**0.25)
             if m**4 != self.points:
@@ -612,7 +754,8 @@ class SimConfig:
     """Fixed-step RK4: horizon T (s), step dt (s), record every record_every-th step, and the
     bound on |q|, |dq|, |Wc|, |Wa| beyond which a run stops as diverged. The paper prints no step;
     dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T is not a
-    multiple of dt, the last step is shortened to end exactly at T."""
+    multiple of dt, the last step is shortened to end exactly at T. At most 1e10 steps (T / dt);
+    1 <= record_every <= MAX_RECORD_EVERY = 10^10."""
 
     T: float = 150.0
     dt: float = 1e-3
@@ -623,7 +766,9 @@ class SimConfig:
         object.__setattr__(self, "T", _scalar(self.T, "sim.T", minimum=0.0, strict=True))
         object.__setattr__(self, "dt", _scalar(self.dt, "sim.dt", minimum=0.0, strict=True))
         object.__setattr__(
-            self, "record_every", _integer(self.record_every, "sim.record_every", minimum=1)
+            self,
+            "record_every",
+            _integer(self.record_every, "sim.record_every", minimum=1, maximum=MAX_RECORD_EVERY),
         )
         object.__setattr__(
             self,
@@ -633,7 +778,9 @@ class SimConfig:
         if self.dt > self.T:
             raise ValueError(f"sim.dt: must be <= sim.T = {self.T:g}, got {self.dt:g}")
         if self.T / self.dt > 1e10:
-            raise ValueError(f"sim.dt: T / dt = {self.T / self.dt:.3g} steps is more than 1e10")
+            raise ValueError(
+                f"sim.dt: sim.T / sim.dt = {self.T / self.dt:.3g} steps is more than 1e10"
+            )
 
 
 _SECTIONS: dict[str, type] = {
@@ -699,12 +846,19 @@ class Config:
         (default: the paper's instance). Unknown sections and keys are refused."""
         if not isinstance(data, Mapping):
             raise TypeError(f"config: expected a mapping of sections, got {type(data).__name__}")
+        if base is not None and not isinstance(base, Config):
+            raise TypeError(f"base: expected adparm.Config or None, got {type(base).__name__}")
         base = cls() if base is None else base
         sections = {}
         for section, values in data.items():
+            if not isinstance(section, str):
+                raise TypeError(
+                    f"config: section names must be strings, got {type(section).__name__} "
+                    f"{_text(section)}; known sections: {', '.join(_SECTIONS)}"
+                )
             if section not in _SECTIONS:
                 raise ValueError(
-                    f"unknown config section [{section}]{_hint(section, list(_SECTIONS))}; "
+                    f"unknown config section [{_name(section)}]{_hint(section, list(_SECTIONS))}; "
                     f"known sections: {', '.join(_SECTIONS)}"
                 )
             if not isinstance(values, Mapping):

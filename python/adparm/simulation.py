@@ -319,9 +319,9 @@ def _result(run: _core.Simulation, config: Config, wall_time: float) -> Simulati
 
 def _divergence_message(run: _core.Simulation, config: Config) -> str:
     return (
-        f"simulation diverged at t = {run.divergence_time:.6g} s (state non-finite or beyond "
-        f"sim.divergence_bound = {config.sim.divergence_bound:g}); the partial result is in "
-        "the exception's .result"
+        f"simulation diverged at t = {run.divergence_time:.6g} s (state or a recorded output "
+        f"non-finite, or beyond sim.divergence_bound = {config.sim.divergence_bound:g}); the "
+        "partial result is in the exception's .result"
     )
 
 

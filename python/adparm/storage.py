@@ -45,7 +45,9 @@ def columns() -> list[str]:
 def table(result: SimulationResult) -> np.ndarray:
     """The recorded time series as one (rows, len(columns())) array."""
     n = result.t.size
-    return np.hstack([np.asarray(getattr(result, attr)).reshape(n, -1) for attr, _ in _COLUMNS])
+    return np.hstack(
+        [np.asarray(getattr(result, attr)).reshape(n, len(names)) for attr, names in _COLUMNS]
+    )
 
 
 def save_result(result: SimulationResult, path: str | Path) -> Path:

@@ -268,11 +268,21 @@ def summary_markdown(summary: dict[str, Any]) -> str:
             "| basis function | W* | critic Wc | Wc - W* | actor Wa | Wa - W* |",
             "|---|---:|---:|---:|---:|---:|",
         ]
+        # None for a run without rows (diverged at t = 0)
+        columns = [
+            summary[key] or [None] * len(target)
+            for key in (
+                "critic_weights",
+                "critic_weight_error",
+                "actor_weights",
+                "actor_weight_error",
+            )
+        ]
         for i, name in enumerate(summary["basis"]):
             lines.append(
-                f"| {name} | {_fmt(target[i])} | {_fmt(summary['critic_weights'][i])} | "
-                f"{_fmt(summary['critic_weight_error'][i])} | "
-                f"{_fmt(summary['actor_weights'][i])} | {_fmt(summary['actor_weight_error'][i])} |"
+                f"| {name} | {_fmt(target[i])} | "
+                + " | ".join(_fmt(column[i]) for column in columns)
+                + " |"
             )
     lines += [
         "",

@@ -57,10 +57,11 @@ class TwoLinkArm {
     for (double v : {p.p1, p.p2, p.p3, p.g1, p.g2, p.coulomb, p.viscous})
       check_finite(v, (prefix + ": parameters").c_str());
     if (!(p.p2 > 0.0)) throw std::invalid_argument(prefix + ".p2: must be > 0");
-    if (!(p.p1 * p.p2 - p.p2 * p.p2 - p.p3 * p.p3 > 0.0))
+    const double det = p.p1 * p.p2 - p.p2 * p.p2 - p.p3 * p.p3;  // inf - inf = nan: refused
+    if (!(det > 0.0) || !std::isfinite(det))
       throw std::invalid_argument(prefix +
                                   ".p1, p2, p3: M(q) must be positive definite for all q "
-                                  "(need p1 p2 - p2^2 - p3^2 > 0)");
+                                  "(need p1 p2 - p2^2 - p3^2 > 0 and finite)");
   }
 
   const Parameters& parameters() const { return parameters_; }

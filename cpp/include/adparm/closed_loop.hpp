@@ -80,6 +80,7 @@ class ClosedLoop {
         probe_(settings.probe) {
     check_finite(settings.disturbance, "plant.disturbance");
     check_finite(settings.control.alpha1, "control.alpha1");
+    check_hurwitz(settings.control.alpha1);
     check_finite(settings.task.q0, "task.q0");
     check_finite(settings.task.dq0, "task.dq0");
     check_size(settings.critic_weights, kBasisSize, 1, "init.critic_weights");
@@ -103,6 +104,16 @@ class ClosedLoop {
   const Critic<Basis>& critic() const { return critic_; }
   const Trajectory& trajectory() const { return trajectory_; }
   const Extrapolation<Arm, Basis>& extrapolation() const { return extrapolation_; }
+
+  // de1 = -alpha1 e1 + e2 is stable only if every eigenvalue of alpha1 has a positive real part:
+  // trace > 0 and det > 0 (2 x 2), judged on alpha1 / max|entry| (no overflow), as in Python.
+  static void check_hurwitz(const Mat2& alpha1) {
+    const double scale = alpha1.cwiseAbs().maxCoeff();
+    const Mat2 a = alpha1 / scale;
+    if (!(scale > 0.0) || !(a(0, 0) + a(1, 1) > 0.0 && a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0) > 0.0))
+      throw std::invalid_argument(
+          "control.alpha1: every eigenvalue must have a positive real part (-alpha1 Hurwitz)");
+  }
 
   static CovarianceMap covariance(State& x) { return CovarianceMap(x.data() + kGamma); }
   static ConstCovarianceMap covariance(const State& x) {

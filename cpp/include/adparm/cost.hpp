@@ -1,11 +1,26 @@
-// Quadratic cost of eqs. (10)-(11): r(x, u) = x^T Q x + u^T R u, with Q >= 0 and R > 0 symmetric.
+// Quadratic cost of eqs. (10)-(11): r(x, u) = x^T Q x + u^T R u, with Q > 0 and R > 0 symmetric.
 #pragma once
 
 #include <Eigen/Cholesky>
+#include <string>
 
 #include "adparm/types.hpp"
 
 namespace adparm {
+
+// Throws std::invalid_argument unless the finite matrix is symmetric (to 1e-12, relative) and
+// positive definite (it has a Cholesky factor), both judged on matrix / max|entry| so that no
+// square overflows. Python's config applies the same test.
+template <int N>
+void check_symmetric_positive_definite(const Eigen::Matrix<double, N, N>& matrix,
+                                       const char* name) {
+  const double scale = matrix.cwiseAbs().maxCoeff();
+  const Eigen::Matrix<double, N, N> scaled = matrix / scale;  // scale 0: refused below
+  if (scale > 0.0 && !scaled.isApprox(scaled.transpose(), 1e-12))
+    throw std::invalid_argument(std::string(name) + ": must be symmetric");
+  if (!(scale > 0.0) || Eigen::LLT<Eigen::Matrix<double, N, N>>(scaled).info() != Eigen::Success)
+    throw std::invalid_argument(std::string(name) + ": must be positive definite");
+}
 
 class QuadraticCost {
  public:
@@ -13,12 +28,9 @@ class QuadraticCost {
   QuadraticCost(const Mat4& Q, const Mat2& R) : Q_(Q), R_(R) {
     check_finite(Q, "cost.Q");
     check_finite(R, "cost.R");
-    if (!Q.isApprox(Q.transpose(), 1e-12)) throw std::invalid_argument("cost.Q: must be symmetric");
-    if (!R.isApprox(R.transpose(), 1e-12)) throw std::invalid_argument("cost.R: must be symmetric");
-    Eigen::LLT<Mat2> chol(R);
-    if (chol.info() != Eigen::Success)
-      throw std::invalid_argument("cost.R: must be positive definite");
-    R_inverse_ = chol.solve(Mat2::Identity());
+    check_symmetric_positive_definite(Q, "cost.Q");
+    check_symmetric_positive_definite(R, "cost.R");
+    R_inverse_ = Eigen::LLT<Mat2>(R).solve(Mat2::Identity());
   }
 
   const Mat4& Q() const { return Q_; }

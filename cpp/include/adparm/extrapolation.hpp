@@ -61,6 +61,8 @@ class Extrapolation {
   Extrapolation(const ExtrapolationSettings& settings, bool constant_desired)
       : settings_(settings), draws_(settings.seed), constant_desired_(constant_desired) {
     if (settings.points < 0) throw std::invalid_argument("extrapolation.points: must be >= 0");
+    if (settings.points > 1000000)  // Python's MAX_POINTS
+      throw std::invalid_argument("extrapolation.points: must be <= 1000000");
     check_finite(settings.box, "extrapolation.box");
     if (!(settings.box.array() > 0.0).all())
       throw std::invalid_argument("extrapolation.box: half-widths must be > 0");

@@ -72,8 +72,9 @@ class Simulation {
     check_positive(sim_.divergence_bound, "sim.divergence_bound");
     if (sim_.record_every < 1) throw std::invalid_argument("sim.record_every: must be >= 1");
     // T / dt steps, rounded up (a ratio within 1e-12 of an integer counts as that integer); the
-    // last step is shortened to end exactly at T.
-    const double steps = std::ceil(sim_.T / sim_.dt * (1.0 - 1e-12));
+    // last step is shortened to end exactly at T. At least one: for dt far above T the ratio
+    // underflows to 0, and a run of 0 steps would never reach step_ == steps_.
+    const double steps = std::max(1.0, std::ceil(sim_.T / sim_.dt * (1.0 - 1e-12)));
     if (steps > 1e10) throw std::invalid_argument("sim.T / sim.dt: more than 1e10 steps");
     if (sim_.T > system_.trajectory().end_time() * (1.0 + 1e-12))
       throw std::invalid_argument("task.qd: the samples end before sim.T");
@@ -82,13 +83,15 @@ class Simulation {
     system_.begin_step(0.0, states_[0]);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, System::kDof, System::kBasisSize);
-    record(0.0, states_[0]);
+    if (!record(0.0, states_[0])) stop_diverged(0.0);
   }
 
   // Advances at most max_steps steps; returns the number taken. The state alternates between two
   // buffers, so the last finite state survives a diverging step without a copy. A row due at a
   // step's end is written from the next step's first RK4 stage, which evaluates the outputs at
-  // that very (t, state); the last row of a chunk is written before returning.
+  // that very (t, state); the last row of a chunk is written before returning. A row whose
+  // outputs are not finite (a torque or an HJB error that overflows while the state is still
+  // finite) is not written: the run stops there as diverged, with state() and step() at that row.
   long advance(long max_steps) {
     long taken = 0;
     while (status_ == RunStatus::running && taken < max_steps) {
@@ -99,14 +102,17 @@ class Simulation {
       const bool row_due = row_due_;
       rk4_step(system_, t_begin, t_end, previous, state, workspace_,
                row_due ? &row_outputs_ : nullptr);
-      if (row_due) record(t_begin, previous, row_outputs_);
       row_due_ = false;
+      if (row_due && !record(t_begin, previous, row_outputs_)) {
+        stop_diverged(t_begin);  // the step is not taken: state() stays at t_begin
+        return taken;
+      }
       ++step_;
       ++taken;
       if (diverged(state)) {
         status_ = RunStatus::diverged;
         divergence_time_ = t_end;
-        // keep the last finite state as the final row (and as state())
+        // keep the last finite state as the final row (and as state()), if its outputs are finite
         if (!row_due && (step_ - 1) % sim_.record_every != 0) record(t_begin, previous);
         return taken;
       }
@@ -114,15 +120,17 @@ class Simulation {
       if (system_.reset_covariance_if_needed(state)) reset_times_.push_back(t_end);
       system_.begin_step(t_end, state);  // for the next step (and the row recorded at t_end)
       if (step_ == steps_) {
-        record(t_end, state);
-        status_ = RunStatus::finished;
+        if (record(t_end, state))
+          status_ = RunStatus::finished;
+        else
+          stop_diverged(t_end);
       } else if (step_ % sim_.record_every == 0) {
         row_due_ = true;
       }
     }
     if (row_due_) {  // the chunk ends on a row: write it now, the caller may read the recording
-      record(step_ * sim_.dt, states_[current_]);
       row_due_ = false;
+      if (!record(step_ * sim_.dt, states_[current_])) stop_diverged(step_ * sim_.dt);
     }
     return taken;
   }
@@ -145,15 +153,29 @@ class Simulation {
     return !std::isfinite(state.sum()) || !(watched.cwiseAbs().maxCoeff() <= sim_.divergence_bound);
   }
 
-  void record(double t, const State& state) {
+  void stop_diverged(double t) {
+    status_ = RunStatus::diverged;
+    divergence_time_ = t;
+  }
+
+  static bool finite(const typename System::Outputs& o) {
+    return o.errors.e1.allFinite() && o.errors.e2.allFinite() && o.qd.allFinite() &&
+           o.tau.allFinite() && o.u.allFinite() && o.u_hat.allFinite() && o.mu.allFinite() &&
+           o.probe.allFinite() && std::isfinite(o.hjb_error);
+  }
+
+  bool record(double t, const State& state) {
     typename System::State rate;
     typename System::TimeSignals signals;
     system_.time_signals(t, signals);
     system_.derivative(signals, state, rate, &row_outputs_);
-    record(t, state, row_outputs_);
+    return record(t, state, row_outputs_);
   }
 
-  void record(double t, const State& state, const typename System::Outputs& outputs) {
+  // Writes the row of (t, state) and returns true; writes nothing and returns false if an output
+  // is not finite (the state itself is: the caller checked it).
+  bool record(double t, const State& state, const typename System::Outputs& outputs) {
+    if (!finite(outputs)) return false;
     Recording& r = recording_;
     const Eigen::Index i = r.rows++;
     r.t[i] = t;
@@ -173,6 +195,7 @@ class Simulation {
         state.template segment<System::kBasisSize>(System::kActorWeights).transpose();
     r.hjb_error[i] = outputs.hjb_error;
     r.cost[i] = state[System::kCost];
+    return true;
   }
 
   System system_;
