@@ -1,6 +1,6 @@
 // Standalone benchmark of the paper's closed loop (no Python, no test framework).
 //
-// Usage: adparm_bench [simulated_seconds] [extrapolation_points ...]
+// Usage: adparm_bench [--checks] [simulated_seconds] [extrapolation_points ...]
 //   default: 110 s (the paper's claim time) and N = 0, 10, 50 points.
 // Each N runs the paper's settings (paper_settings(), the basis adparm.paper_config() uses) for
 // the given horizon, three times; the fastest run is reported. With points (fixed, drawn in
@@ -14,10 +14,27 @@
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (glibc only; -1 elsewhere or under
 // AddressSanitizer, which owns malloc).
+//
+// --checks (for bench/sanitize.sh, untimed) then also runs what the measurements leave out, over
+// the same horizon, and exits 1 if any check fails:
+//   bench=check run=NAME status=S steps=n rows=r ok=1
+//     each in chunks of 7 and 13 steps, compared bit for bit with a one-shot run: local and grid
+//     extrapolation points, the paper basis with a model error, sinusoid and spline tracking with
+//     points, the rise, pd and optimal controllers, a run that diverges (dt = 4 ms);
+//   bench=check run=batch_threads ... 16 runs in chunks on 3 threads against one by one;
+//   bench=checks invalid_settings=k refused=k failed=f
+//     k invalid Settings (and a Batch with one, and threads = 0), each expected to throw
+//     std::invalid_argument; f counts the failures of the whole section.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "adparm/batch.hpp"
@@ -102,12 +119,304 @@ double time_batch(const std::vector<adparm::Settings>& settings, int threads,
   return seconds;
 }
 
+// --checks ------------------------------------------------------------------------------------
+
+int failures = 0;
+
+void fail(const std::string& what) {
+  ++failures;
+  std::fprintf(stderr, "check failed: %s\n", what.c_str());
+}
+
+bool same(const adparm::Recording& a, const adparm::Recording& b) {
+  return a.rows == b.rows && a.t == b.t && a.hjb_error == b.hjb_error && a.cost == b.cost &&
+         a.q == b.q && a.dq == b.dq && a.qd == b.qd && a.e1 == b.e1 && a.e2 == b.e2 &&
+         a.tau == b.tau && a.u == b.u && a.u_hat == b.u_hat && a.mu == b.mu && a.probe == b.probe &&
+         a.critic_weights == b.critic_weights && a.actor_weights == b.actor_weights;
+}
+
+// Runs `settings` in chunks of 7 and 13 steps in turn (chunks end on recorded rows and between
+// them) and in one go; both must give the same state and recording, with the expected status.
+void check_run(const char* name, const adparm::Settings& settings, adparm::RunStatus expected) {
+  adparm::AnySimulation whole(settings), chunked(settings);
+  whole.advance(whole.steps());
+  for (long chunk = 7; chunked.status() == adparm::RunStatus::running; chunk = 20 - chunk)
+    chunked.advance(chunk);
+  const adparm::Recording recording = chunked.recording();
+  const bool finite = chunked.state().allFinite() && recording.q.allFinite() &&
+                      recording.critic_weights.allFinite() && recording.cost.allFinite();
+  const bool ok = chunked.status() == expected && whole.status() == expected &&
+                  chunked.state() == whole.state() && same(recording, whole.recording()) &&
+                  chunked.reset_times() == whole.reset_times() && finite && recording.rows > 1;
+  std::printf("bench=check run=%s status=%s steps=%ld rows=%ld ok=%d\n", name,
+              status_name(chunked.status()), chunked.step(), static_cast<long>(recording.rows),
+              ok ? 1 : 0);
+  std::fflush(stdout);
+  if (!ok) fail(name);
+}
+
+// qd1 a cubic on [0, end/2] continued by a line with the same position and velocity on
+// [end/2, end] (two spline intervals); qd2 = -0.2.
+adparm::TrajectorySettings spline(double end) {
+  adparm::TrajectorySettings qd;
+  qd.kind = adparm::TrajectoryKind::spline;
+  qd.breaks.resize(3);
+  qd.breaks << 0.0, 0.5 * end, end;
+  qd.coefficients.setZero(2, 8);
+  qd.coefficients.row(0) << 0.01, -0.02, 0.05, 0.1, 0, 0, 0, -0.2;
+  const double s = 0.5 * end;  // the second interval continues the first's position and velocity
+  qd.coefficients.row(1) << 0, 0, 0.05 + 2 * -0.02 * s + 3 * 0.01 * s * s,
+      ((0.01 * s - 0.02) * s + 0.05) * s + 0.1, 0, 0, 0, -0.2;
+  return qd;
+}
+
+adparm::TrajectorySettings sinusoid() {
+  adparm::TrajectorySettings qd;
+  qd.kind = adparm::TrajectoryKind::sinusoid;
+  qd.offset = adparm::Vec2(0.1, -0.1);
+  qd.amplitude.setConstant(2, 2, 0.1);
+  qd.frequency.resize(2, 2);
+  qd.frequency << 1.0, 2.0, 0.5, 3.0;
+  qd.phase.setZero(2, 2);
+  return qd;
+}
+
+void check_runs(double horizon) {
+  using adparm::Settings;
+  Settings base = adparm::paper_settings();
+  base.sim.T = horizon;
+  const auto variant = [&](const std::function<void(Settings&)>& change) {
+    Settings s = base;
+    change(s);
+    return s;
+  };
+  constexpr auto finished = adparm::RunStatus::finished;
+  check_run("local_points", variant([](Settings& s) {
+              s.extrapolation.points = 10;
+              s.extrapolation.mode = adparm::ExtrapolationMode::local;
+              s.extrapolation.seed = 7;
+            }),
+            finished);
+  check_run("grid_points", variant([](Settings& s) {
+              s.extrapolation.points = 16;
+              s.extrapolation.mode = adparm::ExtrapolationMode::grid;
+            }),
+            finished);
+  check_run("paper_basis_model_error", variant([](Settings& s) {
+              s.basis = adparm::BasisKind::paper;
+              s.model.p1 = 4.5;
+              s.model.viscous = 0.2;
+              s.probe.ramp = 0.1;
+              s.sim.record_every = 7;
+            }),
+            finished);
+  check_run("sinusoid_points", variant([](Settings& s) {
+              s.task.qd = sinusoid();
+              s.extrapolation.points = 4;
+            }),
+            finished);
+  check_run("spline_points", variant([&](Settings& s) {
+              s.task.qd = spline(horizon);
+              s.extrapolation.points = 3;
+              s.extrapolation.mode = adparm::ExtrapolationMode::local;
+            }),
+            finished);
+  check_run("rise", variant([](Settings& s) { s.controller.kind = adparm::ControllerKind::rise; }),
+            finished);
+  check_run("pd", variant([](Settings& s) {
+              s.controller.kind = adparm::ControllerKind::pd;
+              s.controller.rise = false;
+            }),
+            finished);
+  check_run("optimal",
+            variant([](Settings& s) { s.controller.kind = adparm::ControllerKind::optimal; }),
+            finished);
+  check_run("diverges", variant([&](Settings& s) {
+              s.sim.dt = 0.004;  // RK4 outside its stability region: diverges at step 5
+              s.sim.T = std::max(horizon, 1.0);
+              s.sim.record_every = 3;
+            }),
+            adparm::RunStatus::diverged);
+
+  // 16 runs in chunks on 3 threads (more than the 2 cores: runs move between threads) against
+  // the same runs one by one.
+  std::vector<Settings> settings;
+  for (int i = 0; i < 16; ++i)
+    settings.push_back(variant([i](Settings& s) {
+      s.task.q0 += adparm::Vec2(0.01 * i, -0.005 * i);
+      s.extrapolation.points = i % 3;
+      s.basis = i % 2 ? adparm::BasisKind::paper : adparm::BasisKind::augmented;
+    }));
+  adparm::Batch<adparm::AnySimulation> batch(settings);
+  while (batch.advance(333, 3)) {
+  }
+  bool ok = true;
+  for (std::size_t i = 0; i < settings.size(); ++i) {
+    adparm::AnySimulation alone(settings[i]);
+    alone.advance(alone.steps());
+    ok = ok && batch[i].status() == adparm::RunStatus::finished &&
+         batch[i].state() == alone.state() && same(batch[i].recording(), alone.recording());
+  }
+  std::printf("bench=check run=batch_threads status=%s steps=%ld rows=%ld ok=%d\n",
+              status_name(batch[0].status()), batch[0].step(),
+              static_cast<long>(batch[0].recording().rows), ok ? 1 : 0);
+  if (!ok) fail("batch_threads");
+}
+
+// Each invalid setting must be refused with std::invalid_argument: not accepted, not another
+// exception, not an abort (an Eigen assertion or a sanitizer finding ends the program).
+void check_invalid_settings() {
+  using adparm::Settings;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<const char*, std::function<void(Settings&)>>> cases = {
+      {"sim.T zero", [](Settings& s) { s.sim.T = 0.0; }},
+      {"sim.T nan", [&](Settings& s) { s.sim.T = nan; }},
+      {"sim.dt negative", [](Settings& s) { s.sim.dt = -1e-3; }},
+      {"sim.dt inf", [&](Settings& s) { s.sim.dt = inf; }},
+      {"sim.T/dt too many steps", [](Settings& s) { s.sim.T = 1e8; }},
+      {"sim.record_every zero", [](Settings& s) { s.sim.record_every = 0; }},
+      {"sim.divergence_bound zero", [](Settings& s) { s.sim.divergence_bound = 0.0; }},
+      {"init.critic_weights size", [](Settings& s) { s.critic_weights.resize(7); }},
+      {"init.actor_weights size", [](Settings& s) { s.actor_weights = Eigen::VectorXd::Ones(9); }},
+      {"init.critic_weights empty", [](Settings& s) { s.critic_weights.resize(0); }},
+      {"init.actor_weights nan", [&](Settings& s) { s.actor_weights[3] = nan; }},
+      {"task.q0 nan", [&](Settings& s) { s.task.q0[1] = nan; }},
+      {"task.dq0 inf", [&](Settings& s) { s.task.dq0[0] = -inf; }},
+      {"plant.disturbance inf", [&](Settings& s) { s.disturbance[0] = inf; }},
+      {"plant.p2 zero", [](Settings& s) { s.plant.p2 = 0.0; }},
+      {"plant M not positive definite", [](Settings& s) { s.plant.p1 = 1.5; }},
+      {"model.p3 nan", [&](Settings& s) { s.model.p3 = nan; }},
+      {"cost.Q asymmetric", [](Settings& s) { s.Q(0, 1) += 1.0; }},
+      {"cost.R not positive definite", [](Settings& s) { s.R(1, 1) = -1.0; }},
+      {"cost.R nan", [&](Settings& s) { s.R(0, 0) = nan; }},
+      {"control.alpha1 nan", [&](Settings& s) { s.control.alpha1(1, 0) = nan; }},
+      {"control.ks negative", [](Settings& s) { s.control.rise.ks = -1.0; }},
+      {"critic.gamma0 zero", [](Settings& s) { s.critic.gamma0 = 0.0; }},
+      {"critic.epsilon_T above gamma0", [](Settings& s) { s.critic.epsilon_T = 200.0; }},
+      {"critic.eta_c negative", [](Settings& s) { s.critic.eta_c = -1.0; }},
+      {"actor.weight_bound zero", [](Settings& s) { s.actor.weight_bound = 0.0; }},
+      {"controller rise without rise",
+       [](Settings& s) {
+         s.controller.kind = adparm::ControllerKind::rise;
+         s.controller.rise = false;
+       }},
+      {"controller.kp nan", [&](Settings& s) { s.controller.kp(0, 0) = nan; }},
+      {"extrapolation.points negative", [](Settings& s) { s.extrapolation.points = -1; }},
+      {"extrapolation grid not m^4",
+       [](Settings& s) {
+         s.extrapolation.points = 5;
+         s.extrapolation.mode = adparm::ExtrapolationMode::grid;
+       }},
+      {"extrapolation.box zero", [](Settings& s) { s.extrapolation.box[2] = 0.0; }},
+      {"probe.amplitude size", [](Settings& s) { s.probe.amplitude.resize(2, 3); }},
+      {"probe.phases size", [](Settings& s) { s.probe.phases.resize(2, 0); }},
+      {"probe.frequencies nan", [&](Settings& s) { s.probe.frequencies[2] = nan; }},
+      {"probe.ramp negative", [](Settings& s) { s.probe.ramp = -1.0; }},
+      {"task.qd sinusoid frequency size",
+       [](Settings& s) {
+         s.task.qd = sinusoid();
+         s.task.qd.frequency.resize(2, 1);
+       }},
+      {"task.qd spline no interval",
+       [](Settings& s) {
+         s.task.qd = spline(s.sim.T);
+         s.task.qd.coefficients.resize(0, 8);
+       }},
+      {"task.qd spline breaks size",
+       [](Settings& s) {
+         s.task.qd = spline(s.sim.T);
+         s.task.qd.breaks.resize(2);
+       }},
+      {"task.qd spline decreasing",
+       [](Settings& s) {
+         s.task.qd = spline(s.sim.T);
+         s.task.qd.breaks[1] = -1.0;
+       }},
+      {"task.qd spline ends before sim.T", [](Settings& s) { s.task.qd = spline(0.5 * s.sim.T); }},
+  };
+  int refused = 0;
+  for (const auto& [name, change] : cases) {
+    Settings settings = adparm::paper_settings();
+    settings.sim.T = 1.0;
+    change(settings);
+    try {
+      adparm::AnySimulation simulation(settings);
+      fail(std::string(name) + ": accepted");
+    } catch (const std::invalid_argument&) {
+      ++refused;
+    } catch (const std::exception& error) {
+      fail(std::string(name) + ": threw " + error.what());
+    }
+  }
+  int batch_cases = 0;
+  // A Batch names the run whose settings are invalid, and refuses threads = 0.
+  std::vector<adparm::Settings> settings(3, adparm::paper_settings());
+  for (auto& s : settings) s.sim.T = 0.01;
+  settings[1].sim.dt = 0.0;
+  ++batch_cases;
+  try {
+    adparm::Batch<adparm::AnySimulation> batch(settings);
+    fail("batch with invalid settings[1]: accepted");
+  } catch (const std::invalid_argument& error) {
+    if (std::strncmp(error.what(), "settings[1]: ", 13) == 0)
+      ++refused;
+    else
+      fail(std::string("batch with invalid settings[1]: message ") + error.what());
+  }
+  settings[1].sim.dt = 1e-3;
+  ++batch_cases;
+  try {
+    adparm::Batch<adparm::AnySimulation> batch(settings);
+    batch.advance(10, 0);
+    fail("batch threads = 0: accepted");
+  } catch (const std::invalid_argument&) {
+    ++refused;
+  }
+  std::printf("bench=checks invalid_settings=%d refused=%d failed=%d\n",
+              static_cast<int>(cases.size()) + batch_cases, refused, failures);
+}
+
+void usage() {
+  std::fprintf(stderr, "usage: adparm_bench [--checks] [simulated_seconds] [points ...]\n");
+}
+
 }  // namespace
 
+int run(double horizon, std::vector<long> point_counts, bool checks);
+
 int main(int argc, char** argv) {
-  const double horizon = argc > 1 ? std::atof(argv[1]) : 110.0;
+  bool checks = false;
+  std::vector<const char*> arguments;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--checks") == 0)
+      checks = true;
+    else
+      arguments.push_back(argv[i]);
+  }
+  double horizon = 110.0;
   std::vector<long> point_counts;
-  for (int i = 2; i < argc; ++i) point_counts.push_back(std::atol(argv[i]));
+  for (std::size_t i = 0; i < arguments.size(); ++i) {
+    char* end = nullptr;
+    if (i == 0) {
+      horizon = std::strtod(arguments[i], &end);
+    } else {
+      point_counts.push_back(std::strtol(arguments[i], &end, 10));
+    }
+    if (end == arguments[i] || *end != '\0') {
+      usage();
+      return 2;
+    }
+  }
+  try {
+    return run(horizon, point_counts, checks);
+  } catch (const std::exception& error) {  // e.g. invalid_argument for a horizon <= 0
+    std::fprintf(stderr, "adparm_bench: %s\n", error.what());
+    return 2;
+  }
+}
+
+int run(double horizon, std::vector<long> point_counts, bool checks) {
   if (point_counts.empty()) point_counts = {0, 10, 50};
   constexpr int repeats = 3;
   bool all_finished = true;
@@ -157,5 +466,11 @@ int main(int argc, char** argv) {
         runs, steps, threads, seconds, 1e9 * seconds / (static_cast<double>(runs) * steps),
         serial / seconds, identical ? 1 : 0);
   }
-  return all_finished && identical ? 0 : 1;
+  std::fflush(stdout);  // a LeakSanitizer report at exit ends the program without flushing
+  if (checks) {
+    check_runs(horizon);
+    check_invalid_settings();
+    std::fflush(stdout);
+  }
+  return all_finished && identical && failures == 0 ? 0 : 1;
 }
