@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .config import CONTROLLER_KINDS, Config, _hint
+from .config import CONTROLLER_KINDS, Config, _check_known
 from .simulation import SimulationInterrupted, SimulationResult, _simulate_keeping_divergence
 from .table import rows_dataframe, rows_json, rows_markdown, write_csv
 
@@ -77,16 +77,13 @@ def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
     if not kinds:
         raise ValueError(f"kinds: expected at least one of {', '.join(CONTROLLER_KINDS)}")
     for kind in kinds:
-        if not isinstance(kind, str):
-            raise TypeError(
-                f"kinds: expected controller kinds as strings ({', '.join(CONTROLLER_KINDS)}), "
-                f"got {kind!r}"
-            )
-        if kind not in CONTROLLER_KINDS:
-            raise ValueError(
-                f"kinds: unknown controller kind {kind!r}{_hint(kind, CONTROLLER_KINDS)}; "
-                f"known kinds: {', '.join(CONTROLLER_KINDS)}"
-            )
+        _check_known(
+            kind,
+            CONTROLLER_KINDS,
+            strings="kinds: controller kinds must be strings",
+            unknown="kinds: unknown controller kind {name!r}",
+            listing=f"known kinds: {', '.join(CONTROLLER_KINDS)}",
+        )
     duplicates = sorted({kind for kind in kinds if kinds.count(kind) > 1})
     if duplicates:
         named = ", ".join(repr(kind) for kind in duplicates)

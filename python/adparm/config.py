@@ -192,18 +192,27 @@ def _gain(value: Any, name: str) -> float | Matrix:
     return _matrix(value, name, 2, 2)
 
 
+def _check_known(
+    name: Any, known: Sequence[str], *, strings: str, unknown: str, listing: str
+) -> None:
+    """Refuses a ``name`` that is not one of ``known``: TypeError ``strings`` for a non-string,
+    ValueError ``unknown`` (a template of ``{name}``) with a "did you mean" hint; both messages end
+    with ``listing``."""
+    if not isinstance(name, str):
+        raise TypeError(f"{strings}, got {type(name).__name__} {_text(name)}; {listing}")
+    if name not in known:
+        raise ValueError(f"{unknown.format(name=_name(name))}{_hint(name, known)}; {listing}")
+
+
 def _check_keys(values: Mapping[str, Any], keys: list[str], where: str) -> None:
     for key in values:
-        if not isinstance(key, str):
-            raise TypeError(
-                f"[{where}]: key names must be strings, got {type(key).__name__} {_text(key)}; "
-                f"known keys of [{where}]: {', '.join(keys)}"
-            )
-        if key not in keys:
-            raise ValueError(
-                f"unknown key {where}.{_name(key)}{_hint(key, keys)}; known keys of [{where}]: "
-                f"{', '.join(keys)}"
-            )
+        _check_known(
+            key,
+            keys,
+            strings=f"[{where}]: key names must be strings",
+            unknown=f"unknown key {where}.{{name}}",
+            listing=f"known keys of [{where}]: {', '.join(keys)}",
+        )
 
 
 def _vector(value: Any, name: str, size: int | None) -> Vector:
@@ -851,16 +860,13 @@ class Config:
         base = cls() if base is None else base
         sections = {}
         for section, values in data.items():
-            if not isinstance(section, str):
-                raise TypeError(
-                    f"config: section names must be strings, got {type(section).__name__} "
-                    f"{_text(section)}; known sections: {', '.join(_SECTIONS)}"
-                )
-            if section not in _SECTIONS:
-                raise ValueError(
-                    f"unknown config section [{_name(section)}]{_hint(section, list(_SECTIONS))}; "
-                    f"known sections: {', '.join(_SECTIONS)}"
-                )
+            _check_known(
+                section,
+                list(_SECTIONS),
+                strings="config: section names must be strings",
+                unknown="unknown config section [{name}]",
+                listing=f"known sections: {', '.join(_SECTIONS)}",
+            )
             if not isinstance(values, Mapping):
                 raise TypeError(
                     f"[{section}]: expected a table of keys, got {type(values).__name__}"
