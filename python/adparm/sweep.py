@@ -310,13 +310,14 @@ def _run_on_executor(
     """(point index, metrics) of every task, in order; Ctrl-C cancels the tasks not started and
     keeps those that ended."""
     futures = [executor.submit(sweep_row, config, tolerance) for config in configs]
+    waiting = 0  # the first task whose row has not been yielded
     try:
-        for i, future in enumerate(tqdm(futures, disable=not progress, desc="sweep")):
-            yield i, future.result()
+        for waiting, future in enumerate(tqdm(futures, disable=not progress, desc="sweep")):
+            yield waiting, future.result()
     except KeyboardInterrupt:
-        for future in futures:
+        for future in futures[waiting:]:
             future.cancel()
-        for i, future in enumerate(futures):
+        for i, future in enumerate(futures[waiting:], start=waiting):
             if future.done() and not future.cancelled() and future.exception() is None:
                 yield i, future.result()
         raise
