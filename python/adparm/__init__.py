@@ -32,6 +32,7 @@ from .optimal import (
     optimal_weights,
     solvable_cost,
 )
+from .physical import two_link_parameters
 from .report import write_report
 from .simulation import (
     SimulationDiverged,
@@ -84,5 +85,6 @@ __all__ = [
     "simulate_batch",
     "solvable_cost",
     "sweep",
+    "two_link_parameters",
     "write_report",
 ]
