@@ -165,25 +165,46 @@ def test_kinds_are_validated() -> None:
     assert list(adparm.compare(config, "rise").results) == ["rise"]  # one kind as a string
 
 
-def test_figure_has_one_line_per_controller_in_each_panel(short_comparison) -> None:
+def test_figure_sets_the_learning_run_apart_and_styles_each_controller(short_comparison) -> None:
     figure = short_comparison.plot()
-    assert len(figure.axes) == 4
-    for axes in figure.axes:
-        lines = [line for line in axes.get_lines() if not line.get_label().startswith("_")]
-        assert [line.get_label() for line in lines] == LABELS
-        assert lines[-1].get_linestyle() == "--"  # optimal, dashed over adp (learned)
-        assert "(rad)" in axes.get_ylabel() or "(N m)" in axes.get_ylabel()
-    e1_1 = figure.axes[0].get_lines()[3]
-    np.testing.assert_array_equal(e1_1.get_ydata(), short_comparison.results["pd"].e1[:, 0])
-    tau_2 = figure.axes[3].get_lines()[0]
-    np.testing.assert_array_equal(tau_2.get_ydata(), short_comparison.results["adp"].tau[:, 1])
-    legend = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
-    assert legend == LABELS
-    assert figure.axes[0].get_shared_x_axes().joined(figure.axes[0], figure.axes[3])
-    assert "(s" in figure.axes[-1].get_xlabel() and figure.axes[-1].get_xscale() == "symlog"
+    assert len(figure.axes) == 8  # 4 rows: e1 and tau of each joint; 2 columns
+    learning, others = figure.axes[0::2], figure.axes[1::2]
+    for column, labels in ((learning, LABELS[:1]), (others, LABELS[1:])):
+        for axes in column:
+            lines = [line for line in axes.get_lines() if not line.get_label().startswith("_")]
+            assert [line.get_label() for line in lines] == labels
+        legend = [text.get_text() for text in column[0].get_legend().get_texts()]
+        assert legend == labels
+        assert column[0].get_shared_x_axes().joined(column[0], column[3])
+    assert "(rad)" in learning[0].get_ylabel() and "(N m)" in learning[3].get_ylabel()
+    # each fixed controller has its own colour and its own line style; optimal on top
+    lines = others[0].get_lines()
+    assert len({line.get_color() for line in lines}) == len(lines)
+    assert len({(line.get_linestyle(), line.get_linewidth()) for line in lines}) == len(lines)
+    assert lines[-1].get_label() == "optimal" and lines[-1].get_zorder() == max(
+        line.get_zorder() for line in lines
+    )
+    np.testing.assert_array_equal(
+        others[0].get_lines()[2].get_ydata(), short_comparison.results["pd"].e1[:, 0]
+    )
+    np.testing.assert_array_equal(
+        learning[3].get_lines()[0].get_ydata(), short_comparison.results["adp"].tau[:, 1]
+    )
+    assert "(s" in others[-1].get_xlabel() and others[-1].get_xscale() == "symlog"
+    assert learning[-1].get_xscale() == "linear"
     assert short_comparison.plot(time_scale="linear").axes[-1].get_xscale() == "linear"
     with pytest.raises(ValueError, match="time_scale"):
         short_comparison.plot(time_scale="log")
+
+
+def test_comparison_draws_into_given_axes(short_comparison) -> None:
+    from matplotlib.figure import Figure
+
+    figure = Figure()
+    grid = figure.subplots(4, 2)
+    assert short_comparison.plot(ax=grid) is figure
+    with pytest.raises(ValueError, match="ax: expected 4 x 2"):
+        short_comparison.plot(ax=Figure().subplots(4, 1))
 
 
 def test_cli_compare_writes_the_table_and_files(tmp_path, capsys) -> None:

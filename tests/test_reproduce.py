@@ -141,19 +141,71 @@ def test_csv_and_dataframe_hold_the_time_series(short_result, tmp_path) -> None:
 def test_plot_returns_labelled_figures(short_result) -> None:
     figures = short_result.plot()
     assert set(figures) == {"fig2_critic_weights", "fig3_actor_weights", "fig4_errors", "torques"}
-    critic = figures["fig2_critic_weights"].axes[0]
-    labels = [text.get_text() for text in critic.get_legend().get_texts()]
-    assert len(labels) == 8 and "$x_1^2$" in labels
-    # W* dashed: one horizontal line per weight at the analytic value
-    dashed = [line for line in critic.get_lines() if line.get_linestyle() == "--"]
+    w_star = adparm.optimal_weights(short_result.config)
+    for name, weights in (
+        ("fig2_critic_weights", short_result.critic_weights),
+        ("fig3_actor_weights", short_result.actor_weights),
+    ):
+        panel, error_panel = figures[name].axes
+        labels = [text.get_text() for text in panel.get_legend().get_texts()]
+        assert labels[0] == "$x_1^2$  (W* = 4)" and labels[-1] == "analytic W*"
+        assert len(labels) == 9
+        # one curve per weight, with the recorded values
+        curves = [line for line in panel.get_lines() if line.get_marker() not in ("None", None)]
+        assert len(curves) == 8
+        np.testing.assert_array_equal(curves[2].get_ydata(), weights[:, 2])
+        # W*: one thick black dashed line per weight at the analytic value, drawn over the curves
+        references = [line for line in panel.get_lines() if line.get_color() == "k"]
+        assert all(line.get_linestyle() == "--" for line in references)
+        np.testing.assert_allclose(sorted(r.get_ydata()[0] for r in references), sorted(w_star))
+        assert min(r.get_zorder() for r in references) > max(c.get_zorder() for c in curves)
+        # the three weights equal to 2 differ in colour and marker
+        equal = [curves[i] for i in np.flatnonzero(w_star == 2.0)]
+        assert len({c.get_color() for c in equal}) == len({c.get_marker() for c in equal}) == 3
+        # the legend lies outside the data
+        assert panel.get_legend().get_bbox_to_anchor().x0 > panel.bbox.x1 - 1
+        # log-scale relative error ||W - W*|| / ||W*||
+        assert error_panel.get_yscale() == "log"
+        relative = error_panel.get_lines()[0].get_ydata()
+        expected = np.linalg.norm(weights - w_star, axis=1) / np.linalg.norm(w_star)
+        np.testing.assert_allclose(relative, np.maximum(expected, 1e-16), rtol=1e-15)
+        assert "(s)" in error_panel.get_xlabel()
+    errors = figures["fig4_errors"].axes
+    assert all("rad" in ax.get_ylabel() for ax in errors)
+    assert errors[-1].get_yscale() == "log"
     np.testing.assert_allclose(
-        sorted(line.get_ydata()[0] for line in dashed),
-        sorted(adparm.optimal_weights(short_result.config)),
+        errors[-1].get_lines()[0].get_ydata(), np.maximum(np.abs(short_result.e1[:, 0]), 1e-16)
     )
-    assert "(s)" in critic.get_xlabel()
-    assert all("rad" in ax.get_ylabel() for ax in figures["fig4_errors"].axes)
     with pytest.raises(ValueError, match="which: unknown figure"):
         short_result.plot(["fig9"])
+
+
+def test_plot_draws_into_given_axes_and_figures(short_result) -> None:
+    from matplotlib.figure import Figure
+
+    figure = Figure()
+    axes = figure.subplots(1, 2)
+    assert short_result.plot("fig4_errors", ax=axes) is figure
+    np.testing.assert_array_equal(axes[1].get_lines()[1].get_ydata(), short_result.e1[:, 1])
+    single = Figure().subplots()
+    assert short_result.plot("fig2_critic_weights", ax=single) is single.figure
+    assert len(single.figure.axes) == 1 and single.get_legend() is not None
+    target = Figure()
+    assert short_result.plot("torques", fig=target) is target and len(target.axes) == 2
+    with pytest.raises(ValueError, match="ax, fig: name one figure"):
+        short_result.plot(ax=single)
+    with pytest.raises(ValueError, match="ax: expected 1 to 2 Axes"):
+        short_result.plot("torques", ax=Figure().subplots(3).tolist())
+    with pytest.raises(ValueError, match="at most one"):
+        short_result.plot("torques", ax=single, fig=target)
+
+
+def test_probe_end_is_marked_and_labelled() -> None:
+    config = adparm.paper_config().updated({"probe": {"until": 1.0}, "sim": {"T": 2.0}})
+    figure = adparm.simulate(config).plot("fig2_critic_weights")
+    texts = [text.get_text() for text in figure.axes[0].texts]
+    assert "probing ends" in texts
+    assert any(line.get_xdata()[0] == 1.0 for line in figure.axes[1].get_lines()[2:])
 
 
 def test_cli_reproduce_writes_the_artefacts(tmp_path, capsys) -> None:

@@ -213,12 +213,16 @@ class Comparison:
         paths[2].write_text("# adparm controller comparison\n\n" + self.table_markdown())
         return paths
 
-    def plot(self, *, time_scale: str = "symlog") -> Figure:
-        """One figure: e1 and tau of each joint (four panels over a shared time axis, ``symlog``
-        or ``linear``), one line per controller (adparm.plotting.plot_comparison)."""
+    def plot(
+        self, *, time_scale: str = "symlog", ax: Any = None, fig: Figure | None = None
+    ) -> Figure:
+        """e1 and tau of each joint under each controller (:func:`adparm.plotting.plot_comparison`):
+        the learning run in its own column, the other controllers together, each in its own
+        colour and line style. ``time_scale`` (``"symlog"`` or ``"linear"``) sets the time axis
+        of the controllers' column; ``ax`` (a 4 x n grid of Axes) or ``fig`` draw into yours."""
         from .plotting import plot_comparison
 
-        return plot_comparison(self, time_scale=time_scale)
+        return plot_comparison(self, time_scale=time_scale, ax=ax, fig=fig)
 
 
 def compare(

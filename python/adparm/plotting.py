@@ -1,13 +1,24 @@
-"""Figures of a run (matplotlib): the paper's Figures 2-4 plus torques and the probing signal.
+"""Figures of a run (matplotlib): the paper's Figures 2-4, the torques, and a controller comparison.
 
-Each function takes a :class:`adparm.SimulationResult` and returns a matplotlib Figure sized for a
-paper column pair (7 x 4.2 in, 9 pt text). Weights are labelled with the basis functions of
-adparm.BASIS_NAMES; the analytic W* (ERRATA.md) is drawn dashed in the same colour when it exists.
+Every function returns a :class:`matplotlib.figure.Figure` and draws its panels either into a new
+figure (default, 9 pt text, sized for a page width), into a figure you pass as ``fig=`` (the panels
+are added to it), or into axes you pass as ``ax=`` (one Axes or a sequence; the function draws as
+many of its panels as you give axes, in order, so ``ax=one_axes`` draws the main panel only).
+
+Design choices, the same in every figure:
+
+- colours from the Okabe-Ito palette (distinguishable with the common colour-vision
+  deficiencies), and a second cue (line style or markers) wherever lines can coincide;
+- the analytic optimum W* (see :func:`adparm.optimal_weights`) drawn on top of the curves as
+  thick black dashes, its values in the legend, and a log-scale panel of the relative error
+  ||W - W*|| / ||W*||;
+- legends outside the data, to the right of the panels;
+- the end of probing marked and labelled.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -16,6 +27,7 @@ import numpy as np
 from .optimal import BASIS_NAMES, optimal_weights
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from .comparison import Comparison
@@ -23,6 +35,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "FIGURES",
+    "OKABE_ITO",
     "plot_actor_weights",
     "plot_comparison",
     "plot_critic_weights",
@@ -32,7 +45,20 @@ __all__ = [
     "save_figures",
 ]
 
-_FIGSIZE = (7.0, 4.2)
+#: The Okabe-Ito colour-blind-safe palette without black (black is kept for references):
+#: blue, vermillion, bluish green, orange, reddish purple, sky blue, yellow-brown, grey.
+OKABE_ITO = (
+    "#0072B2",
+    "#D55E00",
+    "#009E73",
+    "#E69F00",
+    "#CC79A7",
+    "#56B4E9",
+    "#8C6D00",
+    "#7F7F7F",
+)
+_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*")
+_WIDTH = 7.5
 _RC = {
     "font.size": 9,
     "axes.titlesize": 9,
@@ -44,13 +70,47 @@ _RC = {
     "grid.alpha": 0.3,
     "svg.hashsalt": "adparm",  # reproducible SVG ids
 }
+_FLOOR = 1e-16  # log-scale panels show exact zeros at this value
+
+Panel = Callable[["Axes"], None]
 
 
-def _figure(rows: int = 1, figsize: tuple[float, float] = _FIGSIZE) -> Figure:
-    from matplotlib.figure import Figure
+def _draw(
+    panels: Sequence[Panel],
+    *,
+    ax: Axes | Sequence[Axes] | None,
+    fig: Figure | None,
+    height: float,
+    title: str,
+    ratios: Sequence[float] | None = None,
+) -> Figure:
+    """Draw ``panels`` (functions of one Axes) into ``ax``, into new axes of ``fig``, or into a
+    new figure of one column; returns the figure."""
+    import matplotlib
 
-    figure = Figure(figsize=figsize, layout="constrained")
-    figure.subplots(rows, 1, sharex=True, squeeze=False)
+    if ax is not None and fig is not None:
+        raise ValueError("ax, fig: give at most one of them")
+    with matplotlib.rc_context(_RC):
+        if ax is not None:
+            axes = [ax] if not isinstance(ax, Sequence | np.ndarray) else list(np.ravel(ax))
+            if not 1 <= len(axes) <= len(panels):
+                raise ValueError(f"ax: expected 1 to {len(panels)} Axes, got {len(axes)}")
+            figure = axes[0].figure
+        else:
+            if fig is None:
+                from matplotlib.figure import Figure
+
+                fig = Figure(figsize=(_WIDTH, height), layout="constrained")
+            figure = fig
+            grid = figure.subplots(len(panels), 1, sharex=True, squeeze=False, height_ratios=ratios)
+            axes = list(grid[:, 0])
+            axes[0].set_title(title)
+        for axes_i, panel in zip(axes, panels, strict=False):
+            panel(axes_i)
+        for axes_i in axes[:-1]:
+            if axes_i.get_shared_x_axes().joined(axes_i, axes[-1]):
+                axes_i.tick_params(labelbottom=False)
+                axes_i.set_xlabel("")
     return figure
 
 
@@ -61,135 +121,419 @@ def _known_optimum(result: SimulationResult) -> np.ndarray | None:
         return None
 
 
-def _weights(result: SimulationResult, weights: np.ndarray, title: str) -> Figure:
-    import matplotlib
-
-    with matplotlib.rc_context(_RC):
-        figure = _figure()
-        axes = figure.axes[0]
-        target = _known_optimum(result)
-        colours = matplotlib.colormaps["tab10"].colors
-        for i, name in enumerate(BASIS_NAMES):
-            colour = colours[i % len(colours)]
-            axes.plot(result.t, weights[:, i], color=colour, lw=1.1, label=f"${_tex(name)}$")
-            if target is not None:
-                axes.axhline(target[i], color=colour, lw=0.9, ls="--")
-        axes.set_xlabel("time t (s)")
-        axes.set_ylabel("weight (-)")
-        axes.set_title(title + ("  (dashed: analytic W*)" if target is not None else ""))
-        axes.legend(ncols=4, loc="upper right", framealpha=0.85)
-        _mark_probe_end(axes, result)
-    return figure
-
-
 def _tex(name: str) -> str:
     return name.replace("cos x2", r"\cos x_2").replace("x", "x_").replace("x__", "x_")
 
 
-def _mark_probe_end(axes: Any, result: SimulationResult) -> None:
+def _legend_outside(axes: Axes, **kwargs: Any) -> None:
+    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kwargs)
+
+
+def _mark_probe_end(axes: Axes, result: SimulationResult, *, label: bool = True) -> None:
+    """A dotted vertical line where probing stops (if it stops inside the run), labelled."""
     until = result.config.probe.until
     if result.t.size and 0.0 < until < result.t[-1]:
-        axes.axvline(until, color="0.4", lw=0.8, ls=":")
+        axes.axvline(until, color="0.3", lw=0.9, ls=":", zorder=1)
+        if label:
+            axes.annotate(
+                "probing ends",
+                xy=(until, 1.0),
+                xycoords=("data", "axes fraction"),
+                xytext=(3, -3),
+                textcoords="offset points",
+                ha="left",
+                va="top",
+                fontsize=7.5,
+                color="0.3",
+            )
 
 
-def plot_critic_weights(result: SimulationResult) -> Figure:
-    """Figure 2: critic weights Wc(t) (eq. 23) with W* dashed."""
-    return _weights(result, result.critic_weights, "Critic weights $\\hat W_c$ (Figure 2)")
+def _clip_transient(axes: Axes, values: np.ndarray, core: np.ndarray) -> None:
+    """Limit the y axis to ``core`` (the values that matter: W* and the second half of the run)
+    with a margin when the transient goes far beyond it, and say so on the panel."""
+    low, high = float(np.min(core)), float(np.max(core))
+    margin = max(0.3 * (high - low), 1.0)
+    low, high = low - margin, high + margin
+    v_low, v_high = float(np.min(values)), float(np.max(values))
+    span = high - low
+    if v_low >= low - 0.5 * span and v_high <= high + 0.5 * span:
+        return  # the whole run fits without squeezing the final values
+    axes.set_ylim(low, high)
+    beyond = []
+    if v_low < low:
+        beyond.append(f"down to {v_low:.3g}")
+    if v_high > high:
+        beyond.append(f"up to {v_high:.3g}")
+    axes.annotate(
+        "transient clipped (" + ", ".join(beyond) + ")",
+        xy=(0.995, 0.02),
+        xycoords="axes fraction",
+        ha="right",
+        va="bottom",
+        fontsize=7.5,
+        color="0.3",
+        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.8},
+    )
 
 
-def plot_actor_weights(result: SimulationResult) -> Figure:
-    """Figure 3: actor weights Wa(t) (eq. 26) with W* dashed."""
-    return _weights(result, result.actor_weights, "Actor weights $\\hat W_a$ (Figure 3)")
+def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -> Panel:
+    def panel(axes: Axes) -> None:
+        target = _known_optimum(result)
+        t = result.t
+        every = max(1, t.size // 12)
+        # stagger the markers of lines that end together (equal W*) so that each one shows
+        values = target if target is not None else np.arange(len(BASIS_NAMES), dtype=float)
+        offsets = []
+        for i, value in enumerate(values):
+            equal = np.flatnonzero(values == value)
+            rank = int(np.flatnonzero(equal == i)[0])
+            offsets.append(min(rank * every // len(equal), max(t.size - 1, 0)))
+        for i, name in enumerate(BASIS_NAMES):
+            label = f"${_tex(name)}$"
+            if target is not None:
+                label += f"  (W* = {target[i]:g})"
+            axes.plot(
+                t,
+                weights[:, i],
+                color=OKABE_ITO[i % len(OKABE_ITO)],
+                lw=1.2,
+                marker=_MARKERS[i % len(_MARKERS)],
+                markersize=4,
+                # staggered markers: lines that coincide (equal weights) still show each marker
+                markevery=(offsets[i], every),
+                label=label,
+            )
+        if target is not None:
+            for i, value in enumerate(target):
+                axes.axhline(
+                    value,
+                    color="k",
+                    lw=1.6,
+                    ls=(0, (4, 3)),
+                    zorder=5,
+                    label="analytic W*" if i == 0 else "_W*",
+                )
+            core = np.concatenate([target, weights[t.size // 2 :].ravel()])
+        else:
+            core = weights[t.size // 2 :].ravel() if t.size else np.zeros(1)
+        if t.size:
+            _clip_transient(axes, weights, core)
+        axes.set_ylabel(f"weight ${symbol}$ (-)")
+        axes.set_xlabel("time t (s)")
+        _mark_probe_end(axes, result)
+        _legend_outside(axes, title="basis function")
+
+    return panel
 
 
-def _joint_panels(
+def _relative_error_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -> Panel:
+    def panel(axes: Axes) -> None:
+        target = _known_optimum(result)
+        if target is None:
+            axes.text(
+                0.5,
+                0.5,
+                "no analytic W* for this configuration",
+                transform=axes.transAxes,
+                ha="center",
+                va="center",
+                color="0.3",
+            )
+        else:
+            error = np.linalg.norm(weights - target, axis=1) / np.linalg.norm(target)
+            axes.semilogy(
+                result.t,
+                np.maximum(error, _FLOOR),
+                color="k",
+                lw=1.2,
+                label=f"$\\|{symbol} - W^*\\| / \\|W^*\\|$",
+            )
+            axes.axhline(0.02, color=OKABE_ITO[1], lw=0.9, ls="--", label="2 %")
+            _legend_outside(axes)
+        axes.set_ylabel("relative error")
+        axes.set_xlabel("time t (s)")
+        _mark_probe_end(axes, result, label=False)
+
+    return panel
+
+
+def _weights_figure(
     result: SimulationResult,
+    weights: np.ndarray,
+    symbol: str,
     title: str,
-    panels: list[tuple[np.ndarray, str, str]],
-    linewidth: float,
+    ax: Axes | Sequence[Axes] | None,
+    fig: Figure | None,
 ) -> Figure:
-    """One panel per (array (n, 2), y label, legend label with {j} for the joint) over time."""
-    import matplotlib
-
-    with matplotlib.rc_context(_RC):
-        figure = _figure(len(panels))
-        for axes, (values, ylabel, label) in zip(figure.axes, panels, strict=True):
-            for j in range(2):
-                axes.plot(result.t, values[:, j], lw=linewidth, label=label.format(j=j + 1))
-            axes.set_ylabel(ylabel)
-            axes.legend(loc="upper right", ncols=2)
-            _mark_probe_end(axes, result)
-        figure.axes[-1].set_xlabel("time t (s)")
-        figure.axes[0].set_title(title)
-    return figure
-
-
-def plot_errors(result: SimulationResult) -> Figure:
-    """Figure 4: joint angles q, tracking errors e1 = qd - q and filtered errors e2."""
     panels = [
-        (result.q, "q (rad)", "$q_{j}$"),
-        (result.e1, "$e_1$ (rad)", "$e_{{1,{j}}}$"),
-        (result.e2, "$e_2$ (rad/s)", "$e_{{2,{j}}}$"),
+        _weights_panel(result, weights, symbol),
+        _relative_error_panel(result, weights, symbol),
     ]
-    return _joint_panels(result, "Joint angles and tracking errors (Figure 4)", panels, 1.0)
+    return _draw(panels, ax=ax, fig=fig, height=5.2, title=title, ratios=(2.2, 1.0))
 
 
-def plot_torques(result: SimulationResult) -> Figure:
-    """Applied joint torques tau and the probing signal."""
+def plot_critic_weights(
+    result: SimulationResult,
+    *,
+    ax: Axes | Sequence[Axes] | None = None,
+    fig: Figure | None = None,
+) -> Figure:
+    """Figure 2: the critic weights Wc(t) (eq. 23) and their relative error to W*.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A run (:func:`adparm.simulate`).
+    ax : Axes or sequence of Axes, optional
+        Draw into these: the first gets the weights, a second the log-scale relative error
+        ||Wc - W*|| / ||W*||.
+    fig : Figure, optional
+        Add the two panels to this figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Top: each weight over time with the analytic W* as black dashes (values in the
+        legend; markers tell apart weights whose curves coincide). If a transient would squeeze the final values into a thin band, the y axis is
+        limited to the range that matters and the panel says how far the transient went.
+        Bottom: the relative error on a log scale, with the 2 % line.
+    """
+    return _weights_figure(
+        result,
+        result.critic_weights,
+        "\\hat W_c",
+        "Critic weights $\\hat W_c$ (Figure 2)",
+        ax,
+        fig,
+    )
+
+
+def plot_actor_weights(
+    result: SimulationResult,
+    *,
+    ax: Axes | Sequence[Axes] | None = None,
+    fig: Figure | None = None,
+) -> Figure:
+    """Figure 3: the actor weights Wa(t) (eq. 26) and their relative error to W*.
+
+    Parameters and layout as :func:`plot_critic_weights`.
+    """
+    return _weights_figure(
+        result,
+        result.actor_weights,
+        "\\hat W_a",
+        "Actor weights $\\hat W_a$ (Figure 3)",
+        ax,
+        fig,
+    )
+
+
+_JOINT_STYLES = ({"color": OKABE_ITO[0], "ls": "-"}, {"color": OKABE_ITO[1], "ls": "--"})
+
+
+def _joint_panel(
+    result: SimulationResult,
+    values: np.ndarray,
+    ylabel: str,
+    label: str,
+    *,
+    log: bool = False,
+    annotate_probe: bool = False,
+) -> Panel:
+    def panel(axes: Axes) -> None:
+        for j in range(2):
+            y = np.maximum(np.abs(values[:, j]), _FLOOR) if log else values[:, j]
+            axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_JOINT_STYLES[j])
+        if log:
+            axes.set_yscale("log")
+        axes.set_ylabel(ylabel)
+        axes.set_xlabel("time t (s)")
+        _mark_probe_end(axes, result, label=annotate_probe)
+        _legend_outside(axes)
+
+    return panel
+
+
+def plot_errors(
+    result: SimulationResult,
+    *,
+    ax: Axes | Sequence[Axes] | None = None,
+    fig: Figure | None = None,
+) -> Figure:
+    """Figure 4: joint angles q, tracking errors e1 = qd - q and e2, and |e1| on a log scale.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A run.
+    ax : Axes or sequence of Axes, optional
+        Up to four Axes, for q, e1, e2 and |e1| (log scale) in this order.
+    fig : Figure, optional
+        Add the four panels to this figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     panels = [
-        (result.tau, "torque $\\tau$ (N m)", "$\\tau_{j}$"),
-        (result.probe, "probing signal (N m)", "probe$_{j}$"),
+        _joint_panel(result, result.q, "q (rad)", "$q_{j}$", annotate_probe=True),
+        _joint_panel(result, result.e1, "$e_1$ (rad)", "$e_{{1,{j}}}$"),
+        _joint_panel(result, result.e2, "$e_2$ (rad/s)", "$e_{{2,{j}}}$"),
+        _joint_panel(result, result.e1, "$|e_1|$ (rad)", "$|e_{{1,{j}}}|$", log=True),
     ]
-    return _joint_panels(result, "Applied torques and probing signal", panels, 0.8)
+    title = "Joint angles and tracking errors (Figure 4)"
+    return _draw(panels, ax=ax, fig=fig, height=6.4, title=title)
 
 
-def plot_comparison(comparison: Comparison, *, time_scale: str = "symlog") -> Figure:
-    """Controllers side by side (adparm.compare): tracking error e1 and applied torque tau of each
-    joint in four panels over a shared time axis, one line per controller (same colour in every
-    panel; optimal black dashed). The dotted line marks the end of the adp run's probing.
+def plot_torques(
+    result: SimulationResult,
+    *,
+    ax: Axes | Sequence[Axes] | None = None,
+    fig: Figure | None = None,
+) -> Figure:
+    """The applied joint torques tau and the probing signal.
 
-    ``time_scale``: ``"symlog"`` (default: linear up to 1 s, logarithmic after, so that the
-    transients of the first second and the 100 s of probing both show) or ``"linear"``."""
+    Parameters
+    ----------
+    result : SimulationResult
+        A run.
+    ax : Axes or sequence of Axes, optional
+        Up to two Axes, for tau and the probing signal.
+    fig : Figure, optional
+        Add the two panels to this figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    panels = [
+        _joint_panel(
+            result, result.tau, "torque $\\tau$ (N m)", "$\\tau_{j}$", annotate_probe=True
+        ),
+        _joint_panel(result, result.probe, "probing signal (N m)", "probe$_{j}$"),
+    ]
+    return _draw(panels, ax=ax, fig=fig, height=4.2, title="Applied torques and probing signal")
+
+
+#: Line style of each controller in :func:`plot_comparison`: colour, dashes and width differ, and
+#: "optimal" is drawn thin and black on top of "adp (learned)", which is drawn wide and light, so
+#: both show where they coincide.
+CONTROLLER_STYLES = {
+    "adp (learned)": {"color": OKABE_ITO[5], "ls": "-", "lw": 3.2, "alpha": 0.9, "zorder": 2},
+    "rise": {"color": OKABE_ITO[2], "ls": "-.", "lw": 1.3, "zorder": 3},
+    "pd": {"color": OKABE_ITO[1], "ls": (0, (1, 1.5)), "lw": 1.5, "zorder": 3},
+    "optimal": {"color": "k", "ls": (0, (4, 2.5)), "lw": 1.1, "zorder": 4},
+}
+_LEARNING_STYLE = {"color": OKABE_ITO[0], "ls": "-", "lw": 0.7}
+_COMPARE_PANELS = (
+    ("e1", 0, "$e_{1,1}$ (rad)"),
+    ("e1", 1, "$e_{1,2}$ (rad)"),
+    ("tau", 0, "$\\tau_1$ (N m)"),
+    ("tau", 1, "$\\tau_2$ (N m)"),
+)
+
+
+def plot_comparison(
+    comparison: Comparison,
+    *,
+    time_scale: str = "symlog",
+    ax: Sequence[Axes] | np.ndarray | None = None,
+    fig: Figure | None = None,
+) -> Figure:
+    """Controllers side by side (:func:`adparm.compare`): e1 and tau of each joint.
+
+    The learning run (``adp``, with its probing) has its own column on the left, on a linear
+    time axis with the end of probing marked; the controllers that do not learn during the run
+    (``adp (learned)``, ``rise``, ``pd``, ``optimal``) share the right-hand column, each in its
+    own colour and line style (:data:`CONTROLLER_STYLES`). Without an ``adp`` row the figure has
+    the right-hand column only.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        The result of :func:`adparm.compare`.
+    time_scale : {"symlog", "linear"}
+        Time axis of the controllers' column: ``"symlog"`` (default) is linear up to 1 s and
+        logarithmic after, so that both the first second and the long run show.
+    ax : 2-d array of Axes, optional
+        Four rows (e1 of joints 1 and 2, tau of joints 1 and 2) and one column per group
+        (learning run, controllers), as ``fig.subplots(4, 2)`` returns.
+    fig : Figure, optional
+        Add the panels to this figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib
 
     if time_scale not in ("symlog", "linear"):
         raise ValueError(f"time_scale: expected 'symlog' or 'linear', got {time_scale!r}")
-    panels = [
-        ("e1", 0, "$e_{1,1}$ (rad)"),
-        ("e1", 1, "$e_{1,2}$ (rad)"),
-        ("tau", 0, "$\\tau_1$ (N m)"),
-        ("tau", 1, "$\\tau_2$ (N m)"),
-    ]
+    if ax is not None and fig is not None:
+        raise ValueError("ax, fig: give at most one of them")
     results = comparison.results
+    learning = {label: r for label, r in results.items() if label == "adp"}
+    others = {label: r for label, r in results.items() if label != "adp"}
+    groups = [g for g in (learning, others) if g]
+    rows = len(_COMPARE_PANELS)
     with matplotlib.rc_context(_RC):
-        figure = _figure(len(panels), figsize=(_FIGSIZE[0], 6.4))
-        colours = matplotlib.colormaps["tab10"].colors
-        for axes, (name, joint, ylabel) in zip(figure.axes, panels, strict=True):
-            for i, (label, result) in enumerate(results.items()):
-                reference = label == "optimal"  # black dashed, so that lines under it show
-                axes.plot(
-                    result.t,
-                    getattr(result, name)[:, joint],
-                    color="k" if reference else colours[i % len(colours)],
-                    lw=1.1 if reference else 0.9,
-                    ls="--" if reference else "-",
-                    label=label + ("" if result.status == "finished" else f" ({result.status})"),
+        if ax is not None:
+            grid = np.asarray(ax, dtype=object).reshape(rows, -1)
+            if grid.shape[1] != len(groups):
+                raise ValueError(
+                    f"ax: expected {rows} x {len(groups)} Axes (one column per group), "
+                    f"got {np.asarray(ax, dtype=object).shape}"
                 )
-            if "adp" in results:
-                _mark_probe_end(axes, results["adp"])
-            axes.set_ylabel(ylabel)
-        last = figure.axes[-1]
-        if time_scale == "symlog":
-            last.set_xscale("symlog", linthresh=1.0)
-        ends = [result.t[-1] for result in results.values() if result.t.size]
-        if ends and max(ends) > 0.0:
-            last.set_xlim(0.0, max(ends))
-        scale_note = ", linear to 1 s, then logarithmic" if time_scale == "symlog" else ""
-        last.set_xlabel(f"time t (s{scale_note})")
-        figure.axes[0].legend(
-            loc="lower center", bbox_to_anchor=(0.5, 1.0), ncols=min(len(results), 5)
-        )
-        figure.suptitle("Controllers compared: tracking errors and applied torques")
+            figure = grid[0, 0].figure
+        else:
+            if fig is None:
+                from matplotlib.figure import Figure
+
+                fig = Figure(figsize=(_WIDTH + 1.0 * (len(groups) - 1), 6.8), layout="constrained")
+            figure = fig
+            grid = figure.subplots(rows, len(groups), sharex="col", squeeze=False)
+            figure.suptitle("Controllers compared: tracking errors and applied torques")
+        for column, group in enumerate(groups):
+            is_learning = group is learning
+            for row, (name, joint, ylabel) in enumerate(_COMPARE_PANELS):
+                axes = grid[row, column]
+                for label, result in group.items():
+                    style = _LEARNING_STYLE if is_learning else CONTROLLER_STYLES.get(label, {})
+                    suffix = "" if result.status == "finished" else f" ({result.status})"
+                    axes.plot(
+                        result.t,
+                        getattr(result, name)[:, joint],
+                        label=label + suffix,
+                        **style,
+                    )
+                if is_learning:
+                    _mark_probe_end(axes, group["adp"], label=row == 0)
+                if column == 0:
+                    axes.set_ylabel(ylabel)
+                if row < rows - 1:
+                    axes.tick_params(labelbottom=False)
+            top, bottom = grid[0, column], grid[-1, column]
+            ends = [r.t[-1] for r in group.values() if r.t.size]
+            if is_learning:
+                bottom.set_xlabel("time t (s)")
+                if ends and max(ends) > 0.0:
+                    bottom.set_xlim(0.0, max(ends))
+            else:
+                if time_scale == "symlog":
+                    bottom.set_xscale("symlog", linthresh=1.0)
+                if ends and max(ends) > 0.0:
+                    bottom.set_xlim(0.0, max(ends))
+                note = ", linear to 1 s, then logarithmic" if time_scale == "symlog" else ""
+                bottom.set_xlabel(f"time t (s{note})")
+            top.legend(
+                title="learning run (with probing)"
+                if is_learning
+                else "learned and fixed controllers",
+                loc="lower center",
+                bbox_to_anchor=(0.5, 1.02),
+                ncols=min(len(group), 4),
+                borderaxespad=0.0,
+            )
     return figure
 
 
@@ -202,19 +546,61 @@ FIGURES = {
 }
 
 
-def plot_result(result: SimulationResult, which: Iterable[str] | None = None) -> dict[str, Figure]:
-    """The figures named in ``which`` (default all of FIGURES), by name."""
-    names = list(FIGURES) if which is None else list(which)
+def plot_result(
+    result: SimulationResult,
+    which: str | Iterable[str] | None = None,
+    *,
+    ax: Axes | Sequence[Axes] | None = None,
+    fig: Figure | None = None,
+) -> dict[str, Figure] | Figure:
+    """The figures of a run by name.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A run.
+    which : str or iterable of str, optional
+        Names from :data:`FIGURES`. A single name returns that figure alone; a list (or None,
+        all of them) returns a dict name -> Figure.
+    ax, fig : optional
+        Passed to the plot function; only with a single name in ``which``.
+
+    Returns
+    -------
+    Figure or dict of str to Figure
+    """
+    single = isinstance(which, str)
+    names = list(FIGURES) if which is None else [which] if single else list(which)
     unknown = [name for name in names if name not in FIGURES]
     if unknown:
         raise ValueError(f"which: unknown figure(s) {unknown}; known: {', '.join(FIGURES)}")
+    if not single and (ax is not None or fig is not None):
+        raise ValueError("ax, fig: name one figure in which (e.g. which='fig4_errors')")
+    if single:
+        return FIGURES[names[0]](result, ax=ax, fig=fig)
     return {name: FIGURES[name](result) for name in names}
 
 
 def save_figures(
     figures: dict[str, Figure], directory: str | Path, formats: Iterable[str] = ("png", "svg")
 ) -> list[Path]:
-    """Write each figure as ``<directory>/<name>.<format>``; returns the paths written."""
+    """Write each figure as ``<directory>/<name>.<format>``.
+
+    Parameters
+    ----------
+    figures : dict of str to Figure
+        As :meth:`adparm.SimulationResult.plot` returns.
+    directory : str or Path
+        Created if missing.
+    formats : iterable of str
+        Any format matplotlib writes (png, svg, pdf, ...). PNGs at 200 dpi; no creation dates,
+        so the same run writes the same files.
+
+    Returns
+    -------
+    list of Path
+        The paths written.
+    """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     written = []

@@ -230,12 +230,33 @@ class SimulationResult:
         out["wall_time"] = self.wall_time
         return out
 
-    def plot(self, which: Iterable[str] | None = None) -> dict[str, Figure]:
-        """Figures 2-4 of the paper and the torques, as matplotlib figures by name (see
-        adparm.plotting.FIGURES); ``which`` picks some of them."""
+    def plot(
+        self,
+        which: str | Iterable[str] | None = None,
+        *,
+        ax: Any = None,
+        fig: Figure | None = None,
+    ) -> dict[str, Figure] | Figure:
+        """Figures 2-4 of the paper and the torques (:func:`adparm.plotting.plot_result`).
+
+        Parameters
+        ----------
+        which : str or iterable of str, optional
+            Names from ``adparm.plotting.FIGURES`` (``fig2_critic_weights``,
+            ``fig3_actor_weights``, ``fig4_errors``, ``torques``). None (default) gives all of
+            them as a dict name -> Figure; a single name gives that Figure.
+        ax : Axes or sequence of Axes, optional
+            With a single name: draw into these axes (see :mod:`adparm.plotting`).
+        fig : Figure, optional
+            With a single name: add the panels to this figure.
+
+        Returns
+        -------
+        dict of str to Figure, or Figure
+        """
         from .plotting import plot_result
 
-        return plot_result(self, which)
+        return plot_result(self, which, ax=ax, fig=fig)
 
     def save(self, path: str | Path) -> Path:
         """Write to ``path``: ``.npz`` (everything, for adparm.load_result) or ``.csv``."""
