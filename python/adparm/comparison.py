@@ -2,8 +2,9 @@
 
 :func:`compare` runs ``adp`` (the online learning run as configured), ``adp (learned)`` (a second
 run from the same initial state that starts from the learning run's final weights, with probing
-off), ``rise`` (RISE feedback alone, u = 0), ``pd`` and ``optimal`` (u* = -R^-1 e2 of ERRATA.md),
-and tabulates the accumulated cost of eq. (10), tracking errors and torques of each run.
+off), ``rise`` (RISE feedback alone, u = 0), ``pd`` and ``optimal`` (u* = -R^-1 e2, the exact
+optimal policy), and tabulates the accumulated cost of eq. (10), tracking errors and torques of each
+run.
 
 The cost J = int_0^T x^T Q x + u^T R u charges the controller's input u only. The RISE term mu
 (``controller.rise``, on by default) also feeds back and rejects the disturbance, and its effort
@@ -165,9 +166,9 @@ class Comparison:
     - accumulated_cost: J = cost[-1], eq. (10);
     - cost_vs_optimal: J / J_optimal - 1; None when ``optimal`` did not run, did not finish or
       cost 0, and for a diverged run (its J covers a shorter time);
-    - rms_e1: sqrt(1/T int |e1|^2 dt) over the recorded rows (trapezoid rule), rad;
-    - final_e1: |e1| at the last row, rad;
-    - peak_torque: max |tau| over both joints and all rows, N m;
+    - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
+    - final_e1: ``|e1|`` at the last row, rad;
+    - peak_torque: max ``|tau|`` over both joints and all rows, N m;
     - t_end: the last recorded time (earlier than sim.T for a diverged run), s;
     - wall_time (s) and status (finished, diverged or interrupted) of the run."""
 

@@ -1,8 +1,9 @@
 """Configuration of a run: frozen dataclasses, one per TOML section, validated on construction.
 
-Every field has the paper's value (Section 4 of the paper, corrected by ERRATA.md) or, where the
-paper leaves a setting open, this project's documented choice. A key left out of a TOML file takes
-that default; an unknown section or key is refused with a "did you mean" hint.
+Every field has the paper's value (Section 4 of the paper, with the corrections of the docs page
+"The paper and its corrections") or, where the paper leaves a setting open, this project's
+documented choice. A key left out of a TOML file takes that default; an unknown section or key is
+refused with a "did you mean" hint.
 """
 
 from __future__ import annotations
@@ -519,10 +520,11 @@ class ControlConfig:
     """alpha1 of eq. (7) (the paper's "alpha") and the RISE gains of eqs. (27)-(28).
 
     -alpha1 must be Hurwitz (every eigenvalue of alpha1 with a positive real part), else the
-    error e1 of de1 = -alpha1 e1 + e2 grows; ERRATA's conditions (Q > 0) imply it.
+    error e1 of de1 = -alpha1 e1 + e2 grows; the conditions of the analytic optimum (Q > 0) imply
+    it.
 
     The paper prints no RISE gains. Defaults: ks = 10, alpha2 = 1, beta1 = 0.5, which satisfies
-    condition (29) for the paper's disturbance (|tau_d| <= 0.1, |dtau_d/dt| <= 0.1, so
+    condition (29) for the paper's disturbance (``|tau_d| <= 0.1``, ``|dtau_d/dt| <= 0.1``, so
     zeta1 + zeta2 / alpha2 = 0.2 < 0.5)."""
 
     alpha1: Matrix = ((15.6, 10.6), (10.6, 10.4))
@@ -540,7 +542,7 @@ class ControlConfig:
 
 
 #: The covariance-reset threshold used when critic.epsilon_T is left out (None).
-EPSILON_T_PROBING = 1e-6  # learning from the probing signal alone (README, "Probing")
+EPSILON_T_PROBING = 1e-6  # learning from the probing signal alone (docs: paper corrections)
 EPSILON_T_EXTRAPOLATION = 1e-3  # with Bellman-error extrapolation: the paper's printed value
 
 
@@ -551,13 +553,14 @@ class CriticConfig:
 
     Paper values, except that epsilon_T (paper: 1e-3) left out (None) depends on where the
     excitation comes from (Config.resolved_epsilon_T):
+
     - 1e-6 when the critic learns from the probing signal alone (no extrapolation points). With
       1e-3, Gamma is reset every few tens of ms under strong probing, each window is too short to
-      inform the weakly excited e1 direction, and the critic stalls 10-40 % off W* (README,
-      "Probing").
+      inform the weakly excited e1 direction, and the critic stalls 10-40 % off W* (docs: "The
+      paper and its corrections").
     - the printed 1e-3 with Bellman-error extrapolation. There the information grows steadily, and
       frequent resets keep the least-squares gain alive while the target (the value of the moving
-      actor) moves; with 1e-6 the gain decays and the critic can take minutes (README,
+      actor) moves; with 1e-6 the gain decays and the critic can take minutes (docs: user guide,
       "Bellman-error extrapolation")."""
 
     eta_c: float = 800.0
@@ -599,9 +602,10 @@ class ActorConfig:
 class InitConfig:
     """Initial critic and actor weights (8 each, in the basis order of adparm.BASIS_NAMES).
 
-    Not printed in the paper. All ones (ERRATA): the initial actor must stabilise the model, and
-    all-zero weights are inadmissible (omega = 0 at rest while the HJB error is x^T Q x > 0, so the
-    critic diverges within milliseconds; simulate() then raises SimulationDiverged)."""
+    Not printed in the paper. All ones: the initial actor must stabilise the model, and all-zero
+    weights are inadmissible (omega = 0 at rest while the HJB error is x^T Q x > 0, so the critic
+    diverges within milliseconds; simulate() then raises SimulationDiverged; docs: "The paper and
+    its corrections")."""
 
     critic_weights: Vector = (1.0,) * 8
     actor_weights: Vector = (1.0,) * 8
@@ -617,13 +621,13 @@ class ProbeConfig:
     probe_j(t) = ramp(t) sum_k amplitude_jk sin(frequencies_k t + phases_jk) for t < until,
     ramp(t) = min(1, t / ramp).
 
-    The paper says only that "a probing signal is added"; the design is ours (README, "Probing").
-    amplitude is one number (both joints), a pair (per joint, every sinusoid) or a 2 x n matrix
-    (per joint and sinusoid, N m). Default: 4 sinusoids at 1, 2.7, 5.3, 9.1 rad/s, each with the
-    torque direction [71, 23] N m = 75 N m along M(qd) v_fast, where v_fast is the eigenvector of
-    alpha1 with the larger eigenvalue (23.9 1/s): that mode of e1 is filtered hardest and is the
-    critic's least excited direction. Phases k rad on both joints (None), so each sinusoid keeps
-    that direction; until 100 s, no ramp; until = 0 turns probing off."""
+    The paper says only that "a probing signal is added"; the design is ours (docs: "The paper and
+    its corrections", excitation). amplitude is one number (both joints), a pair (per joint, every
+    sinusoid) or a 2 x n matrix (per joint and sinusoid, N m). Default: 4 sinusoids at 1, 2.7, 5.3,
+    9.1 rad/s, each with the torque direction [71, 23] N m = 75 N m along M(qd) v_fast, where v_fast
+    is the eigenvector of alpha1 with the larger eigenvalue (23.9 1/s): that mode of e1 is filtered
+    hardest and is the critic's least excited direction. Phases k rad on both joints (None), so each
+    sinusoid keeps that direction; until 100 s, no ramp; until = 0 turns probing off."""
 
     amplitude: Vector | Matrix = (71.0, 23.0)
     until: float = 100.0
@@ -673,7 +677,7 @@ EXTRAPOLATION_MODES = ("fixed", "grid", "local")
 class ControllerConfig:
     """Which input u the loop applies (tau = h_hat + mu - u, mu the RISE term):
     ``adp`` u = u_hat + probe (the paper; critic and actor learn), ``rise`` u = 0,
-    ``pd`` u = -(kp e1 + kd de1), ``optimal`` u = -R^-1 e2 (the exact optimal policy of ERRATA).
+    ``pd`` u = -(kp e1 + kd de1), ``optimal`` u = -R^-1 e2 (the exact optimal policy).
     Only adp learns and probes. ``rise = false`` drops the RISE term mu (not with kind rise).
     kp, kd: a number (times I) or a 2 x 2 matrix, used by pd only (our choice 50 and 10).
 
@@ -761,10 +765,10 @@ class ExtrapolationConfig:
 @dataclass(frozen=True)
 class SimConfig:
     """Fixed-step RK4: horizon T (s), step dt (s), record every record_every-th step, and the
-    bound on |q|, |dq|, |Wc|, |Wa| beyond which a run stops as diverged. The paper prints no step;
-    dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T is not a
-    multiple of dt, the last step is shortened to end exactly at T. At most 1e10 steps (T / dt);
-    1 <= record_every <= MAX_RECORD_EVERY = 10^10."""
+    bound on ``|q|``, ``|dq|``, ``|Wc|``, ``|Wa|`` beyond which a run stops as diverged. The paper
+    prints no step; dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T
+    is not a multiple of dt, the last step is shortened to end exactly at T. At most 1e10 steps (T /
+    dt); 1 <= record_every <= MAX_RECORD_EVERY = 10^10."""
 
     T: float = 150.0
     dt: float = 1e-3
@@ -923,7 +927,7 @@ def _plain(value: Any) -> Any:
 
 
 def paper_config() -> Config:
-    """The paper's instance (Section 4, ERRATA-corrected) with our documented open choices."""
+    """The paper's instance (Section 4, corrected) with our documented open choices."""
     return Config()
 
 

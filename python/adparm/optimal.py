@@ -1,4 +1,4 @@
-"""The analytic optimal solution of ERRATA.md and the HJB residual of eq. (21)."""
+"""The analytic optimum V*, W* (docs: "The paper and its corrections") and the HJB residual (21)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ __all__ = [
     "solvable_cost",
 ]
 
-#: The paper's basis phi(x), x = [e1; e2] (ERRATA ordering).
+#: The paper's basis phi(x), x = [e1; e2] (the order of W*).
 BASIS_NAMES = (
     "x1^2",
     "x2^2",
@@ -92,7 +92,7 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
 
 def solvable_cost(K: Any, alpha1: Any, R: Any) -> np.ndarray:
     """The state weight Q (4 x 4) for which V* = x^T blockdiag(K, M(q)) x is the exact HJB
-    solution (ERRATA): Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1. Use it with
+    solution: Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1. Use it with
     ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is known. K must be
     symmetric positive definite; raises ValueError if the resulting Q is not positive definite
     (then cost.Q would be refused)."""
@@ -163,8 +163,8 @@ def initial_error_state(config: Config) -> np.ndarray:
 
 
 def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
-    """V*(x) = e1^T K e1 + e2^T M(q) e2 (ERRATA), q = qd(t) - e1 on the believed model: the
-    optimal cost-to-go of eq. (10) from x for the disturbance-free error system, when the
+    """V*(x) = e1^T K e1 + e2^T M(q) e2 (the exact HJB solution), q = qd(t) - e1 on the believed
+    model: the optimal cost-to-go of eq. (10) from x for the disturbance-free error system, when the
     conditions of :func:`optimal_weights` hold (it raises ValueError otherwise). ``x`` defaults to
     the initial error state of ``config``."""
     weights = optimal_weights(config)

@@ -293,10 +293,10 @@ def plot_critic_weights(
     Returns
     -------
     matplotlib.figure.Figure
-        Top: each weight over time with the analytic W* as black dashes (values in the
-        legend; markers tell apart weights whose curves coincide). If a transient would squeeze the final values into a thin band, the y axis is
-        limited to the range that matters and the panel says how far the transient went.
-        Bottom: the relative error on a log scale, with the 2 % line.
+        Top: each weight over time with the analytic W* as black dashes (values in the legend;
+        markers tell apart weights whose curves coincide). If a transient would squeeze the final
+        values into a thin band, the y axis is limited to the range that matters and the panel says
+        how far the transient went. Bottom: the relative error on a log scale, with the 2 % line.
     """
     return _weights_figure(
         result,
@@ -360,14 +360,14 @@ def plot_errors(
     ax: Axes | Sequence[Axes] | None = None,
     fig: Figure | None = None,
 ) -> Figure:
-    """Figure 4: joint angles q, tracking errors e1 = qd - q and e2, and |e1| on a log scale.
+    """Figure 4: joint angles q, tracking errors e1 = qd - q and e2, and ``|e1|`` on a log scale.
 
     Parameters
     ----------
     result : SimulationResult
         A run.
     ax : Axes or sequence of Axes, optional
-        Up to four Axes, for q, e1, e2 and |e1| (log scale) in this order.
+        Up to four Axes, for q, e1, e2 and ``|e1|`` (log scale) in this order.
     fig : Figure, optional
         Add the four panels to this figure.
 

@@ -29,7 +29,7 @@ __all__ = [
 #: The paper: "The value of Wc after 110 s is [...]" (Section 4).
 PAPER_CLAIM_TIME = 110.0
 
-# Values printed in Section 4 of the paper (ERRATA-corrected where the print is wrong).
+# Values printed in Section 4 of the paper (corrected where the print is wrong).
 _PAPER_PRINTED: dict[str, Any] = {
     "plant.p1": 5.0,
     "plant.p2": 1.0,
@@ -77,7 +77,7 @@ _REASONS: dict[str, str] = {
     "control.alpha2": "Not printed; see control.ks.",
     "control.beta1": "Not printed; beta1 = 0.5 > zeta1 + zeta2 / alpha2 = 0.2 (condition 29).",
     "init": (
-        "Not printed; all ones. Zero weights are inadmissible (ERRATA): the critic diverges "
+        "Not printed; all ones. Zero weights are inadmissible: the critic diverges "
         "within milliseconds."
     ),
     "task.dq0": "Not printed; the arm starts at rest.",
