@@ -1,7 +1,7 @@
 """Every ```python block of README.md and of the documentation pages (docs/**/*.md) runs as
 written: each file's blocks in order, in one namespace, in a fresh working directory in which the
 repository's examples/ folder is available as examples/. Blocks in other languages (text, sh,
-toml) are not run."""
+toml) are not run. The examples in the public docstrings run too (doctest)."""
 
 from __future__ import annotations
 
@@ -70,3 +70,12 @@ def test_python_blocks_run(path: Path, tmp_path: Path, monkeypatch: pytest.Monke
     import matplotlib.pyplot as plt
 
     plt.close("all")
+
+
+@pytest.mark.parametrize("module", ["adparm.optimal", "adparm.physical", "adparm.simulation"])
+def test_docstring_examples_run(module: str) -> None:
+    import doctest
+    import importlib
+
+    failures, tried = doctest.testmod(importlib.import_module(module))
+    assert tried > 0 and failures == 0

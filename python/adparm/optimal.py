@@ -36,11 +36,34 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     """The exact weights W* of V*(x) = x^T blockdiag(K, M(q)) x in the paper's basis.
 
     They exist when K = -Q12 is symmetric positive definite, Q11 = K alpha1 + alpha1^T K and
-    Q22 = R^-1 (to relative tolerance rtol), for any desired trajectory with the augmented basis
-    and for a set-point with qd2 = 0 with the paper's basis (cos x2 = cos q2 there). Then
-    u* = -R^-1 e2 and W* = [K11, K22, 2 K12, p1, 2 p3, p2, 2 p2, 2 p3] with p of the arm the
-    controller believes ([model], default the plant). Otherwise raises ValueError naming the
-    condition that fails."""
+    Q22 = R^-1, for any desired trajectory with the augmented basis and for a set-point with
+    qd2 = 0 with the paper's basis (cos x2 = cos q2 there). Then u* = -R^-1 e2.
+
+    Parameters
+    ----------
+    config : Config
+        Cost, alpha1, basis, task and the arm the controller believes ([model], by default the
+        plant).
+    rtol : float, optional
+        Relative tolerance of the conditions on Q.
+
+    Returns
+    -------
+    ndarray, shape (8,)
+        W* = [K11, K22, 2 K12, p1, 2 p3, p2, 2 p2, 2 p3], in the order of ``BASIS_NAMES``; for
+        the paper's example [4, 6, -8, 5, 2, 1, 2, 2].
+
+    Raises
+    ------
+    ValueError
+        Naming the condition that fails, when the analytic solution does not apply.
+
+    Examples
+    --------
+    >>> import adparm
+    >>> adparm.optimal_weights(adparm.paper_config())
+    array([ 4.,  6., -8.,  5.,  2.,  1.,  2.,  2.])
+    """
     if not isinstance(config, Config):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     Q = np.array(config.cost.Q)
@@ -91,11 +114,31 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
 
 
 def solvable_cost(K: Any, alpha1: Any, R: Any) -> np.ndarray:
-    """The state weight Q (4 x 4) for which V* = x^T blockdiag(K, M(q)) x is the exact HJB
-    solution: Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1. Use it with
-    ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is known. K must be
-    symmetric positive definite; raises ValueError if the resulting Q is not positive definite
-    (then cost.Q would be refused)."""
+    """The state weight Q for which V* = x^T blockdiag(K, M(q)) x is the exact HJB solution.
+
+    Use it with ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is
+    known.
+
+    Parameters
+    ----------
+    K : array_like, shape (2, 2)
+        Symmetric positive definite: the e1 block of V*.
+    alpha1 : array_like, shape (2, 2)
+        The gain in e2 = de1 + alpha1 e1.
+    R : array_like, shape (2, 2)
+        The input weight.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        Q with Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1.
+
+    Raises
+    ------
+    ValueError
+        If an input has the wrong shape or is not finite, K is not symmetric positive definite,
+        or the resulting Q is not positive definite (then cost.Q would be refused).
+    """
     K, alpha1, R = (np.asarray(v, dtype=float) for v in (K, alpha1, R))
     for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
         if value.shape != (2, 2) or not np.all(np.isfinite(value)):
@@ -127,10 +170,25 @@ def _weights(value: Any, name: str) -> np.ndarray:
 def hjb_residual(
     config: Config, x: Any, critic_weights: Any, actor_weights: Any, *, t: float = 0.0
 ) -> np.ndarray | float:
-    """The HJB error of eq. (21) at x = [e1; e2], computed by the C++ core with the cost, alpha1,
-    basis and believed arm of ``config`` and the desired state (qd, dqd) at time ``t``. ``x`` is
-    one state (4,) or a batch (..., 4); the result has x's leading shape (a float for one
-    state)."""
+    """The HJB error of eq. (21) at states x = [e1; e2], computed by the C++ core.
+
+    Parameters
+    ----------
+    config : Config
+        Cost, alpha1, basis and the arm the controller believes.
+    x : array_like, shape (4,) or (..., 4)
+        One state or a batch.
+    critic_weights, actor_weights : array_like, shape (8,)
+        Wc and Wa, in the order of ``BASIS_NAMES``.
+    t : float, optional
+        Time at which the desired state (qd, dqd) is taken.
+
+    Returns
+    -------
+    float or ndarray
+        A float for one state, else an array of x's leading shape. At Wc = Wa = W* it vanishes
+        to round-off at every state.
+    """
     try:
         states = np.asarray(x, dtype=float)
     except (TypeError, ValueError) as error:
@@ -163,10 +221,29 @@ def initial_error_state(config: Config) -> np.ndarray:
 
 
 def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
-    """V*(x) = e1^T K e1 + e2^T M(q) e2 (the exact HJB solution), q = qd(t) - e1 on the believed
-    model: the optimal cost-to-go of eq. (10) from x for the disturbance-free error system, when the
-    conditions of :func:`optimal_weights` hold (it raises ValueError otherwise). ``x`` defaults to
-    the initial error state of ``config``."""
+    """The optimal value V*(x) = e1^T K e1 + e2^T M(q) e2, with q = qd(t) - e1.
+
+    The optimal cost-to-go of eq. (10) from x for the disturbance-free error system, on the
+    believed arm, when the conditions of :func:`optimal_weights` hold.
+
+    Parameters
+    ----------
+    config : Config
+        The instance.
+    x : array_like, shape (4,), optional
+        The error state; default the initial error state of ``config``.
+    t : float, optional
+        Time at which qd is taken.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        If the analytic solution does not apply (see :func:`optimal_weights`).
+    """
     weights = optimal_weights(config)
     x = initial_error_state(config) if x is None else x
     # V* = W*^T phi(x, qd) in the augmented basis, exactly

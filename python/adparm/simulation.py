@@ -170,12 +170,44 @@ _ARRAYS_N = ("critic_weights", "actor_weights")
 class SimulationResult:
     """One closed-loop run, one row per recorded step (all arrays read-only).
 
-    t (n,) s; q, dq (n, 2) rad, rad/s; qd (n, 2) desired position; e1 = qd - q,
-    e2 = de1 + alpha1 e1 (n, 2); tau (n, 2) applied torque N m; u (n, 2) the controller's input
-    (adp: u_hat + probe); u_hat (n, 2) actor input (eq. 20); mu (n, 2) RISE term (eq. 27);
-    probe (n, 2) probing signal; critic_weights, actor_weights (n, 8) in the order of
-    adparm.BASIS_NAMES; hjb_error (n,) eq. (21); cost (n,) accumulated cost of eq. (10),
-    int_0^t x^T Q x + u^T R u, integrated by RK4 with the state; covariance_reset_times (k,) s.
+    Returned by :func:`adparm.simulate`; ``.plot()``, ``.save()``, ``.summary()`` and
+    ``.to_dataframe()`` present it.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time (s).
+    q, dq : ndarray, shape (n, 2)
+        Joint angles (rad) and velocities (rad/s).
+    qd : ndarray, shape (n, 2)
+        Desired joint angles (rad).
+    e1, e2 : ndarray, shape (n, 2)
+        Tracking error e1 = qd - q (rad) and filtered error e2 = de1 + alpha1 e1 (rad/s).
+    tau : ndarray, shape (n, 2)
+        Applied torque tau = h_hat + mu - u (N m).
+    u : ndarray, shape (n, 2)
+        The controller's input (adp: u_hat + probe).
+    u_hat : ndarray, shape (n, 2)
+        The actor's input (eq. 20).
+    mu : ndarray, shape (n, 2)
+        The RISE term (eq. 27).
+    probe : ndarray, shape (n, 2)
+        The probing signal.
+    critic_weights, actor_weights : ndarray, shape (n, 8)
+        Wc and Wa, in the order of ``adparm.BASIS_NAMES``.
+    hjb_error : ndarray, shape (n,)
+        The HJB error of eq. (21).
+    cost : ndarray, shape (n,)
+        Accumulated cost of eq. (10), the integral of x^T Q x + u^T R u, integrated by RK4 with
+        the state.
+    covariance_reset_times : ndarray, shape (k,)
+        Times (s) at which Gamma was reset.
+    config : Config
+        The configuration of the run.
+    status : str
+        ``"finished"``, ``"diverged"``, ``"interrupted"`` or ``"running"``.
+    wall_time : float
+        Seconds spent in the core.
     """
 
     t: np.ndarray
@@ -399,9 +431,35 @@ def _check_memory(configs: list[Config]) -> None:
 def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
     """Simulate the closed loop of ``config`` in the C++ core (fixed-step RK4).
 
-    ``progress=True`` shows a tqdm progress bar in simulated seconds. Raises SimulationDiverged
-    (with the partial result) if the state diverges, and SimulationInterrupted (with the rows
-    recorded so far) on Ctrl-C, which is acted on between two chunks of about CALL_SECONDS."""
+    Parameters
+    ----------
+    config : Config
+        The run: arm, task, cost, controller and its gains, horizon (``adparm.paper_config()``
+        is the paper's example).
+    progress : bool, optional
+        Show a tqdm progress bar in simulated seconds.
+
+    Returns
+    -------
+    SimulationResult
+        One row per recorded step (every ``sim.record_every``-th step, and the last).
+
+    Raises
+    ------
+    SimulationDiverged
+        If the state or a recorded output becomes non-finite or leaves
+        ``sim.divergence_bound``; ``.result`` holds the rows up to the last finite step.
+    SimulationInterrupted
+        On Ctrl-C, which is acted on between two chunks of about ``CALL_SECONDS``; ``.result``
+        holds the rows recorded so far.
+
+    Examples
+    --------
+    >>> import adparm
+    >>> result = adparm.simulate(adparm.paper_config().updated({"sim": {"T": 1.0}}))
+    >>> result.status, result.t[-1]
+    ('finished', np.float64(1.0))
+    """
     settings = core_settings(config)
     _check_memory([config])
     run = _core.Simulation(settings)
@@ -462,17 +520,38 @@ def simulate_batch(
     progress: bool = False,
     on_divergence: str = "raise",
 ) -> list[SimulationResult]:
-    """Simulate many independent runs in parallel C++ threads; one result per config, in order.
+    """Simulate many independent runs on parallel C++ threads; one result per config, in order.
 
-    Each run gives bit-for-bit the result of ``simulate(config)``, whatever ``threads`` is (None:
-    every CPU this process may use). ``wall_time`` of each result is the time spent advancing that
-    run. ``progress=True`` shows a tqdm bar in steps over all runs. Every run's recording is held
-    in memory (about 4.7 MB for a 150 s run at the default sim.record_every = 10); for
-    thousands of runs, see :func:`adparm.sweep`, which keeps only summary rows. ``on_divergence``:
-    ``"raise"`` (default) lets every run end, then raises SimulationDiverged for the first run
-    that diverged, with ``.index`` and ``.results`` (all results); ``"keep"`` returns the
-    results, the diverged ones with ``status == "diverged"`` and their partial rows. Ctrl-C
-    raises SimulationInterrupted, whose ``.result`` lists every run's result so far."""
+    Each run gives bit-for-bit the result of ``simulate(config)``, whatever the thread count.
+    Every run's recording is held in memory (about 4.7 MB for a 150 s run at the default
+    ``sim.record_every = 10``); for thousands of runs, :func:`adparm.sweep` keeps only summary
+    rows.
+
+    Parameters
+    ----------
+    configs : iterable of Config
+        The runs.
+    threads : int, optional
+        Number of threads; None (default) uses every CPU this process may run on.
+    progress : bool, optional
+        Show a tqdm bar in steps over all runs.
+    on_divergence : {"raise", "keep"}
+        ``"raise"`` (default) lets every run end, then raises SimulationDiverged for the first
+        run that diverged, with ``.index`` and ``.results`` (all results); ``"keep"`` returns
+        the results, the diverged ones with ``status == "diverged"`` and their partial rows.
+
+    Returns
+    -------
+    list of SimulationResult
+        ``wall_time`` of each is the time spent advancing that run.
+
+    Raises
+    ------
+    SimulationDiverged
+        With ``on_divergence="raise"``, if a run diverged.
+    SimulationInterrupted
+        On Ctrl-C; ``.result`` lists every run's result so far.
+    """
     if isinstance(configs, Config):
         raise TypeError("configs: expected an iterable of adparm.Config, got one Config")
     configs = list(configs)
