@@ -100,7 +100,10 @@ DESCRIPTIONS = {
     ("sim", "T"): "Horizon (s).",
     ("sim", "dt"): "RK4 step (s).",
     ("sim", "record_every"): "Record every n-th step.",
-    ("sim", "divergence_bound"): "The run stops as diverged when |q|, |dq|, |Wc| or |Wa| "
+    (
+        "sim",
+        "divergence_bound",
+    ): "The run stops as diverged when ``|q|``, ``|dq|``, ``|Wc|`` or ``|Wa|`` "
     "exceeds this value, or a state or recorded output is not finite.",
 }
 
