@@ -200,6 +200,19 @@ def test_plot_draws_into_given_axes_and_figures(short_result) -> None:
         short_result.plot("torques", ax=single, fig=target)
 
 
+def test_weights_figure_without_known_optimum_shows_the_settling() -> None:
+    config = adparm.paper_config().updated({"cost": {"Q": np.eye(4).tolist()}, "sim": {"T": 1.0}})
+    result = adparm.simulate(config)
+    panel, error_panel = result.plot("fig2_critic_weights").axes
+    assert not [line for line in panel.get_lines() if line.get_color() == "k"]  # no W* lines
+    assert error_panel.get_yscale() == "log"
+    assert "no analytic W*" in error_panel.get_legend().get_texts()[0].get_text()
+    change = error_panel.get_lines()[0].get_ydata()
+    final = result.critic_weights[-1]
+    expected = np.linalg.norm(result.critic_weights[:-1] - final, axis=1) / np.linalg.norm(final)
+    np.testing.assert_allclose(change, np.maximum(expected, 1e-16), rtol=1e-15)
+
+
 def test_probe_end_is_marked_and_labelled() -> None:
     config = adparm.paper_config().updated({"probe": {"until": 1.0}, "sim": {"T": 2.0}})
     figure = adparm.simulate(config).plot("fig2_critic_weights")
