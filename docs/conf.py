@@ -63,4 +63,5 @@ sphinx_gallery_conf = {
     "reset_modules": ("matplotlib",),
     "show_memory": False,
     "plot_gallery": "True",
+    "capture_repr": (),  # no "<Figure ...>" lines under the figures
 }

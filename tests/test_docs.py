@@ -72,7 +72,9 @@ def test_python_blocks_run(path: Path, tmp_path: Path, monkeypatch: pytest.Monke
     plt.close("all")
 
 
-@pytest.mark.parametrize("module", ["adparm.optimal", "adparm.physical", "adparm.simulation"])
+@pytest.mark.parametrize(
+    "module", ["adparm.config", "adparm.optimal", "adparm.physical", "adparm.simulation"]
+)
 def test_docstring_examples_run(module: str) -> None:
     import doctest
     import importlib

@@ -232,16 +232,39 @@ def compare(
     *,
     progress: bool = False,
 ) -> Comparison:
-    """Run ``config`` under each controller kind of ``kinds`` (adp, rise, pd, optimal) on the same
-    arm, task and initial state; only controller.kind changes.
+    """Run ``config`` under several controllers on the same arm, task and initial state.
 
-    ``adp`` gives two rows: ``"adp"``, the online learning run exactly as configured (probing
-    included), and ``"adp (learned)"``, a second run from the same initial state whose critic and
-    actor start at the learning run's final weights, with probing off (probe.until = 0) and
-    learning still on. A run that diverges is kept, with status "diverged" and its partial result.
-    Raises ValueError for an unknown or repeated kind (with a "did you mean" hint), or for
-    ``rise`` when controller.rise is false. Ctrl-C raises SimulationInterrupted, whose ``.result``
-    is the Comparison of the runs so far (the one interrupted with status "interrupted")."""
+    Only ``controller.kind`` changes between the runs. A run that diverges is kept, with status
+    "diverged" and its partial result.
+
+    Parameters
+    ----------
+    config : Config
+        The shared settings.
+    kinds : str or sequence of str, optional
+        Controller kinds among ``adp``, ``rise``, ``pd`` and ``optimal`` (default all four).
+        ``adp`` gives two rows: ``"adp"``, the online learning run exactly as configured
+        (probing included), and ``"adp (learned)"``, a second run from the same initial state
+        whose critic and actor start at the learning run's final weights, with probing off and
+        learning still on.
+    progress : bool, optional
+        Show a progress bar.
+
+    Returns
+    -------
+    Comparison
+        ``.results`` (label -> SimulationResult), ``.rows`` (cost, errors, torque, wall time),
+        ``.plot()``, ``.save()``, ``.to_dataframe()``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown or repeated kind (with a "did you mean" hint), or for ``rise`` when
+        ``controller.rise`` is false.
+    SimulationInterrupted
+        On Ctrl-C; ``.result`` is the Comparison of the runs so far (the one interrupted with
+        status "interrupted").
+    """
     configs = _controller_configs(config, kinds)
     results: dict[str, SimulationResult] = {}
     label = ""

@@ -819,7 +819,41 @@ def _hint(name: str, choices: Sequence[str]) -> str:
 
 @dataclass(frozen=True)
 class Config:
-    """A whole run. ``Config()`` and :func:`paper_config` are the paper's instance."""
+    """A whole run: one frozen, checked section per TOML table.
+
+    ``Config()`` and :func:`paper_config` are the paper's instance. Change it with
+    :meth:`updated` (a copy), build one with :meth:`from_dict`, or read a TOML file with
+    :func:`load_config`; :meth:`to_toml` writes one back. The docs page "Configuration
+    reference" lists every field with its default and meaning.
+
+    Attributes
+    ----------
+    plant, model : PlantConfig, ModelConfig
+        The simulated arm and the arm the controller believes (default: the plant).
+    task : TaskConfig
+        Initial state and desired trajectory.
+    cost : CostConfig
+        Q and R of the cost (eqs. 10-11).
+    control : ControlConfig
+        alpha1 and the RISE gains.
+    critic, actor, init : CriticConfig, ActorConfig, InitConfig
+        The learning laws (eqs. 23-26) and the initial weights.
+    probe : ProbeConfig
+        The probing signal.
+    controller : ControllerConfig
+        Controller kind (adp, rise, pd, optimal) and basis.
+    extrapolation : ExtrapolationConfig
+        Bellman-error extrapolation points.
+    sim : SimConfig
+        Horizon, step, recording and divergence bound.
+
+    Examples
+    --------
+    >>> import adparm
+    >>> config = adparm.paper_config().updated({"critic": {"eta_c": 100.0}})
+    >>> config.critic.eta_c, config.sim.T
+    (100.0, 150.0)
+    """
 
     plant: PlantConfig = field(default_factory=PlantConfig)
     model: ModelConfig = field(default_factory=ModelConfig)

@@ -232,19 +232,43 @@ def sweep(
 ) -> SweepResult:
     """Run ``base_config`` at every point of ``grid`` and tabulate the summary metrics.
 
-    ``grid`` maps 'section.key' to the values to try, e.g. ``{"critic.eta_c": [100, 800],
-    "probe.amplitude": [[50, 20], [71, 23]], "task.q0": [[0.1, 0.2], [0.5, -0.3]]}``; the
-    points are all combinations (the last key varies fastest). It can also be a list of points
-    with the same keys, e.g. ``[{"task.q0": q0} for q0 in draws]`` for a Monte Carlo study.
-    Every point's config is built and checked before anything runs.
+    Every point's config is built and checked before anything runs. Runs that diverge are kept
+    as rows with status "diverged".
 
-    Without ``executor`` the runs go through :func:`adparm.simulate_batch` on ``threads``
-    threads. With one (``submit``-style, e.g. ``ProcessPoolExecutor()`` or a dask
-    ``Client(...).get_executor()``) each point is one task and ``threads`` is not used (the
-    executor sets the parallelism). Runs that diverge are kept as rows with status "diverged".
-    ``tolerance`` is that of the time-within-tolerance metrics. Ctrl-C raises
-    SimulationInterrupted, whose ``.result`` is the SweepResult of the points done so far (an
-    executor's tasks not yet started are cancelled)."""
+    Parameters
+    ----------
+    base_config : Config
+        The settings shared by every point.
+    grid : mapping or sequence of mappings
+        Either ``{"section.key": [values...]}``, e.g. ``{"critic.eta_c": [100, 800],
+        "task.q0": [[0.1, 0.2], [0.5, -0.3]]}``, run at every combination (the last key varies
+        fastest); or a list of points with the same keys, e.g.
+        ``[{"task.q0": q0} for q0 in draws]`` for a Monte Carlo study, run as given.
+    executor : concurrent.futures-style executor, optional
+        Without one, the runs go through :func:`adparm.simulate_batch` on ``threads`` threads.
+        With one (anything with ``submit``, e.g. ``ProcessPoolExecutor()`` or a dask
+        ``Client(...).get_executor()``) each point is one task, and the executor sets the
+        parallelism.
+    threads : int, optional
+        Threads of the in-process run; default every CPU this process may use.
+    tolerance : float, optional
+        Tolerance of the time-within-tolerance metrics (default 0.02).
+    progress : bool, optional
+        Show a progress bar.
+
+    Returns
+    -------
+    SweepResult
+        One row per point: the point's values, then status, t_end, the critic's and actor's
+        relative errors (at the end and at 110 s), the time from which each stays within
+        ``tolerance``, final ``|e1|``, accumulated cost, covariance resets and wall time.
+
+    Raises
+    ------
+    SimulationInterrupted
+        On Ctrl-C; ``.result`` is the SweepResult of the points done so far (an executor's
+        tasks not yet started are cancelled).
+    """
     if not isinstance(base_config, Config):
         raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
     if not 0.0 < tolerance < 1.0:
