@@ -55,7 +55,7 @@ def test_paper_values() -> None:
     assert c.control.alpha1 == ((15.6, 10.6), (10.6, 10.4))
     assert (c.critic.eta_c, c.critic.nu, c.critic.gamma0) == (800, 1, 100)
     assert c.critic.epsilon_T is None
-    assert c.resolved_epsilon_T == 1e-6  # our deviation from the printed 1e-3 (README)
+    assert c.resolved_epsilon_T == 1e-6  # our deviation from the printed 1e-3 (docs/paper.md)
     assert c.updated({"extrapolation": {"points": 10}}).resolved_epsilon_T == 1e-3  # printed
     assert c.updated({"critic": {"epsilon_T": 0.5}}).resolved_epsilon_T == 0.5
     assert (c.controller.kind, c.controller.basis, c.controller.rise) == ("adp", "augmented", True)
