@@ -207,6 +207,13 @@ def test_comparison_draws_into_given_axes(short_comparison) -> None:
         short_comparison.plot(ax=Figure().subplots(4, 1))
 
 
+def test_comparison_without_a_learning_run_has_one_column() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 0.5}})
+    figure = adparm.compare(config, kinds=["pd", "optimal"]).plot()
+    assert len(figure.axes) == 4
+    assert [line.get_label() for line in figure.axes[0].get_lines()] == ["pd", "optimal"]
+
+
 def test_cli_compare_writes_the_table_and_files(tmp_path, capsys) -> None:
     out = tmp_path / "cmp"
     args = ["compare", "--out", str(out), "--T", "1", "--no-progress", "--formats", "png"]
