@@ -1,7 +1,8 @@
 """Sphinx directive ``config-reference``: the table of every configuration field, generated
 from adparm's config dataclasses (section, key and default come from the code; the meaning from
-DESCRIPTIONS below). A field without a description, or a description without a field, is a
-warning, so ``sphinx-build -W`` fails until the table is complete and true."""
+the field's ``metadata["doc"]`` if it has one, else from DESCRIPTIONS below). A field without a
+description, or a description without a field, is a warning, so ``sphinx-build -W`` fails until
+the table is complete and true."""
 
 from __future__ import annotations
 
@@ -165,7 +166,7 @@ class ConfigReference(Directive):
             lines += ["   * - key", "     - default", "     - meaning"]
             for field in dataclasses.fields(instance):
                 seen.add((section, field.name))
-                description = DESCRIPTIONS.get((section, field.name))
+                description = field.metadata.get("doc") or DESCRIPTIONS.get((section, field.name))
                 if description is None:
                     logger.warning(
                         f"config-reference: {section}.{field.name} has no description in "
