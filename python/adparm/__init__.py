@@ -31,6 +31,7 @@ from .optimal import (
     optimal_value,
     optimal_weights,
     solvable_cost,
+    value_scale,
 )
 from .report import write_report
 from .simulation import (
@@ -44,12 +45,14 @@ from .simulation import (
 )
 from .storage import load_result
 from .sweep import SweepResult, grid_points, sweep
+from .truth import ApproximationWarning, diagnose, lqr_value, optimal_cost
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BASIS_NAMES",
     "ActorConfig",
+    "ApproximationWarning",
     "Comparison",
     "Config",
     "ControlConfig",
@@ -71,12 +74,15 @@ __all__ = [
     "TaskConfig",
     "compare",
     "desired_state",
+    "diagnose",
     "extrapolation_points",
     "grid_points",
     "hjb_residual",
     "initial_error_state",
     "load_config",
     "load_result",
+    "lqr_value",
+    "optimal_cost",
     "optimal_value",
     "optimal_weights",
     "paper_config",
@@ -84,5 +90,6 @@ __all__ = [
     "simulate_batch",
     "solvable_cost",
     "sweep",
+    "value_scale",
     "write_report",
 ]
