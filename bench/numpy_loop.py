@@ -56,9 +56,10 @@ def _arm(p: tuple[float, ...], q: np.ndarray, dq: np.ndarray):
 
 
 def keep_e2_block_positive(W, rate, margin, metric):
-    """adparm's projection (positive_block.hpp): the e2 block P(c) of W, c = +-1, keeps
-    lambda_min >= margin; rate - metric N mu over the active constraints (at most two)."""
-    normals = []
+    """adparm's projection (positive_block.hpp): where lambda_min of the e2 block P(c) of W,
+    c = +-1, is at or below margin, d lambda_min / dt >= 100 (margin - lambda_min), by
+    rate + metric N mu over the active constraints (at most two)."""
+    normals, floors = [], []
     for c in (1.0, -1.0):
         b = 0.5 * (W[6] + c * W[7])
         values, vectors = np.linalg.eigh(np.array([[W[3] + c * W[4], b], [b, W[5]]]))
@@ -67,15 +68,17 @@ def keep_e2_block_positive(W, rate, margin, metric):
         n[3:8] = [v[0] ** 2, c * v[0] ** 2, v[1] ** 2, v[0] * v[1], c * v[0] * v[1]]
         if values[0] <= margin:
             normals.append(n)
-    if all(n @ rate >= 0.0 for n in normals):
+            floors.append(100.0 * (margin - values[0]))
+    pairs = list(zip(normals, floors, strict=True))
+    if all(n @ rate >= f for n, f in pairs):
         return rate
-    for n in normals:  # one constraint
-        if n @ rate < 0.0:
-            projected = rate - (n @ rate) / (n @ metric @ n) * (metric @ n)
-            if all(m @ projected >= 0.0 for m in normals if m is not n):
+    for n, f in pairs:  # one constraint
+        if n @ rate < f:
+            projected = rate + (f - n @ rate) / (n @ metric @ n) * (metric @ n)
+            if all(m @ projected >= g for m, g in pairs if m is not n):
                 return projected
     N = np.array(normals).T
-    return rate - metric @ N @ np.linalg.solve(N.T @ metric @ N, N.T @ rate)
+    return rate + metric @ N @ np.linalg.solve(N.T @ metric @ N, np.array(floors) - N.T @ rate)
 
 
 class NumpyPaperLoop:

@@ -249,14 +249,19 @@ def e2_block(W: np.ndarray, c: float) -> np.ndarray:
     return np.array([[W[3] + c * W[4], b], [b, W[5]]])
 
 
+#: positive_block.hpp's kE2Recovery (1/s)
+E2_RECOVERY = 100.0
+
+
 def keep_e2_block_positive(
     W: np.ndarray, rate: np.ndarray, margin: float, metric: np.ndarray | None = None
 ) -> np.ndarray:
-    """The least change of ``rate`` (in the metric's inverse norm: rate - metric N mu, mu >= 0)
-    that does not lower lambda_min(P(+-1)) once it is at or below ``margin``: eigh for the
-    gradient of lambda_min, every active set tried by brute force."""
+    """The least change of ``rate`` (rate + metric N lambda, lambda >= 0) that gives
+    d lambda_min(P(c)) / dt >= E2_RECOVERY (margin - lambda_min) at c = +-1 wherever
+    lambda_min <= margin: eigh for the gradient of lambda_min, every active set tried by brute
+    force, the candidate nearest to ``rate`` in the metric's inverse kept."""
     metric = np.eye(8) if metric is None else metric
-    normals = []
+    normals, floors = [], []
     for c in (1.0, -1.0):
         values, vectors = np.linalg.eigh(e2_block(W, c))
         if values[0] <= margin:
@@ -264,17 +269,19 @@ def keep_e2_block_positive(
             n = np.zeros(8)
             n[3:8] = [v[0] ** 2, c * v[0] ** 2, v[1] ** 2, v[0] * v[1], c * v[0] * v[1]]
             normals.append(n)
-    if all(n @ rate >= 0.0 for n in normals):
+            floors.append(E2_RECOVERY * (margin - values[0]))
+    if all(n @ rate >= f for n, f in zip(normals, floors, strict=True)):
         return rate
     candidates = []
+    tolerance = 1e-9 * max(np.abs(rate).max(), max(floors), 1.0)
     for subset in ([0], [1], [0, 1]):
         if max(subset) >= len(normals):
             continue
         N = np.array([normals[i] for i in subset]).T
-        mu = np.linalg.solve(N.T @ metric @ N, N.T @ rate)
-        projected = rate - metric @ N @ mu
-        feasible = all(n @ projected >= -1e-9 * np.abs(rate).max() for n in normals)
-        if np.all(mu <= 1e-12) and feasible:  # KKT: rate + metric N lambda, lambda >= 0
+        lam = np.linalg.solve(N.T @ metric @ N, np.array([floors[i] for i in subset]) - N.T @ rate)
+        projected = rate + metric @ N @ lam
+        feasible = all(n @ projected >= f - tolerance for n, f in zip(normals, floors, strict=True))
+        if np.all(lam >= -1e-12) and feasible:  # KKT
             candidates.append(projected)
     inverse = np.linalg.inv(metric)
     return min(candidates, key=lambda r: (r - rate) @ inverse @ (r - rate))

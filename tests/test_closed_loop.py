@@ -254,7 +254,7 @@ def test_projection_is_active_in_the_comparison() -> None:
     # outward through eta_a2): the projected rate is tangent, and differs from the free one
     rng = np.random.default_rng(1)
     config = random_config(rng, mode="fixed").updated(
-        {"actor": {"weight_bound": 1.0, "eta_a1": 1e-4}}
+        {"actor": {"weight_bound": 1.0, "eta_a1": 1e-4, "positive_e2": False}}
     )
     free = config.updated({"actor": {"weight_bound": 1e9}})
     active = 0

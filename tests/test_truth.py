@@ -129,3 +129,28 @@ def test_no_controller_beats_the_optimal_cost() -> None:
     # the exact optimal policy reaches it
     optimal = adparm.simulate(config.updated({"controller": {"kind": "optimal"}}))
     assert optimal.cost[-1] == pytest.approx(best, rel=5e-3)
+
+
+def test_verdict_reaches_summary_sweep_rows_and_cli(tmp_path, capsys) -> None:
+    from adparm.cli import main
+    from adparm.summary import summary_markdown
+
+    config = adparm.paper_config().updated({"sim": {"T": 3.0, "record_every": 100}})
+    result = adparm.simulate(config, diagnose=False)
+    summary = result.summary()
+    assert "away from the known W*" in summary["verdict"]
+    assert summary["diagnostics"]["verdict"] == summary["verdict"]
+    assert "**Verdict: ended away from the known W*" in summary_markdown(summary)
+    table = adparm.sweep(config, {"task.q0": [[0.1, 0.2]]}, threads=1)
+    assert "away from the known W*" in table.rows[0]["verdict"]
+    assert table.rows[0]["e2_block_min_eigenvalue"] > 0.0
+    path = tmp_path / "run.toml"
+    path.write_text(config.to_toml())
+    with pytest.warns(adparm.ApproximationWarning, match="not converged"):
+        status = main(
+            ["run", str(path), "--out", str(tmp_path / "out"), "--no-figures", "--no-progress"]
+        )
+    assert status == 0
+    assert "verdict: ended away from the known W*" in capsys.readouterr().err
+    saved = (tmp_path / "out" / "summary.json").read_text()
+    assert '"verdict": "ended away from the known W*' in saved

@@ -144,6 +144,13 @@ def _sweep(args: argparse.Namespace) -> int:
         return 2
     print(table.to_markdown(), end="")
     print(f"wrote {args.out} ({len(table)} runs)")
+    off = [row["verdict"] for row in table if row["verdict"] not in ("ok", "not a learning run")]
+    if off:
+        print(
+            f"adparm sweep: {len(off)} of {len(table)} runs did not find the optimum (see the "
+            f"verdict column), e.g.: {off[0]}",
+            file=sys.stderr,
+        )
     diverged = sum(row["status"] == "diverged" for row in table)
     if diverged:
         print(f"adparm sweep: {diverged} of {len(table)} runs diverged", file=sys.stderr)
@@ -238,6 +245,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{error:.3g} at t = {summary['t_end']:g} s; final |e1| = "
             f"{summary['final_e1_norm']:.3g} rad"
         )
+    if summary["verdict"] not in ("ok", "not a learning run"):
+        print(f"adparm {args.command}: verdict: {summary['verdict']}", file=sys.stderr)
     if failure is not None:
         print(f"adparm {args.command}: {failure}", file=sys.stderr)
         return 1

@@ -4,13 +4,13 @@
 //   e2^T P(c) e2,   P(c) = [[W4 + c W5, (W7 + c W8) / 2], [(W7 + c W8) / 2, W6]],   c = cos q2,
 // (1-based weight indices). P is affine in c, so P(c) > 0 for every c in [-1, 1] (every q) exactly
 // when P(+1) > 0 and P(-1) > 0. The HJB equation of eq. (21) also has an anti-stabilising solution
-// with this block negated; on-trajectory learning can end there. The projection below removes from
-// the weights' rate the component that would lower lambda_min(P(c)), c = +-1, once it is at or
-// below `margin` (the ODE projection of eq. 26's proj{}, for two concave constraints):
+// with this block negated; on-trajectory learning can end there. The projection below changes the
+// weights' rate least so that lambda_min(P(c)), c = +-1, does not fall once at or below `margin`
+// and is pulled back up to it (the ODE projection of eq. 26's proj{}, for two concave constraints):
 //   n_c = d lambda_min(P(c)) / dW = [v1^2, c v1^2, v2^2, v1 v2, c v1 v2] on W4..W8,
-// v the unit eigenvector of lambda_min; rate -= sum_c mu_c n_c with mu >= 0 the least change that
-// leaves n_c . rate >= 0 for every active c. Weights that start inside {lambda_min >= margin} stay
-// there; weights that start below it cannot go lower.
+// v the unit eigenvector of lambda_min; n_c . rate >= kE2Recovery (margin - lambda_min) for every
+// active c. Weights that start inside {lambda_min >= margin} stay there (up to the RK4 step);
+// weights that start below it are brought up to it.
 #pragma once
 
 #include <cmath>
@@ -56,10 +56,14 @@ double e2_block_lambda_min(const Vector& W) {
   return std::min(e2_block_lambda_min(W, 1.0, gradient), e2_block_lambda_min(W, -1.0, gradient));
 }
 
-// Projects `rate` (dW/dt) so that lambda_min(P(+-1)) of W does not fall further once at or below
-// `margin`, in the metric of `metric` (identity for the actor's gradient law; the critic's Gamma
-// for its least-squares law: rate -= Gamma N mu). Bases other than the paper/augmented ones are
-// left alone.
+// Below the margin, lambda_min is also pulled back at this rate (1/s): the linearised constraint
+// lets RK4 steps along the boundary drift below it (lambda_min is concave in W).
+constexpr double kE2Recovery = 100.0;
+
+// Projects `rate` (dW/dt) so that d lambda_min(P(c)) / dt >= kE2Recovery (margin - lambda) for
+// c = +-1 whenever lambda_min(P(c)) <= margin, by the least change in the metric of `metric`
+// (identity for the actor's gradient law; the critic's Gamma for its least-squares law):
+// rate += metric N mu, mu >= 0. Bases other than the paper/augmented ones are left alone.
 template <class Basis, class Vector, class Metric>
 Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin,
                               const Metric& metric) {
@@ -68,26 +72,31 @@ Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin
   } else {
     Vector n[2], metric_n[2];
     bool active[2];
+    double floor[2];  // the least d lambda / dt allowed
     for (int i = 0; i < 2; ++i) {
       const double lambda = e2_block_lambda_min(W, i == 0 ? 1.0 : -1.0, n[i]);
       active[i] = lambda <= margin;
+      floor[i] = kE2Recovery * (margin - lambda);
       metric_n[i].noalias() = metric * n[i];
     }
-    const auto violates = [&](int i, const Vector& r) { return active[i] && n[i].dot(r) < 0.0; };
+    const auto violates = [&](int i, const Vector& r) {
+      return active[i] && n[i].dot(r) < floor[i];
+    };
     if (!violates(0, rate) && !violates(1, rate)) return rate;
-    for (int i = 0; i < 2; ++i) {  // one constraint: remove its inward-violating component
+    for (int i = 0; i < 2; ++i) {  // one constraint met with equality
       if (!violates(i, rate)) continue;
-      const Vector projected = rate - (n[i].dot(rate) / n[i].dot(metric_n[i])) * metric_n[i];
+      const Vector projected =
+          rate + ((floor[i] - n[i].dot(rate)) / n[i].dot(metric_n[i])) * metric_n[i];
       if (!violates(1 - i, projected)) return projected;
     }
-    // both: rate - Metric N mu with N^T (rate - Metric N mu) = 0, N = [n0 n1]
+    // both: N^T (rate + Metric N mu) = floor, N = [n0 n1]
     const double g00 = n[0].dot(metric_n[0]), g11 = n[1].dot(metric_n[1]);
     const double g01 = n[0].dot(metric_n[1]);
     const double det = g00 * g11 - g01 * g01;
-    const double r0 = n[0].dot(rate), r1 = n[1].dot(rate);
-    if (!(det > 1e-12 * g00 * g11)) return rate - (r0 / g00) * metric_n[0];  // parallel normals
+    const double r0 = floor[0] - n[0].dot(rate), r1 = floor[1] - n[1].dot(rate);
+    if (!(det > 1e-12 * g00 * g11)) return rate + (r0 / g00) * metric_n[0];  // parallel normals
     const double mu0 = (g11 * r0 - g01 * r1) / det, mu1 = (g00 * r1 - g01 * r0) / det;
-    return rate - mu0 * metric_n[0] - mu1 * metric_n[1];
+    return rate + mu0 * metric_n[0] + mu1 * metric_n[1];
   }
 }
 
