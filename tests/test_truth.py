@@ -3,6 +3,7 @@ and the yardsticks lqr_value (python-control, checked against SciPy) and optimal
 
 from __future__ import annotations
 
+import json
 import warnings
 
 import numpy as np
@@ -154,3 +155,48 @@ def test_verdict_reaches_summary_sweep_rows_and_cli(tmp_path, capsys) -> None:
     assert "verdict: ended away from the known W*" in capsys.readouterr().err
     saved = (tmp_path / "out" / "summary.json").read_text()
     assert '"verdict": "ended away from the known W*' in saved
+
+
+def test_compare_reports_every_controller_against_the_optimal_cost_for_any_cost() -> None:
+    config = adparm.paper_config().updated(
+        {
+            "cost": {"Q": np.diag([40.0, 40.0, 4.0, 4.0])},
+            "plant": {"disturbance": [0.0, 0.0], "coulomb": 0.0},
+            "controller": {"rise": False},
+            "sim": {"T": 8.0, "record_every": 100},
+        }
+    )
+    comparison = adparm.compare(config, ["pd", "optimal"])
+    best = comparison.optimal_cost
+    assert best == pytest.approx(adparm.optimal_cost(config), rel=1e-9)
+    for row in comparison.rows:
+        J = comparison.results[row["controller"]].cost[-1]
+        assert row["cost_vs_optimal_cost"] == pytest.approx(J / best - 1.0, rel=1e-12)
+        assert row["cost_vs_optimal_cost"] > -1e-3  # nobody beats J*
+    assert "J / J* - 1" in comparison.table_markdown()
+
+
+def test_check_step_size_sees_the_integration_error_of_the_transient(tmp_path, capsys) -> None:
+    from adparm.cli import main
+
+    coarse = adparm.check_step_size(adparm.paper_config(), transient=0.5)
+    fine = adparm.check_step_size(
+        adparm.paper_config().updated({"sim": {"dt": 2.5e-4}}), transient=0.5
+    )
+    assert coarse["dt"] == 1e-3 and coarse["transient"] == 0.5
+    # dt = 1 ms: a few per cent in the critic's transient; a 4x smaller step: well below 1 %
+    assert coarse["critic_max_difference"] > 0.01 and "try sim.dt = 0.0005" in coarse["verdict"]
+    assert fine["critic_max_difference"] < 0.01 and fine["verdict"] == "ok"
+    assert fine["critic_max_difference"] < coarse["critic_max_difference"] / 8
+    assert fine["e1_max_difference"] < coarse["e1_max_difference"]
+    path = tmp_path / "run.toml"
+    path.write_text(adparm.paper_config().updated({"sim": {"T": 1.0}}).to_toml())
+    out = tmp_path / "out"
+    assert (
+        main(["run", str(path), "--out", str(out), "--no-figures", "--no-progress", "--check-dt"])
+        == 0
+    )
+    assert "step size (first 1 s against dt/2): sim.dt = 0.001 s leaves" in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["step_size_check"]["critic_max_difference"] > 0.01
+    assert "- step size: against a dt/2 run" in (out / "summary.md").read_text()

@@ -45,7 +45,7 @@ from .simulation import (
 )
 from .storage import load_result
 from .sweep import SweepResult, grid_points, sweep
-from .truth import ApproximationWarning, diagnose, lqr_value, optimal_cost
+from .truth import ApproximationWarning, check_step_size, diagnose, lqr_value, optimal_cost
 
 __version__ = "0.1.0"
 
@@ -72,6 +72,7 @@ __all__ = [
     "SinusoidTrajectory",
     "SweepResult",
     "TaskConfig",
+    "check_step_size",
     "compare",
     "desired_state",
     "diagnose",

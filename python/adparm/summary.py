@@ -272,8 +272,6 @@ def _diagnostics_lines(d: dict[str, Any] | None) -> list[str]:
             f"{_fmt(d['e2_block_min_eigenvalue'])}, actor "
             f"{_fmt(d['actor_e2_block_min_eigenvalue'])}",
         ]
-    if "integration" in d:
-        lines.append(f"- step size: {d['integration']}")
     return lines
 
 
@@ -289,6 +287,13 @@ def summary_markdown(summary: dict[str, Any]) -> str:
         f"- covariance resets: {summary['covariance_resets']}",
     ]
     lines += _diagnostics_lines(summary.get("diagnostics"))
+    check = summary.get("step_size_check")
+    if check is not None:
+        lines.append(
+            f"- step size: against a dt/2 run over the first {_fmt(check['transient'])} s, the "
+            f"critic weights differ by {_fmt(check.get('critic_max_difference'))} (relative, "
+            f"largest), e1 by {_fmt(check.get('e1_max_difference'))}: {check['verdict']}"
+        )
     target = summary["optimal_weights"]
     if target is None:
         lines += [

@@ -30,6 +30,7 @@ __all__ = [
     "RESIDUAL_TOLERANCE",
     "ApproximationWarning",
     "diagnose",
+    "check_step_size",
     "e2_block_min_eigenvalue",
     "learned_matrix",
     "lqr_value",
@@ -357,6 +358,66 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
         advice.append("run longer (sim.T) or excite more (probe.amplitude)")
     if problems:
         out["verdict"] = "; ".join(problems)
+    return out
+
+
+#: check_step_size flags a transient whose dt and dt/2 runs differ by more than this (relative).
+STEP_TOLERANCE = 0.01
+
+
+def check_step_size(config: Config, *, transient: float = 1.0) -> dict[str, Any]:
+    """The integration error of the early learning transient: runs ``config`` over the first
+    ``transient`` seconds (at most sim.T) with sim.dt and with sim.dt / 2 and compares, on the rows
+    both record (every ~10 ms), the critic weights and e1:
+
+    - critic_max_difference: max_t ||Wc_dt - Wc_dt/2|| / max_t ||Wc_dt/2||;
+    - critic_final_difference: the same at the end of the transient;
+    - e1_max_difference: max_t |e1_dt - e1_dt/2| / max_t |e1_dt/2|;
+    - verdict: "ok" when all are below STEP_TOLERANCE (1 %), else what was seen and what to try.
+    RK4 is fourth order, so the difference is about 15/16 of the error of the dt run."""
+    from .simulation import SimulationDiverged, simulate
+
+    config = _check_config(config)
+    if not (isinstance(transient, (int, float)) and math.isfinite(transient) and transient > 0):
+        raise ValueError(f"transient: expected a finite number > 0, got {transient!r}")
+    dt = config.sim.dt
+    T = min(float(transient), config.sim.T)
+    every = max(1, round(0.01 / dt))
+    runs = []
+    for step, record in ((dt, every), (dt / 2, 2 * every)):
+        changed = config.updated({"sim": {"T": T, "dt": step, "record_every": record}})
+        try:
+            runs.append(simulate(changed, diagnose=False))
+        except SimulationDiverged as error:
+            runs.append(error.result)
+    coarse, fine = runs
+    n = min(coarse.t.size, fine.t.size) - 1  # the last row is at T in both
+    out: dict[str, Any] = {"dt": dt, "transient": T}
+    if coarse.status != "finished" or fine.status != "finished":
+        out["verdict"] = (
+            f"a run diverged (dt: {coarse.status}, dt/2: {fine.status}); try a smaller sim.dt"
+        )
+        return out
+    rows = list(range(n)) + [-1]
+    Wc, Wc_half = coarse.critic_weights[rows], fine.critic_weights[rows]
+    e1, e1_half = coarse.e1[rows], fine.e1[rows]
+    scale = max(np.linalg.norm(Wc_half, axis=1).max(), 1e-300)
+    difference = np.linalg.norm(Wc - Wc_half, axis=1)
+    out["critic_max_difference"] = float(difference.max() / scale)
+    out["critic_final_difference"] = float(
+        difference[-1] / max(np.linalg.norm(Wc_half[-1]), 1e-300)
+    )
+    out["e1_max_difference"] = float(
+        np.linalg.norm(e1 - e1_half, axis=1).max()
+        / max(np.linalg.norm(e1_half, axis=1).max(), 1e-300)
+    )
+    worst = max(out["critic_max_difference"], out["e1_max_difference"])
+    out["verdict"] = (
+        "ok"
+        if worst <= STEP_TOLERANCE
+        else f"sim.dt = {dt:g} s leaves {100 * worst:.2g} % of integration error in the first "
+        f"{T:g} s (critic weights or e1 against a dt/2 run); try sim.dt = {dt / 2:g}"
+    )
     return out
 
 
