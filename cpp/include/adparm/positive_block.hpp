@@ -49,6 +49,13 @@ double e2_block_lambda_min(const Vector& W, double c, Vector& gradient) {
   return lambda;
 }
 
+// lambda_min(P(c)) > margin, without a square root: P - margin I has positive pivots.
+template <class Vector>
+bool e2_block_above(const Vector& W, double c, double margin) {
+  const double a = W[3] + c * W[4] - margin, d = W[5] - margin, b = 0.5 * (W[6] + c * W[7]);
+  return a > 0.0 && a * d > b * b;
+}
+
 // The smallest eigenvalue of P(c) over c in [-1, 1] (at c = +-1).
 template <class Vector>
 double e2_block_lambda_min(const Vector& W) {
@@ -70,6 +77,8 @@ Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin
   if constexpr (!std::is_base_of_v<QuadraticArmBasis, Basis>) {
     return rate;
   } else {
+    // the common case, inside at both ends: a few multiplications, no square root
+    if (e2_block_above(W, 1.0, margin) && e2_block_above(W, -1.0, margin)) return rate;
     Vector n[2], metric_n[2];
     bool active[2];
     double floor[2];  // the least d lambda / dt allowed
