@@ -200,3 +200,14 @@ def test_check_step_size_sees_the_integration_error_of_the_transient(tmp_path, c
     summary = json.loads((out / "summary.json").read_text())
     assert summary["step_size_check"]["critic_max_difference"] > 0.01
     assert "- step size: against a dt/2 run" in (out / "summary.md").read_text()
+
+
+def test_diagnostics_cover_the_extrapolation_box() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 2.0}, "extrapolation": {"points": 10}})
+    d = adparm.simulate(config).diagnostics  # extrapolation learns W* within 2 s: no warning
+    assert d["verdict"] == "ok"
+    assert d["hjb_residual_box"] is not None and d["hjb_residual_box"] < 0.05
+    assert (
+        adparm.diagnose(adparm.simulate(config.updated({"controller": {"kind": "pd"}})))["verdict"]
+        == "not a learning run"
+    )
