@@ -42,6 +42,9 @@ __all__ = [
 #: off W* leaves a few per cent).
 RESIDUAL_TOLERANCE = 0.05
 
+# The bases whose e2 block is [[W4 + c W5, (W7 + c W8)/2], [., W6]] (positive_block.hpp).
+_PAPER_BASES = ("paper", "augmented")
+
 # Samples of the explored region and of the extrapolation box (fixed seed: same verdict each time).
 _SAMPLES = 200
 _SEED = 20240
@@ -260,11 +263,15 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
         out["verdict"] = "not a learning run" if config.controller.kind != "adp" else "no rows"
         return out
     Wc, Wa = result.critic_weights[-1], result.actor_weights[-1]
-    out["e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wc)
-    out["actor_e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wa)
+    paper_basis = config.controller.basis in _PAPER_BASES  # the e2 block's layout is known
+    out["e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wc) if paper_basis else None
+    out["actor_e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wa) if paper_basis else None
     if result.status == "diverged" or not (np.all(np.isfinite(Wc)) and np.all(np.isfinite(Wa))):
         out["problems"].append("diverged")
-        if min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"]) <= 0.0:
+        if (
+            paper_basis
+            and min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"]) <= 0.0
+        ):
             out["problems"].append("the e2 block of the learned V is not positive definite")
         out["verdict"] = "; ".join(out["problems"])
         return out
@@ -299,7 +306,7 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
         out["value_error"] = float(np.sqrt(np.mean((phi @ Wc - exact) ** 2) / np.mean(exact**2)))
     else:
         out["critic_relative_error"] = None
-        if config.task.is_set_point:
+        if config.task.is_set_point and paper_basis:
             P = lqr_value(config)
             out["value_yardstick"] = "LQR"
             out["value_error"] = float(
@@ -309,7 +316,11 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
             out["value_yardstick"], out["value_error"] = None, None
 
     problems, advice = out["problems"], out["advice"]
-    lowest = min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"])
+    lowest = (
+        min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"])
+        if paper_basis
+        else math.inf
+    )
     if lowest <= 0.0:
         problems.append(
             "ended at a non-stabilising solution: the e2 block of the learned V is not positive "
