@@ -23,6 +23,9 @@ from adparm.simulation import core_settings
 
 from conftest import assert_same_arrays
 
+# short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
 SECTIONS = {
     name: [f.name for f in dataclasses.fields(getattr(adparm.Config(), name))]
     for name in (f.name for f in dataclasses.fields(adparm.Config))
