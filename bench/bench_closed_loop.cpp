@@ -296,6 +296,7 @@ void check_invalid_settings() {
       {"critic.epsilon_T above gamma0", [](Settings& s) { s.critic.epsilon_T = 200.0; }},
       {"critic.eta_c negative", [](Settings& s) { s.critic.eta_c = -1.0; }},
       {"actor.weight_bound zero", [](Settings& s) { s.actor.weight_bound = 0.0; }},
+      {"actor.e2_margin negative", [](Settings& s) { s.actor.e2_margin = -1.0; }},
       {"controller rise without rise",
        [](Settings& s) {
          s.controller.kind = adparm::ControllerKind::rise;

@@ -55,6 +55,32 @@ def _arm(p: tuple[float, ...], q: np.ndarray, dq: np.ndarray):
     return M, C, G, F
 
 
+def keep_e2_block_positive(W, rate, margin, metric):
+    """adparm's projection (positive_block.hpp): where lambda_min of the e2 block P(c) of W,
+    c = +-1, is at or below margin, d lambda_min / dt >= 100 (margin - lambda_min), by
+    rate + metric N mu over the active constraints (at most two)."""
+    normals, floors = [], []
+    for c in (1.0, -1.0):
+        b = 0.5 * (W[6] + c * W[7])
+        values, vectors = np.linalg.eigh(np.array([[W[3] + c * W[4], b], [b, W[5]]]))
+        v = vectors[:, 0]
+        n = np.zeros(8)
+        n[3:8] = [v[0] ** 2, c * v[0] ** 2, v[1] ** 2, v[0] * v[1], c * v[0] * v[1]]
+        if values[0] <= margin:
+            normals.append(n)
+            floors.append(100.0 * (margin - values[0]))
+    pairs = list(zip(normals, floors, strict=True))
+    if all(n @ rate >= f for n, f in pairs):
+        return rate
+    for n, f in pairs:  # one constraint
+        if n @ rate < f:
+            projected = rate + (f - n @ rate) / (n @ metric @ n) * (metric @ n)
+            if all(m @ projected >= g for m, g in pairs if m is not n):
+                return projected
+    N = np.array(normals).T
+    return rate + metric @ N @ np.linalg.solve(N.T @ metric @ N, np.array(floors) - N.T @ rate)
+
+
 class NumpyPaperLoop:
     """The closed loop of ``config`` (see the module docstring for what is covered)."""
 
@@ -95,6 +121,7 @@ class NumpyPaperLoop:
         self.epsilon_T = config.resolved_epsilon_T
         self.eta_a1, self.eta_a2 = a.eta_a1, a.eta_a2
         self.weight_bound_sq = a.weight_bound**2
+        self.positive_e2, self.e2_margin = a.positive_e2, a.e2_margin
 
         ctl = config.control
         self.rise = config.controller.rise
@@ -178,11 +205,15 @@ class NumpyPaperLoop:
         gain = self.eta_c / (1.0 + self.nu_c * (omega @ Gw))  # eta_c / rho
         dWc = -(gain * hjb) * Gw
         dGamma = -gain * np.outer(Gw, Gw)
+        if self.positive_e2:  # keep the e2 block positive definite (not in the paper)
+            dWc = keep_e2_block_positive(Wc, dWc, self.e2_margin, Gamma)
 
         # actor, eq. (26), with the projection onto ||Wa|| <= weight_bound
         dW = Wa - Wc
         dWa = -self.eta_a1 * hjb / np.sqrt(1.0 + omega @ omega) * (B @ (self.Rinv @ (B.T @ dW)))
         dWa = dWa - self.eta_a2 * dW
+        if self.positive_e2:
+            dWa = keep_e2_block_positive(Wa, dWa, self.e2_margin, np.eye(8))
         WaWa = Wa @ Wa
         if WaWa >= self.weight_bound_sq and Wa @ dWa > 0.0:
             dWa = dWa - (Wa @ dWa) / WaWa * Wa

@@ -243,6 +243,50 @@ def initial_state(config: Config) -> np.ndarray:
     )
 
 
+def e2_block(W: np.ndarray, c: float) -> np.ndarray:
+    """P(c) of the e2 part e2^T P(c) e2 of V = W^T phi (paper/augmented basis), c = cos q2."""
+    b = 0.5 * (W[6] + c * W[7])
+    return np.array([[W[3] + c * W[4], b], [b, W[5]]])
+
+
+#: positive_block.hpp's kE2Recovery (1/s)
+E2_RECOVERY = 100.0
+
+
+def keep_e2_block_positive(
+    W: np.ndarray, rate: np.ndarray, margin: float, metric: np.ndarray | None = None
+) -> np.ndarray:
+    """The least change of ``rate`` (rate + metric N lambda, lambda >= 0) that gives
+    d lambda_min(P(c)) / dt >= E2_RECOVERY (margin - lambda_min) at c = +-1 wherever
+    lambda_min <= margin: eigh for the gradient of lambda_min, every active set tried by brute
+    force, the candidate nearest to ``rate`` in the metric's inverse kept."""
+    metric = np.eye(8) if metric is None else metric
+    normals, floors = [], []
+    for c in (1.0, -1.0):
+        values, vectors = np.linalg.eigh(e2_block(W, c))
+        if values[0] <= margin:
+            v = vectors[:, 0]
+            n = np.zeros(8)
+            n[3:8] = [v[0] ** 2, c * v[0] ** 2, v[1] ** 2, v[0] * v[1], c * v[0] * v[1]]
+            normals.append(n)
+            floors.append(E2_RECOVERY * (margin - values[0]))
+    if all(n @ rate >= f for n, f in zip(normals, floors, strict=True)):
+        return rate
+    candidates = []
+    tolerance = 1e-9 * max(np.abs(rate).max(), max(floors), 1.0)
+    for subset in ([0], [1], [0, 1]):
+        if max(subset) >= len(normals):
+            continue
+        N = np.array([normals[i] for i in subset]).T
+        lam = np.linalg.solve(N.T @ metric @ N, np.array([floors[i] for i in subset]) - N.T @ rate)
+        projected = rate + metric @ N @ lam
+        feasible = all(n @ projected >= f - tolerance for n, f in zip(normals, floors, strict=True))
+        if np.all(lam >= -1e-12) and feasible:  # KKT
+            candidates.append(projected)
+    inverse = np.linalg.inv(metric)
+    return min(candidates, key=lambda r: (r - rate) @ inverse @ (r - rate))
+
+
 def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None = None):
     """The closed loop's right-hand side at (t, state) and its outputs (qd, e1, e2, tau, u, u_hat,
     mu, probe, hjb_error).
@@ -287,7 +331,11 @@ def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None =
             dWc += -w * c.eta_c * Gamma @ omega * eps / rho
             dGamma += -w * c.eta_c * Gamma @ np.outer(omega, omega) @ Gamma / rho
             grad += -w * a.eta_a1 * eps / np.sqrt(1 + omega @ omega) * B @ Rinv @ B.T @ (Wa - Wc)
+        if a.positive_e2:
+            dWc = keep_e2_block_positive(Wc, dWc, a.e2_margin, Gamma)
         dWa = grad - a.eta_a2 * (Wa - Wc)
+        if a.positive_e2:
+            dWa = keep_e2_block_positive(Wa, dWa, a.e2_margin)
         if Wa @ Wa >= a.weight_bound**2 and Wa @ dWa > 0:
             dWa = dWa - Wa * (Wa @ dWa) / (Wa @ Wa)
 

@@ -16,6 +16,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 
 import numpy_loop  # noqa: E402
 
+# short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
 STEPS = 300
 
 

@@ -254,7 +254,7 @@ def test_projection_is_active_in_the_comparison() -> None:
     # outward through eta_a2): the projected rate is tangent, and differs from the free one
     rng = np.random.default_rng(1)
     config = random_config(rng, mode="fixed").updated(
-        {"actor": {"weight_bound": 1.0, "eta_a1": 1e-4}}
+        {"actor": {"weight_bound": 1.0, "eta_a1": 1e-4, "positive_e2": False}}
     )
     free = config.updated({"actor": {"weight_bound": 1e9}})
     active = 0
@@ -498,3 +498,27 @@ def test_core_refuses_a_grid_that_is_not_m_to_the_fourth() -> None:
     settings.extrapolation = extrapolation
     with pytest.raises(ValueError, match="grid mode needs N = m\\^4 points"):
         _core.Simulation(settings)
+
+
+def test_positive_e2_projection_is_exercised_and_keeps_the_block_from_falling() -> None:
+    # the random states of the comparisons above put W on both sides of the boundary; here: the
+    # projection changes the rates in some of them, never lowers lambda_min of an active e2 block,
+    # and matches the NumPy reference (eigh + brute-force active sets) with and without it
+    rng = np.random.default_rng(7)
+    config = adparm.paper_config().updated({"actor": {"e2_margin": 0.5}})
+    free = config.updated({"actor": {"positive_e2": False}})
+    changed = 0
+    for _ in range(60):
+        state = random_state(rng)
+        rate = _core.closed_loop_derivative(core_settings(config), 0.3, state)[0]
+        free_rate = _core.closed_loop_derivative(core_settings(free), 0.3, state)[0]
+        assert_close(rate, reference.rhs(config, 0.3, state)[0], "rate")
+        changed += not np.allclose(rate, free_rate, rtol=0, atol=0)
+        for slice_ in (reference.WC_SLICE, reference.WA_SLICE):
+            W, dW = state[slice_], rate[slice_]
+            for c in (1.0, -1.0):
+                values, vectors = np.linalg.eigh(reference.e2_block(W, c))
+                if values[0] <= 0.5:  # d lambda_min / dt = v^T dP v >= 0
+                    v = vectors[:, 0]
+                    assert v @ reference.e2_block(dW, c) @ v >= -1e-9 * np.abs(dW).max()
+    assert changed >= 20

@@ -12,6 +12,9 @@ import adparm
 from adparm.cli import main
 from adparm.comparison import COMPARE_COLUMNS, LEARNED_LABEL
 
+# short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
 LABELS = ["adp", LEARNED_LABEL, "rise", "pd", "optimal"]
 
 
@@ -112,7 +115,10 @@ def test_table_dataframe_and_files_hold_the_rows(short_comparison, tmp_path) -> 
     c = short_comparison
     text = c.table_markdown()
     lines = text.splitlines()
-    assert lines[0].startswith("| controller | J (eq. 10) |") and len(lines[0].split("|")) == 11
+    assert (
+        lines[0].startswith("| controller | J (eq. 10) |")
+        and len(lines[0].split("|")) == len(COMPARE_COLUMNS) + 2
+    )
     for row, line in zip(c.rows, lines[2:7], strict=True):
         assert line.startswith(f"| {row['controller']} | {row['accumulated_cost']:.6g} |")
         assert f"| {row['rms_e1']:.3g} |" in line and line.endswith("| finished |")

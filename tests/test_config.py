@@ -18,7 +18,7 @@ def test_python_preset_equals_the_cores_copy() -> None:
     for section, keys in {
         "plant": ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous"),
         "critic": ("eta_c", "nu", "gamma0", "epsilon_T"),
-        "actor": ("eta_a1", "eta_a2", "weight_bound"),
+        "actor": ("eta_a1", "eta_a2", "weight_bound", "positive_e2", "e2_margin"),
         "sim": ("T", "dt", "record_every", "divergence_bound"),
     }.items():
         for key in keys:

@@ -23,6 +23,9 @@ from adparm.simulation import core_settings
 
 from conftest import assert_same_arrays
 
+# short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
 SECTIONS = {
     name: [f.name for f in dataclasses.fields(getattr(adparm.Config(), name))]
     for name in (f.name for f in dataclasses.fields(adparm.Config))
@@ -205,6 +208,8 @@ def valid_dicts(draw: st.DrawFn) -> dict[str, dict[str, Any]]:
             "eta_a1": draw(reals(0.0, 1.0)),
             "eta_a2": draw(reals(0.0, 5.0)),
             "weight_bound": draw(reals(0.1, 200.0)),
+            "positive_e2": draw(st.booleans()),
+            "e2_margin": draw(reals(0.0, 1.0)),
         },
         "init": {"critic_weights": draw(weights), "actor_weights": draw(weights)},
         "probe": draw(probes(T)),
@@ -387,7 +392,7 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         ]
     if key in ("kind", "basis", "mode", "boundary"):
         return [str(value) + "x", "", str(value).upper(), 1, None, True, [value]]
-    if key == "rise":
+    if key in ("rise", "positive_e2"):
         return ["true", 1, 0, 1.0, None, [True]]
     if key == "points":
         return [-1, MAX_POINTS + 1, 10**30, 2.0, 1.5, "3", True, None, NAN]
@@ -430,6 +435,7 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         "eta_a1": "nonneg",
         "eta_a2": "nonneg",
         "weight_bound": "pos",
+        "e2_margin": "nonneg",
         "until": "nonneg",
         "ramp": "nonneg",
         "divergence_bound": "pos",
@@ -638,9 +644,10 @@ CORE_FIELDS: list[tuple[str, str, st.SearchStrategy]] = [
     ("control", "alpha1", sized(2, 2)),
     *[("control.rise", key, floats_any) for key in ("ks", "alpha2", "beta1")],
     *[("critic", key, floats_any) for key in ("eta_c", "nu", "gamma0", "epsilon_T")],
-    *[("actor", key, floats_any) for key in ("eta_a1", "eta_a2", "weight_bound")],
+    *[("actor", key, floats_any) for key in ("eta_a1", "eta_a2", "weight_bound", "e2_margin")],
     ("controller", "kind", st.sampled_from(list(_core.ControllerKind.__members__.values()))),
     ("controller", "rise", st.booleans()),
+    ("actor", "positive_e2", st.booleans()),
     ("controller", "kp", sized(2, 2)),
     ("controller", "kd", sized(2, 2)),
     ("", "basis", st.sampled_from(list(_core.BasisKind.__members__.values()))),

@@ -73,7 +73,7 @@ def test_hjb_residual_keeps_batch_shape(rng) -> None:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        ({"cost": {"R": [[0.5, 0.0], [0.0, 0.25]]}}, "Q22 must equal R"),
+        ({"cost": {"R": [[0.5, 0.0], [0.0, 0.25]]}}, r"Q22 must equal s\^2 R\^-1"),
         ({"control": {"alpha1": [[15.0, 10.6], [10.6, 10.4]]}}, "Q11 must equal"),
         ({"task": {"qd": [0.0, 0.3]}, "controller": {"basis": "paper"}}, "qd2 = 0"),
     ],
@@ -115,3 +115,37 @@ def test_hjb_residual_refuses_bad_weights() -> None:
         adparm.hjb_residual(adparm.paper_config(), np.zeros(4), np.ones(7), np.ones(8))
     with pytest.raises(ValueError, match="actor_weights: must be finite"):
         adparm.hjb_residual(adparm.paper_config(), np.zeros(4), np.ones(8), np.full(8, np.inf))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_exact_family_q22_is_s2_r_inverse(seed) -> None:
+    # Q22 = s^2 R^-1: V* = e1^T K e1 + s e2^T M e2, u* = -s R^-1 e2 (HJB residual at round-off)
+    rng = np.random.default_rng(100 + seed)
+    base = random_optimal_config(rng)
+    s = float(rng.uniform(0.2, 5.0))
+    Q, R = np.array(base.cost.Q), np.array(base.cost.R)
+    K, alpha1 = -Q[:2, 2:], np.array(base.control.alpha1)
+    family = adparm.solvable_cost(K, alpha1, R, s=s)
+    np.testing.assert_allclose(family[2:, 2:], s**2 * np.linalg.inv(R), rtol=1e-12)
+    try:
+        config = base.updated({"cost": {"Q": family}})
+    except ValueError:  # Q not positive definite for this s (solvable_cost would have said so)
+        pytest.skip("Q not positive definite")
+    assert adparm.value_scale(config) == pytest.approx(s, rel=1e-12)
+    W = adparm.optimal_weights(config)
+    W1 = adparm.optimal_weights(base)
+    np.testing.assert_allclose(W[:3], W1[:3], rtol=1e-12)
+    np.testing.assert_allclose(W[3:], s * W1[3:], rtol=1e-12)
+    X = states(rng, 2000)
+    residual = adparm.hjb_residual(config, X, W, W)
+    scale = 1.0 + np.einsum("ni,ij,nj->n", X, family, X)
+    assert np.abs(residual / scale).max() < 1e-9
+    # the s = 1 weights are no solution of this cost
+    assert np.abs(adparm.hjb_residual(config, X, W1, W1) / scale).max() > 1e-3
+
+
+def test_solvable_cost_refuses_a_bad_scale() -> None:
+    with pytest.raises(ValueError, match="s: expected a finite number > 0"):
+        adparm.solvable_cost(np.eye(2), np.eye(2), np.eye(2), s=0.0)
+    with pytest.raises(TypeError, match="s: expected a number"):
+        adparm.solvable_cost(np.eye(2), np.eye(2), np.eye(2), s="1")

@@ -15,6 +15,9 @@ from adparm.summary import accumulated_cost, deviations, summarize, summary_mark
 
 from conftest import assert_same_arrays
 
+# short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
 
 @pytest.fixture(scope="module")
 def short_result() -> adparm.SimulationResult:
@@ -108,7 +111,7 @@ def test_summary_markdown_holds_the_table(short_result) -> None:
 
 
 def test_summary_without_known_optimum() -> None:
-    config = adparm.paper_config().updated({"sim": {"T": 0.5}, "cost": {"R": [[1.0, 0], [0, 1.0]]}})
+    config = adparm.paper_config().updated({"sim": {"T": 0.5}, "cost": {"R": [[1.0, 0], [0, 0.5]]}})
     s = summarize(adparm.simulate(config))
     assert s["optimal_weights"] is None and "Q22" in s["optimal_weights_unavailable"]
     assert "not known" in summary_markdown(s)

@@ -31,8 +31,10 @@ def test_rk4_fourth_order_on_the_arm() -> None:
 
 def test_rk4_fourth_order_on_the_smooth_closed_loop() -> None:
     # no sgn() anywhere (no Coulomb friction, beta1 = 0), no covariance reset, no projection
+    # (the e2-block projection switches on and off: not smooth)
     config = adparm.paper_config().updated(
         {
+            "actor": {"positive_e2": False},
             "plant": {"coulomb": 0.0},
             "control": {"beta1": 0.0},
             "critic": {"epsilon_T": 0.0},

@@ -31,6 +31,7 @@ from .optimal import (
     optimal_value,
     optimal_weights,
     solvable_cost,
+    value_scale,
 )
 from .physical import two_link_parameters
 from .report import write_report
@@ -45,12 +46,14 @@ from .simulation import (
 )
 from .storage import load_result
 from .sweep import SweepResult, grid_points, sweep
+from .truth import ApproximationWarning, check_step_size, diagnose, lqr_value, optimal_cost
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BASIS_NAMES",
     "ActorConfig",
+    "ApproximationWarning",
     "Comparison",
     "Config",
     "ControlConfig",
@@ -70,14 +73,18 @@ __all__ = [
     "SinusoidTrajectory",
     "SweepResult",
     "TaskConfig",
+    "check_step_size",
     "compare",
     "desired_state",
+    "diagnose",
     "extrapolation_points",
     "grid_points",
     "hjb_residual",
     "initial_error_state",
     "load_config",
     "load_result",
+    "lqr_value",
+    "optimal_cost",
     "optimal_value",
     "optimal_weights",
     "paper_config",
@@ -86,5 +93,6 @@ __all__ = [
     "solvable_cost",
     "sweep",
     "two_link_parameters",
+    "value_scale",
     "write_report",
 ]

@@ -47,11 +47,13 @@ class CriticSettings:
     def __init__(self) -> None: ...
 
 class ActorSettings:
-    """eta_a1, eta_a2, weight_bound (eq. 26)."""
+    """eta_a1, eta_a2, weight_bound (eq. 26), positive_e2, e2_margin."""
 
     eta_a1: float
     eta_a2: float
     weight_bound: float
+    positive_e2: bool
+    e2_margin: float
     def __init__(self) -> None: ...
 
 class ProbeSettings:

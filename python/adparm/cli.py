@@ -54,6 +54,13 @@ def _parser() -> argparse.ArgumentParser:
     run = commands.add_parser("run", help="run a TOML configuration and write the same artefacts")
     run.add_argument("config", type=Path, help="TOML file ([plant] [task] [cost] ... [sim])")
     common(run, "results")
+    for sub in (reproduce, run):
+        sub.add_argument(
+            "--check-dt",
+            action="store_true",
+            help="also run the first second with sim.dt and sim.dt/2 and report the integration "
+            "error of the learning transient (summary field step_size_check)",
+        )
     comparison = commands.add_parser(
         "compare",
         help="run the same arm, task and initial state under several controllers and tabulate "
@@ -144,6 +151,13 @@ def _sweep(args: argparse.Namespace) -> int:
         return 2
     print(table.to_markdown(), end="")
     print(f"wrote {args.out} ({len(table)} runs)")
+    off = [row["verdict"] for row in table if row["verdict"] not in ("ok", "not a learning run")]
+    if off:
+        print(
+            f"adparm sweep: {len(off)} of {len(table)} runs did not find the optimum (see the "
+            f"verdict column), e.g.: {off[0]}",
+            file=sys.stderr,
+        )
     diverged = sum(row["status"] == "diverged" for row in table)
     if diverged:
         print(f"adparm sweep: {diverged} of {len(table)} runs diverged", file=sys.stderr)
@@ -204,6 +218,10 @@ def _interrupted(command: str, interrupt: SimulationInterrupted, written: str) -
 def _write_run(args: argparse.Namespace, result: SimulationResult) -> dict:
     """Writes the report of a run (finished, diverged or interrupted); returns its summary."""
     summary = result.summary()
+    if getattr(args, "check_dt", False):
+        from .truth import check_step_size
+
+        summary["step_size_check"] = check_step_size(result.config)
     write_report(
         result, args.out, formats=args.formats, figures=not args.no_figures, summary=summary
     )
@@ -238,6 +256,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{error:.3g} at t = {summary['t_end']:g} s; final |e1| = "
             f"{summary['final_e1_norm']:.3g} rad"
         )
+    check = summary.get("step_size_check")
+    if check is not None:
+        print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
+    if summary["verdict"] not in ("ok", "not a learning run"):
+        print(f"adparm {args.command}: verdict: {summary['verdict']}", file=sys.stderr)
     if failure is not None:
         print(f"adparm {args.command}: {failure}", file=sys.stderr)
         return 1

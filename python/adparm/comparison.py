@@ -44,6 +44,7 @@ COMPARE_COLUMNS = (
     "controller",
     "accumulated_cost",
     "cost_vs_optimal",
+    "cost_vs_optimal_cost",
     "rms_e1",
     "final_e1",
     "peak_torque",
@@ -57,6 +58,7 @@ _MARKDOWN = {
     "controller": ("controller", "{}"),
     "accumulated_cost": ("J (eq. 10)", "{:.6g}"),
     "cost_vs_optimal": ("J / J_optimal - 1", "{:.3g}"),
+    "cost_vs_optimal_cost": ("J / J* - 1", "{:.3g}"),
     "rms_e1": ("e1 RMS (rad)", "{:.3g}"),
     "final_e1": ("e1 final (rad)", "{:.3g}"),
     "peak_torque": ("tau peak (N m)", "{:.4g}"),
@@ -136,7 +138,12 @@ def _rms_norm(t: np.ndarray, values: np.ndarray) -> float:
     return float(np.sqrt(integral / span))
 
 
-def _row(label: str, result: SimulationResult, optimal_cost: float | None) -> dict[str, Any]:
+def _row(
+    label: str,
+    result: SimulationResult,
+    optimal_cost: float | None,
+    best_cost: float | None = None,
+) -> dict[str, Any]:
     empty = result.t.size == 0
     cost = math.nan if empty else float(result.cost[-1])
     return {
@@ -146,6 +153,9 @@ def _row(label: str, result: SimulationResult, optimal_cost: float | None) -> di
             None
             if optimal_cost is None or result.status != "finished"
             else cost / optimal_cost - 1.0
+        ),
+        "cost_vs_optimal_cost": (
+            None if best_cost is None or result.status != "finished" else cost / best_cost - 1.0
         ),
         "rms_e1": _rms_norm(result.t, result.e1),
         "final_e1": math.nan if empty else float(np.linalg.norm(result.e1[-1])),
@@ -166,14 +176,19 @@ class Comparison:
     - accumulated_cost: J = cost[-1], eq. (10);
     - cost_vs_optimal: J / J_optimal - 1; None when ``optimal`` did not run, did not finish or
       cost 0, and for a diverged run (its J covers a shorter time);
-    - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
-    - final_e1: ``|e1|`` at the last row, rad;
-    - peak_torque: max ``|tau|`` over both joints and all rows, N m;
+    - cost_vs_optimal_cost: J / J* - 1 with J* = adparm.optimal_cost(config), the numerically
+      optimal cost from the same x(0) for the believed model without disturbance, for any cost
+      (``optimal_cost`` holds J*; None for a moving qd or when IPOPT fails). Below 0 only where
+      the run is not that problem: RISE effort is not charged, a disturbance or model error acts;
+    - rms_e1: sqrt(1/T int |e1|^2 dt) over the recorded rows (trapezoid rule), rad;
+    - final_e1: |e1| at the last row, rad;
+    - peak_torque: max |tau| over both joints and all rows, N m;
     - t_end: the last recorded time (earlier than sim.T for a diverged run), s;
     - wall_time (s) and status (finished, diverged or interrupted) of the run."""
 
     results: dict[str, SimulationResult]
     rows: list[dict[str, Any]]
+    optimal_cost: float | None = None
 
     @property
     def diverged(self) -> list[str]:
@@ -188,8 +203,11 @@ class Comparison:
             "J = int_0^T x^T Q x + u^T R u (eq. 10) charges the controller's input u (adp: "
             "u_hat + probe); the RISE term mu is "
             + ("on and is not charged." if self._rise() else "off.")
-            + " e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, tau peak = max |tau_j| over "
-            "both joints.",
+            + " J* = "
+            + ("-" if self.optimal_cost is None else f"{self.optimal_cost:.6g}")
+            + " is the numerically optimal cost from x(0) (adparm.optimal_cost: believed model, no "
+            "disturbance, infinite horizon). e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, "
+            "tau peak = max |tau_j| over both joints.",
         ]
         return "\n".join(lines) + "\n"
 
@@ -283,17 +301,30 @@ def compare(
             "exception's .result",
             _comparison(results),
         ) from None
-    return _comparison(results)
+    return _comparison(results, _optimal_cost(config))  # after the runs: Ctrl-C reaches them
+
+
+def _optimal_cost(config: Config) -> float | None:
+    """J* of adparm.optimal_cost, or None where it does not apply (moving qd) or IPOPT fails."""
+    from .truth import optimal_cost
+
+    if not config.task.is_set_point:
+        return None
+    try:
+        return optimal_cost(config)
+    except RuntimeError:  # pragma: no cover - IPOPT failed
+        return None
 
 
 def _run(config: Config, progress: bool) -> SimulationResult:
     return _simulate_keeping_divergence(config, progress)[0]
 
 
-def _comparison(results: dict[str, SimulationResult]) -> Comparison:
+def _comparison(results: dict[str, SimulationResult], best: float | None = None) -> Comparison:
     optimal = results.get("optimal")
     optimal_cost = None
     if optimal is not None and optimal.status == "finished" and optimal.cost[-1] > 0.0:
         optimal_cost = float(optimal.cost[-1])
-    rows = [_row(label, result, optimal_cost) for label, result in results.items()]
-    return Comparison(results=results, rows=rows)
+    best = best if best is not None and best > 0.0 else None
+    rows = [_row(label, result, optimal_cost, best) for label, result in results.items()]
+    return Comparison(results=results, rows=rows, optimal_cost=best)

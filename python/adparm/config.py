@@ -582,15 +582,25 @@ class CriticConfig:
 @dataclass(frozen=True)
 class ActorConfig:
     """Actor law (26): gains eta_a1, eta_a2 and the projection bound ||Wa|| <= weight_bound
-    (the paper leaves the bound open; 100 is about 8 ||W*||)."""
+    (the paper leaves the bound open; 100 is about 8 ||W*||).
+
+    positive_e2 (default true; not in the paper): the projection also keeps the e2 block of the
+    actor's value, e2^T P(cos q2) e2, positive definite with lambda_min(P) >= e2_margin at
+    cos q2 = +-1 (hence at every q), for the paper and augmented bases. Without it, about one run
+    in four with other probe phases or q(0) ends at the anti-stabilising solution of the HJB
+    equation (the e2 block negated; docs/guide/truth.md). e2_margin is in the units of M
+    (kg m^2)."""
 
     eta_a1: float = 0.01
     eta_a2: float = 1.0
     weight_bound: float = 100.0
+    positive_e2: bool = True
+    e2_margin: float = 0.01
 
     def __post_init__(self) -> None:
-        for key in ("eta_a1", "eta_a2"):
+        for key in ("eta_a1", "eta_a2", "e2_margin"):
             object.__setattr__(self, key, _scalar(getattr(self, key), f"actor.{key}", minimum=0.0))
+        object.__setattr__(self, "positive_e2", _boolean(self.positive_e2, "actor.positive_e2"))
         object.__setattr__(
             self,
             "weight_bound",

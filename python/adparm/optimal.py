@@ -17,6 +17,7 @@ __all__ = [
     "optimal_value",
     "optimal_weights",
     "solvable_cost",
+    "value_scale",
 ]
 
 #: The paper's basis phi(x), x = [e1; e2] (the order of W*).
@@ -36,8 +37,10 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     """The exact weights W* of V*(x) = x^T blockdiag(K, M(q)) x in the paper's basis.
 
     They exist when K = -Q12 is symmetric positive definite, Q11 = K alpha1 + alpha1^T K and
-    Q22 = R^-1, for any desired trajectory with the augmented basis and for a set-point with
-    qd2 = 0 with the paper's basis (cos x2 = cos q2 there). Then u* = -R^-1 e2.
+    Q22 = s^2 R^-1 for some s > 0 (to relative tolerance rtol), for any desired trajectory with
+    the augmented basis and for a set-point with qd2 = 0 with the paper's basis (cos x2 = cos q2
+    there). Then V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2; s = 1 is the case of the
+    paper's corrected example.
 
     Parameters
     ----------
@@ -50,8 +53,8 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     Returns
     -------
     ndarray, shape (8,)
-        W* = [K11, K22, 2 K12, p1, 2 p3, p2, 2 p2, 2 p3], in the order of ``BASIS_NAMES``; for
-        the paper's example [4, 6, -8, 5, 2, 1, 2, 2].
+        W* = [K11, K22, 2 K12, s p1, 2 s p3, s p2, 2 s p2, 2 s p3], in the order of
+        ``BASIS_NAMES``; for the paper's example [4, 6, -8, 5, 2, 1, 2, 2].
 
     Raises
     ------
@@ -86,9 +89,10 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             "cost.Q: Q11 must equal K alpha1 + alpha1^T K with K = -Q12 "
             f"(got Q11 = {Q11.tolist()}, K alpha1 + alpha1^T K = {lyapunov.tolist()})"
         )
-    if not close(Q22, np.linalg.inv(R)):
+    scale = value_scale(config)
+    if scale is None:
         raise ValueError(
-            f"cost.Q: Q22 must equal R^-1 (got Q22 = {Q22.tolist()}, "
+            f"cost.Q: Q22 must equal s^2 R^-1 for some s > 0 (got Q22 = {Q22.tolist()}, "
             f"R^-1 = {np.linalg.inv(R).tolist()})"
         )
     if config.controller.basis == "paper" and not (
@@ -104,17 +108,29 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             K[0, 0],
             K[1, 1],
             2.0 * K[0, 1],
-            p["p1"],
-            2.0 * p["p3"],
-            p["p2"],
-            2.0 * p["p2"],
-            2.0 * p["p3"],
+            scale * p["p1"],
+            2.0 * scale * p["p3"],
+            scale * p["p2"],
+            2.0 * scale * p["p2"],
+            2.0 * scale * p["p3"],
         ]
     )
 
 
-def solvable_cost(K: Any, alpha1: Any, R: Any) -> np.ndarray:
-    """The state weight Q for which V* = x^T blockdiag(K, M(q)) x is the exact HJB solution.
+def value_scale(config: Config, *, rtol: float = 1e-9) -> float | None:
+    """s > 0 with Q22 = s^2 R^-1 (to relative tolerance rtol), or None when there is none. In
+    the exact family V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2 (s = 1: the paper's corrected example)."""
+    Q22 = np.array(config.cost.Q)[2:, 2:]
+    R = np.array(config.cost.R)
+    product = Q22 @ R  # = s^2 I
+    s2 = 0.5 * np.trace(product)
+    if not s2 > 0.0 or np.abs(product - s2 * np.eye(2)).max() > rtol * max(s2, 1.0):
+        return None
+    return float(np.sqrt(s2))
+
+
+def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
+    """The state weight Q for which V* = e1^T K e1 + s e2^T M(q) e2 is the exact HJB solution.
 
     Use it with ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is
     known.
@@ -127,30 +143,36 @@ def solvable_cost(K: Any, alpha1: Any, R: Any) -> np.ndarray:
         The gain in e2 = de1 + alpha1 e1.
     R : array_like, shape (2, 2)
         The input weight.
+    s : float, optional
+        The scale of the e2 block (s = 1: the paper's corrected example).
 
     Returns
     -------
     ndarray, shape (4, 4)
-        Q with Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1.
+        Q with Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = s^2 R^-1.
 
     Raises
     ------
     ValueError
         If an input has the wrong shape or is not finite, K is not symmetric positive definite,
-        or the resulting Q is not positive definite (then cost.Q would be refused).
+        s is not > 0, or the resulting Q is not positive definite (then cost.Q would be refused).
     """
+    if isinstance(s, bool) or not isinstance(s, (int, float, np.floating, np.integer)):
+        raise TypeError(f"s: expected a number > 0, got {s!r}")
+    if not (np.isfinite(s) and s > 0.0):
+        raise ValueError(f"s: expected a finite number > 0, got {s!r}")
     K, alpha1, R = (np.asarray(v, dtype=float) for v in (K, alpha1, R))
     for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
         if value.shape != (2, 2) or not np.all(np.isfinite(value)):
             raise ValueError(f"{name}: expected a finite 2 x 2 matrix, got {value.tolist()}")
     if not np.allclose(K, K.T) or np.linalg.eigvalsh(K).min() <= 0.0:
         raise ValueError(f"K: must be symmetric positive definite, got {K.tolist()}")
-    Q = np.block([[K @ alpha1 + alpha1.T @ K, -K], [-K, np.linalg.inv(R)]])
+    Q = np.block([[K @ alpha1 + alpha1.T @ K, -K], [-K, s**2 * np.linalg.inv(R)]])
     Q = 0.5 * (Q + Q.T)
     if np.linalg.eigvalsh(Q).min() <= 0.0:
         raise ValueError(
-            "K, alpha1, R: Q = [[K alpha1 + alpha1^T K, -K], [-K, R^-1]] is not positive definite; "
-            "increase alpha1 or decrease R"
+            "K, alpha1, R: Q = [[K alpha1 + alpha1^T K, -K], [-K, s^2 R^-1]] is not positive "
+            "definite; increase alpha1 or s, or decrease R"
         )
     return Q
 

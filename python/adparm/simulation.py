@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import time
@@ -81,7 +82,7 @@ def core_settings(config: Config) -> _core.Settings:
     critic.epsilon_T = config.resolved_epsilon_T
     settings.critic = critic
     actor = _core.ActorSettings()
-    for key in ("eta_a1", "eta_a2", "weight_bound"):
+    for key in ("eta_a1", "eta_a2", "weight_bound", "positive_e2", "e2_margin"):
         setattr(actor, key, getattr(config.actor, key))
     settings.actor = actor
 
@@ -307,6 +308,16 @@ class SimulationResult:
 
         return pandas.DataFrame(table(self), columns=columns())
 
+    @functools.cached_property
+    def diagnostics(self) -> dict[str, Any]:
+        """The truth about this run (adparm.truth.diagnose): the verdict ("ok" or the problems
+        found: a non-positive-definite e2 block, away from a known W*, a basis that cannot
+        represent V*, learning not converged), the HJB residual of the final weights over the
+        explored region relative to x^T Q x, and the learned V against the best yardstick."""
+        from .truth import diagnose
+
+        return diagnose(self)
+
     def summary(self, tolerance: float = 0.02) -> dict[str, Any]:
         """The metrics of summary.json (adparm.summary.summarize)."""
         from .summary import summarize
@@ -428,7 +439,7 @@ def _check_memory(configs: list[Config]) -> None:
         )
 
 
-def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
+def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -> SimulationResult:
     """Simulate the closed loop of ``config`` in the C++ core (fixed-step RK4).
 
     Parameters
@@ -438,6 +449,10 @@ def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
         is the paper's example).
     progress : bool, optional
         Show a tqdm progress bar in simulated seconds.
+    diagnose : bool, optional
+        Diagnose a finished learning run (``result.diagnostics``) and emit
+        ``adparm.ApproximationWarning`` when the basis cannot represent V* or learning has not
+        converged (the message says which and what to try).
 
     Returns
     -------
@@ -482,6 +497,10 @@ def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
     result = _result(run, config, time.perf_counter() - start)
     if run.status == "diverged":
         raise SimulationDiverged(_divergence_message(run, config), result, run.divergence_time)
+    if diagnose:
+        from .truth import warn_if_approximate
+
+        warn_if_approximate(result)
     return result
 
 

@@ -85,6 +85,13 @@ _REASONS: dict[str, str] = {
     "plant.viscous": "Not in the paper; 0 keeps its friction model.",
     "sim": "Not printed; RK4 with dt = 1 ms, horizon 150 s (past the 110 s claim).",
     "model": "Not in the paper; the controller's model defaults to the plant (exact model).",
+    "actor.positive_e2": (
+        "Not in the paper (its proj{} bounds only ||Wa||): the projection also keeps the e2 block "
+        "of the critic's and the actor's V positive definite at cos q2 = +-1. Without it about one "
+        "run in four with other probe phases or q(0) ends at the anti-stabilising HJB solution "
+        "(e2 block negated), reported as finished."
+    ),
+    "actor.e2_margin": "Not in the paper; see actor.positive_e2 (lambda_min >= 0.01 kg m^2).",
     "controller.basis": (
         "The paper's 8 functions over [x; qd] with cos x2 replaced by cos(qd2 - x2) = cos q2: "
         "identical to the printed basis while qd2 = 0, and exact for any desired trajectory."
@@ -214,6 +221,11 @@ def summarize(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str,
         "paper_claim_time": PAPER_CLAIM_TIME,
         "deviations": deviations(result.config),
     }
+    diagnostics = result.diagnostics
+    out["verdict"] = diagnostics["verdict"]
+    out["e2_block_min_eigenvalue"] = diagnostics.get("e2_block_min_eigenvalue")
+    out["hjb_residual_explored"] = diagnostics.get("hjb_residual_explored")
+    out["diagnostics"] = diagnostics
     if target is None:
         out["optimal_weights_unavailable"] = no_target
         return out
@@ -236,6 +248,33 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+def _diagnostics_lines(d: dict[str, Any] | None) -> list[str]:
+    if not d:
+        return []
+    lines = ["", f"**Verdict: {d['verdict']}**"]
+    if d.get("advice"):
+        lines.append(f"(try: {'; '.join(d['advice'])})")
+    if "hjb_residual_explored" in d:
+        lines += [
+            "",
+            f"- HJB residual of the final weights, rms(eps) / rms(x^T Q x): "
+            f"{_fmt(d['hjb_residual_explored'])} over the explored region, "
+            f"{_fmt(d['hjb_residual_box'])} over the extrapolation box, "
+            f"{_fmt(d['hjb_residual_trajectory'])} along the end of the trajectory"
+            + (
+                f"; the least any weights reach: {_fmt(d['hjb_residual_best'])}"
+                if d.get("hjb_residual_best") is not None
+                else ""
+            ),
+            f"- learned V against {d['value_yardstick'] or '-'}: relative error "
+            f"{_fmt(d['value_error'])}",
+            f"- smallest eigenvalue of the e2 block of V (over q): critic "
+            f"{_fmt(d['e2_block_min_eigenvalue'])}, actor "
+            f"{_fmt(d['actor_e2_block_min_eigenvalue'])}",
+        ]
+    return lines
+
+
 def summary_markdown(summary: dict[str, Any]) -> str:
     """``summary.md``: the W* table, the convergence figures and the deviations."""
     lines = ["# adparm run summary", ""]
@@ -247,6 +286,14 @@ def summary_markdown(summary: dict[str, Any]) -> str:
         f"probe, {_fmt(summary['accumulated_cost_without_probe'])} with the actor's u_hat alone",
         f"- covariance resets: {summary['covariance_resets']}",
     ]
+    lines += _diagnostics_lines(summary.get("diagnostics"))
+    check = summary.get("step_size_check")
+    if check is not None:
+        lines.append(
+            f"- step size: against a dt/2 run over the first {_fmt(check['transient'])} s, the "
+            f"critic weights differ by {_fmt(check.get('critic_max_difference'))} (relative, "
+            f"largest), e1 by {_fmt(check.get('e1_max_difference'))}: {check['verdict']}"
+        )
     target = summary["optimal_weights"]
     if target is None:
         lines += [

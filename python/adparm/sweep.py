@@ -39,6 +39,7 @@ __all__ = ["SWEEP_METRICS", "SweepResult", "grid_points", "sweep", "sweep_row"]
 #: The metrics of each row (from adparm.summary.summarize), after the grid's own columns.
 SWEEP_METRICS = (
     "status",
+    "verdict",
     "t_end",
     "critic_relative_error",
     "actor_relative_error",
@@ -48,6 +49,8 @@ SWEEP_METRICS = (
     "final_e1_norm",
     "accumulated_cost",
     "covariance_resets",
+    "e2_block_min_eigenvalue",
+    "hjb_residual_explored",
     "wall_time",
 )
 

@@ -40,11 +40,14 @@ void bind_settings(py::module_& m) {
       .def_readwrite("nu", &CriticSettings::nu)
       .def_readwrite("gamma0", &CriticSettings::gamma0)
       .def_readwrite("epsilon_T", &CriticSettings::epsilon_T);
-  py::class_<ActorSettings>(m, "ActorSettings", "eta_a1, eta_a2, weight_bound (eq. 26).")
+  py::class_<ActorSettings>(m, "ActorSettings",
+                            "eta_a1, eta_a2, weight_bound (eq. 26), positive_e2, e2_margin.")
       .def(py::init<>())
       .def_readwrite("eta_a1", &ActorSettings::eta_a1)
       .def_readwrite("eta_a2", &ActorSettings::eta_a2)
-      .def_readwrite("weight_bound", &ActorSettings::weight_bound);
+      .def_readwrite("weight_bound", &ActorSettings::weight_bound)
+      .def_readwrite("positive_e2", &ActorSettings::positive_e2)
+      .def_readwrite("e2_margin", &ActorSettings::e2_margin);
   py::class_<ProbeSettings>(m, "ProbeSettings",
                             "amplitude (2, n), until, ramp, frequencies (n,), phases (2, n).")
       .def(py::init<>())

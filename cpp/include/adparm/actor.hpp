@@ -5,8 +5,11 @@
 // of eps_hjb^2 up to a factor 1/2 that eta_a1 absorbs. With Bellman-error extrapolation the
 // gradient term gains its average over the N extrapolation points (extrapolation.hpp). proj keeps
 // ||Wa|| <= weight_bound: at the boundary the outward radial component of the rate is removed.
+// Not in the paper: with positive_e2 on, proj also keeps the e2 block of Wa positive definite
+// (lambda_min >= e2_margin, positive_block.hpp), away from the anti-stabilising HJB solution.
 #pragma once
 
+#include "adparm/positive_block.hpp"
 #include "adparm/types.hpp"
 
 namespace adparm {
@@ -15,6 +18,8 @@ struct ActorSettings {
   double eta_a1 = 0.01;
   double eta_a2 = 1.0;
   double weight_bound = 100.0;
+  bool positive_e2 = true;  // keep the e2 block of Wa positive definite (positive_block.hpp)
+  double e2_margin = 0.01;  // ... with lambda_min >= e2_margin
 };
 
 template <class Basis, int Inputs>
@@ -30,6 +35,7 @@ class Actor {
     check_non_negative(settings.eta_a1, "actor.eta_a1");
     check_non_negative(settings.eta_a2, "actor.eta_a2");
     check_positive(settings.weight_bound, "actor.weight_bound");
+    check_non_negative(settings.e2_margin, "actor.e2_margin");
   }
 
   const ActorSettings& settings() const { return settings_; }
@@ -56,8 +62,12 @@ class Actor {
     return project(Wa, gradient - settings_.eta_a2 * difference);
   }
 
-  // proj{}: on or outside the ball ||Wa|| <= weight_bound, drop the outward radial component.
-  Vector project(const Vector& Wa, const Vector& rate) const {
+  // proj{}: on or outside the ball ||Wa|| <= weight_bound, drop the outward radial component;
+  // with positive_e2, first keep lambda_min of the e2 block >= e2_margin (positive_block.hpp).
+  Vector project(const Vector& Wa, const Vector& unprojected) const {
+    const Vector rate = settings_.positive_e2
+                            ? keep_e2_block_positive<Basis>(Wa, unprojected, settings_.e2_margin)
+                            : unprojected;
     const double norm_squared = Wa.squaredNorm();
     const double outward = Wa.dot(rate);
     if (norm_squared >= settings_.weight_bound * settings_.weight_bound && outward > 0.0)

@@ -21,6 +21,7 @@
 #include "adparm/critic.hpp"
 #include "adparm/extrapolation.hpp"
 #include "adparm/hjb.hpp"
+#include "adparm/positive_block.hpp"
 #include "adparm/rise.hpp"
 #include "adparm/settings.hpp"
 #include "adparm/trajectory.hpp"
@@ -175,6 +176,9 @@ class ClosedLoop {
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(error_system_, cost_, desired, critic_weights, actor_weights, learn);
+      if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
+        critic_rate = keep_e2_block_positive<Basis>(critic_weights, critic_rate,
+                                                    actor_.settings().e2_margin, gamma);
       rate.template segment<kBasisSize>(kActorWeights) =
           actor_.weight_rate(actor_gradient, difference, actor_weights);  // eq. (26)
     } else {

@@ -1,0 +1,467 @@
+"""Runs that tell the truth: yardsticks for any cost and the diagnostics of a learning run.
+
+- :func:`lqr_value`: P of the Riccati equation of the error system linearised at the set-point
+  (python-control), the exact V* = x^T P x of a linear arm and the local V* of any other.
+- :func:`optimal_cost`: the numerically optimal cost from x0 for the believed model without
+  disturbance, by direct transcription (CasADi + IPOPT), for any cost.
+- :func:`diagnose`: after a run, the e2 block of the learned V (positive definite?), the distance
+  to a known W*, the HJB residual of the final weights over the region the run explored (and over
+  the extrapolation box) relative to x^T Q x, and the learned V against the best yardstick. It
+  gives a verdict; :func:`adparm.simulate` warns with :class:`ApproximationWarning` when the basis
+  cannot represent V* or learning has not converged.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .optimal import hjb_residual, initial_error_state, optimal_weights
+from .simulation import desired_state
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .config import Config
+    from .simulation import SimulationResult
+
+__all__ = [
+    "RESIDUAL_TOLERANCE",
+    "ApproximationWarning",
+    "diagnose",
+    "check_step_size",
+    "e2_block_min_eigenvalue",
+    "learned_matrix",
+    "lqr_value",
+    "optimal_cost",
+    "warn_if_approximate",
+]
+
+#: The relative HJB residual rms(eps) / rms(x^T Q x) above which a run is flagged (a critic 2 %
+#: off W* leaves a few per cent).
+RESIDUAL_TOLERANCE = 0.05
+
+# The bases whose e2 block is [[W4 + c W5, (W7 + c W8)/2], [., W6]] (positive_block.hpp).
+_PAPER_BASES = ("paper", "augmented")
+
+# Samples of the explored region and of the extrapolation box (fixed seed: same verdict each time).
+_SAMPLES = 200
+_SEED = 20240
+
+
+class ApproximationWarning(UserWarning):
+    """A learning run whose critic is not a good approximation of V*: the basis cannot represent
+    V* (the HJB residual of the final weights is large off the trajectory while small along it),
+    or learning has not converged. The message says which and what to try."""
+
+
+def _check_config(config: Any) -> Config:
+    from .config import Config
+
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    return config
+
+
+def _mass(config: Config, q2: float) -> np.ndarray:
+    p = config.model.resolve(config.plant)
+    c = math.cos(q2)
+    m12 = p["p2"] + p["p3"] * c
+    return np.array([[p["p1"] + 2.0 * p["p3"] * c, m12], [m12, p["p2"]]])
+
+
+def _linearisation(config: Config) -> tuple[np.ndarray, np.ndarray]:
+    """A, B of dx = A x + B u at x = 0 for the set-point qd(0): de1 = -alpha1 e1 + e2,
+    M(qd) de2 = u (C e2 is quadratic in x and the feedforward cancels G and F)."""
+    alpha1 = np.array(config.control.alpha1)
+    qd = desired_state(config, 0.0)[0]
+    A = np.block([[-alpha1, np.eye(2)], [np.zeros((2, 2)), np.zeros((2, 2))]])
+    B = np.vstack([np.zeros((2, 2)), np.linalg.inv(_mass(config, qd[1]))])
+    return A, B
+
+
+def lqr_value(config: Config) -> np.ndarray:
+    """P (4 x 4) of the algebraic Riccati equation A^T P + P A - P B R^-1 B^T P + Q = 0 of the
+    error system linearised at the set-point qd(0) (believed model, A = [[-alpha1, I], [0, 0]],
+    B = [0; M(qd)^-1]), solved by python-control (control.care). x^T P x is V* exactly for a
+    linear arm (p3 = 0) and the local V* near the set-point otherwise; on ERRATA's instances
+    P = blockdiag(K, s M(qd))."""
+    import control
+
+    config = _check_config(config)
+    A, B = _linearisation(config)
+    Q, R = np.array(config.cost.Q), np.array(config.cost.R)
+    P, _, _ = control.care(A, B, Q, R)
+    P = np.asarray(P)
+    return 0.5 * (P + P.T)
+
+
+def learned_matrix(config: Config, weights: Any) -> np.ndarray:
+    """The quadratic form of V = W^T phi at the set-point qd(0) (x -> 0, cos q2 -> cos qd2):
+    blockdiag([[W1, W3/2], [W3/2, W2]], [[W4 + c W5, (W7 + c W8)/2], [., W6]]), to compare with
+    :func:`lqr_value`."""
+    W = np.asarray(weights, dtype=float)
+    c = math.cos(desired_state(config, 0.0)[0][1])
+    P = np.zeros((4, 4))
+    P[:2, :2] = [[W[0], W[2] / 2], [W[2] / 2, W[1]]]
+    b = 0.5 * (W[6] + c * W[7])
+    P[2:, 2:] = [[W[3] + c * W[4], b], [b, W[5]]]
+    return P
+
+
+def e2_block_min_eigenvalue(weights: Any) -> float:
+    """min over cos q2 in [-1, 1] of lambda_min(P(cos q2)), P the e2 block of V = W^T phi in the
+    paper/augmented basis (affine in cos q2, so the minimum is at cos q2 = +-1). Negative: V is
+    not positive definite for some q, as at the anti-stabilising HJB solution."""
+    W = np.asarray(weights, dtype=float)
+    values = []
+    for c in (1.0, -1.0):
+        b = 0.5 * (W[6] + c * W[7])
+        values.append(np.linalg.eigvalsh([[W[3] + c * W[4], b], [b, W[5]]])[0])
+    return float(min(values))
+
+
+def optimal_cost(
+    config: Config,
+    x0: Any = None,
+    *,
+    horizon: float | None = None,
+    intervals: int = 400,
+) -> float:
+    """The optimal cost int_0^inf x^T Q x + u^T R u dt from x0 (default: the initial error state
+    of ``config``) for the error system of the believed model without disturbance,
+    de1 = -alpha1 e1 + e2, M(q) de2 = -C(q, dq) e2 + u, q = qd - e1, dq = alpha1 e1 - e2 (a
+    set-point qd), by direct multiple shooting (CasADi, IPOPT): ``intervals`` RK4 intervals over
+    ``horizon`` (default 12 / the slowest closed-loop LQR rate) with u linear within each
+    interval, plus the terminal cost x(T)^T P x(T) of :func:`lqr_value`. Any cost Q, R. On
+    ERRATA's instances it equals V*(x0) = e1^T K e1 + s e2^T M e2 to about 1e-4."""
+    import casadi
+
+    config = _check_config(config)
+    if not config.task.is_set_point:
+        raise ValueError("task.qd: optimal_cost needs a set-point (a constant qd)")
+    if isinstance(intervals, bool) or not isinstance(intervals, (int, np.integer)):
+        raise TypeError(f"intervals: expected an integer >= 10, got {intervals!r}")
+    if intervals < 10:
+        raise ValueError(f"intervals: expected an integer >= 10, got {intervals!r}")
+    x0 = initial_error_state(config) if x0 is None else np.asarray(x0, dtype=float)
+    if x0.shape != (4,) or not np.all(np.isfinite(x0)):
+        raise ValueError(f"x0: expected 4 finite numbers, got {x0!r}")
+    P = lqr_value(config)
+    Q, R = np.array(config.cost.Q), np.array(config.cost.R)
+    alpha1 = np.array(config.control.alpha1)
+    if horizon is None:
+        A, B = _linearisation(config)
+        closed = A - B @ np.linalg.solve(R, B.T @ P)
+        horizon = 12.0 / float(np.min(-np.linalg.eigvals(closed).real))
+    if not (math.isfinite(horizon) and horizon > 0.0):
+        raise ValueError(f"horizon: expected a finite number > 0, got {horizon!r}")
+    p = config.model.resolve(config.plant)
+    qd = desired_state(config, 0.0)[0]
+
+    x = casadi.SX.sym("x", 4)
+    u = casadi.SX.sym("u", 2)
+    e1, e2 = x[:2], x[2:]
+    q2 = qd[1] - x[1]
+    dq = casadi.mtimes(casadi.DM(alpha1), e1) - e2
+    c2, s2 = casadi.cos(q2), casadi.sin(q2)
+    m12 = p["p2"] + p["p3"] * c2
+    M = casadi.vertcat(
+        casadi.horzcat(p["p1"] + 2 * p["p3"] * c2, m12), casadi.horzcat(m12, p["p2"])
+    )
+    h = p["p3"] * s2
+    C = casadi.vertcat(
+        casadi.horzcat(-h * dq[1], -h * (dq[0] + dq[1])), casadi.horzcat(h * dq[0], 0)
+    )
+    de1 = -casadi.mtimes(casadi.DM(alpha1), e1) + e2
+    de2 = casadi.solve(M, -casadi.mtimes(C, e2) + u)
+    rate = casadi.vertcat(
+        de1, de2, casadi.bilin(casadi.DM(Q), x, x) + casadi.bilin(casadi.DM(R), u, u)
+    )
+    f = casadi.Function("f", [x, u], [rate])
+
+    step = horizon / intervals
+    xa = casadi.SX.sym("xa", 5)
+    ua, ub = casadi.SX.sym("ua", 2), casadi.SX.sym("ub", 2)
+    k1 = f(xa[:4], ua)
+    k2 = f(xa[:4] + step / 2 * k1[:4], (ua + ub) / 2)
+    k3 = f(xa[:4] + step / 2 * k2[:4], (ua + ub) / 2)
+    k4 = f(xa[:4] + step * k3[:4], ub)
+    rk4 = casadi.Function("rk4", [xa, ua, ub], [xa + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+
+    opti = casadi.Opti()
+    X = opti.variable(4, intervals + 1)
+    U = opti.variable(2, intervals + 1)
+    opti.subject_to(X[:, 0] == x0)
+    total = 0
+    for k in range(intervals):
+        end = rk4(casadi.vertcat(X[:, k], 0), U[:, k], U[:, k + 1])
+        opti.subject_to(X[:, k + 1] == end[:4])
+        total += end[4]
+    total += casadi.bilin(casadi.DM(P), X[:, -1], X[:, -1])
+    opti.minimize(total)
+    # the LQR policy's trajectory of the linearisation as the initial guess
+    opti.set_initial(
+        X, np.outer(x0, np.ones(intervals + 1)) * np.exp(-np.arange(intervals + 1) * step)
+    )
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
+    try:
+        solution = opti.solve()
+    except RuntimeError as error:  # pragma: no cover - IPOPT failed
+        raise RuntimeError(f"optimal_cost: IPOPT did not converge ({error})") from error
+    return float(solution.value(total))
+
+
+def _explored_states(result: SimulationResult, rng: np.random.Generator) -> np.ndarray:
+    x = np.hstack([result.e1, result.e2])
+    low, high = x.min(axis=0), x.max(axis=0)
+    return rng.uniform(low, high, size=(_SAMPLES, 4))
+
+
+def _relative_residual(
+    config: Config, X: np.ndarray, Wc: np.ndarray, Wa: np.ndarray, t_end: float = 0.0
+) -> float:
+    """rms(eps) / rms(x^T Q x) over X; for a moving qd the states are split over 8 times in
+    [0, t_end] (the desired state enters the HJB error)."""
+    Q = np.array(config.cost.Q)
+    times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
+    groups = np.array_split(np.arange(len(X)), len(times))
+    eps = np.concatenate(
+        [
+            np.atleast_1d(hjb_residual(config, X[g], Wc, Wa, t=float(t)))
+            for g, t in zip(groups, times, strict=True)
+        ]
+    )
+    cost = np.einsum("ni,ij,nj->n", X, Q, X)
+    return float(np.sqrt(np.mean(eps**2)) / max(np.sqrt(np.mean(cost**2)), 1e-300))
+
+
+def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: float) -> float:
+    """min over W of the relative HJB residual with Wc = Wa = W over the states X (least squares
+    from ``start``): how well the basis can represent V* there."""
+    from scipy.optimize import least_squares
+
+    from . import _core
+    from .simulation import core_settings
+
+    Q = np.array(config.cost.Q)
+    scale = max(np.sqrt(np.mean(np.einsum("ni,ij,nj->n", X, Q, X) ** 2)), 1e-300)
+    settings = core_settings(config)  # converted once
+    times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
+    groups = [np.ascontiguousarray(g) for g in np.array_split(X, len(times))]
+
+    def residuals(W: np.ndarray) -> np.ndarray:
+        parts = [
+            _core.hjb_residual(settings, g, W, W, float(t))
+            for g, t in zip(groups, times, strict=True)
+        ]
+        return np.concatenate(parts) / scale
+
+    best = least_squares(residuals, start, method="lm", max_nfev=200)
+    return float(np.sqrt(np.mean(best.fun**2)))
+
+
+def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, Any]:
+    """The truth about a run (plain JSON-ready data; summary.json's ``diagnostics``):
+
+    - e2_block_min_eigenvalue (critic, actor): min over q of lambda_min of V's e2 block; <= 0
+      means the run ended at a non-stabilising solution;
+    - critic_relative_error: ||Wc - W*|| / ||W*|| when W* is known (else None);
+    - hjb_residual_explored: rms(eps) / rms(x^T Q x) of the HJB error (eq. 21) of the final
+      weights over states drawn uniformly in the box the run's x explored; hjb_residual_box: the
+      same over the extrapolation box (when extrapolation is on); hjb_residual_trajectory: the same
+      along the last 10 % of the recorded rows; hjb_residual_best (when the explored residual is
+      above RESIDUAL_TOLERANCE): the least residual any weights reach there (least squares), which
+      tells a basis that cannot represent V* (large) from learning that has not converged (small);
+    - value_yardstick ("W*" or "LQR") and value_error: the relative error of the learned V against
+      V* (sampled states, W* known) or of its quadratic form at the set-point against the LQR P;
+    - verdict: "ok", or the problems found, and advice: what to try.
+    Only learning (adp) runs with rows are diagnosed; others give verdict "not a learning run"."""
+    config = result.config
+    out: dict[str, Any] = {"verdict": "ok", "problems": [], "advice": []}
+    if config.controller.kind != "adp" or result.t.size < 2:
+        out["verdict"] = "not a learning run" if config.controller.kind != "adp" else "no rows"
+        return out
+    Wc, Wa = result.critic_weights[-1], result.actor_weights[-1]
+    paper_basis = config.controller.basis in _PAPER_BASES  # the e2 block's layout is known
+    out["e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wc) if paper_basis else None
+    out["actor_e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wa) if paper_basis else None
+    if result.status == "diverged" or not (np.all(np.isfinite(Wc)) and np.all(np.isfinite(Wa))):
+        out["problems"].append("diverged")
+        if (
+            paper_basis
+            and min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"]) <= 0.0
+        ):
+            out["problems"].append("the e2 block of the learned V is not positive definite")
+        out["verdict"] = "; ".join(out["problems"])
+        return out
+    try:
+        target = optimal_weights(config)
+    except ValueError:
+        target = None
+    rng = np.random.default_rng(_SEED)
+    X = _explored_states(result, rng)
+    t_end = float(result.t[-1])
+    out["hjb_residual_explored"] = _relative_residual(config, X, Wc, Wa, t_end)
+    out["hjb_residual_box"] = None
+    if config.extrapolation.points > 0:
+        box = np.array(config.extrapolation.box_vector())
+        out["hjb_residual_box"] = _relative_residual(
+            config, rng.uniform(-box, box, size=(_SAMPLES, 4)), Wc, Wa, t_end
+        )
+    tail = result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0])
+    x_tail = np.hstack([result.e1, result.e2])[tail]
+    q_tail = np.einsum("ni,ij,nj->n", x_tail, np.array(config.cost.Q), x_tail)
+    out["hjb_residual_trajectory"] = float(
+        np.sqrt(np.mean(result.hjb_error[tail] ** 2)) / max(np.sqrt(np.mean(q_tail**2)), 1e-300)
+    )
+    if target is not None:
+        out["critic_relative_error"] = float(np.linalg.norm(Wc - target) / np.linalg.norm(target))
+        out["value_yardstick"] = "W*"
+        from . import _core
+
+        kind = getattr(_core.BasisKind, config.controller.basis)
+        qd = desired_state(config, 0.0)[0]
+        phi = np.array([_core.basis(kind, x, qd, np.zeros(2))[0] for x in X])
+        exact = phi @ target
+        out["value_error"] = float(np.sqrt(np.mean((phi @ Wc - exact) ** 2) / np.mean(exact**2)))
+    else:
+        out["critic_relative_error"] = None
+        if config.task.is_set_point and paper_basis:
+            P = lqr_value(config)
+            out["value_yardstick"] = "LQR"
+            out["value_error"] = float(
+                np.linalg.norm(learned_matrix(config, Wc) - P) / np.linalg.norm(P)
+            )
+        else:
+            out["value_yardstick"], out["value_error"] = None, None
+
+    problems, advice = out["problems"], out["advice"]
+    lowest = (
+        min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"])
+        if paper_basis
+        else math.inf
+    )
+    if lowest <= 0.0:
+        problems.append(
+            "ended at a non-stabilising solution: the e2 block of the learned V is not positive "
+            f"definite (lambda_min = {lowest:.3g})"
+        )
+        advice.append("keep actor.positive_e2 = true (the default)")
+    if target is not None and out["critic_relative_error"] > tolerance:
+        problems.append(
+            f"ended away from the known W*: ||Wc - W*|| / ||W*|| = "
+            f"{out['critic_relative_error']:.3g} > {tolerance:g}"
+        )
+    residual = out["hjb_residual_explored"]
+    on_trajectory = out["hjb_residual_trajectory"]
+    out["hjb_residual_best"] = None
+    if residual > RESIDUAL_TOLERANCE:
+        if target is not None:  # the basis represents V* exactly: W* reaches round-off
+            best = _relative_residual(config, X, target, target, t_end)
+        else:
+            best = _best_residual(config, X, Wc, t_end)
+        out["hjb_residual_best"] = best
+        if best > RESIDUAL_TOLERANCE:
+            out["approximation"] = "basis"
+            problems.append(
+                f"the basis cannot represent V*: the HJB residual of the final weights is "
+                f"{residual:.3g} of x^T Q x over the explored region ({on_trajectory:.3g} along "
+                f"the end of the trajectory), and no weights do better than {best:.3g}"
+            )
+            advice.append(
+                "use a cost of the exact family (adparm.solvable_cost; then W* is known), or a "
+                "basis that can represent V* (controller.basis), and compare with "
+                "adparm.lqr_value / adparm.optimal_cost"
+            )
+        else:
+            out["approximation"] = "not converged"
+            problems.append(
+                f"learning has not converged: the HJB residual of the final weights is "
+                f"{residual:.3g} of x^T Q x over the explored region, where the basis can reach "
+                f"{best:.3g}"
+            )
+            advice.append(
+                "run longer (sim.T), excite more (probe.amplitude) or add Bellman-error "
+                "extrapolation (extrapolation.points)"
+            )
+    elif target is not None and out["critic_relative_error"] > tolerance:
+        out["approximation"] = "not converged"
+        advice.append("run longer (sim.T) or excite more (probe.amplitude)")
+    if problems:
+        out["verdict"] = "; ".join(problems)
+    return out
+
+
+#: check_step_size flags a transient whose dt and dt/2 runs differ by more than this (relative).
+STEP_TOLERANCE = 0.01
+
+
+def check_step_size(config: Config, *, transient: float = 1.0) -> dict[str, Any]:
+    """The integration error of the early learning transient: runs ``config`` over the first
+    ``transient`` seconds (at most sim.T) with sim.dt and with sim.dt / 2 and compares, on the rows
+    both record (every ~10 ms), the critic weights and e1:
+
+    - critic_max_difference: max_t ||Wc_dt - Wc_dt/2|| / max_t ||Wc_dt/2||;
+    - critic_final_difference: the same at the end of the transient;
+    - e1_max_difference: max_t |e1_dt - e1_dt/2| / max_t |e1_dt/2|;
+    - verdict: "ok" when all are below STEP_TOLERANCE (1 %), else what was seen and what to try.
+    RK4 is fourth order, so the difference is about 15/16 of the error of the dt run."""
+    from .simulation import SimulationDiverged, simulate
+
+    config = _check_config(config)
+    if not (isinstance(transient, (int, float)) and math.isfinite(transient) and transient > 0):
+        raise ValueError(f"transient: expected a finite number > 0, got {transient!r}")
+    dt = config.sim.dt
+    T = min(float(transient), config.sim.T)
+    every = max(1, round(0.01 / dt))
+    runs = []
+    for step, record in ((dt, every), (dt / 2, 2 * every)):
+        changed = config.updated({"sim": {"T": T, "dt": step, "record_every": record}})
+        try:
+            runs.append(simulate(changed, diagnose=False))
+        except SimulationDiverged as error:
+            runs.append(error.result)
+    coarse, fine = runs
+    n = min(coarse.t.size, fine.t.size) - 1  # the last row is at T in both
+    out: dict[str, Any] = {"dt": dt, "transient": T}
+    if coarse.status != "finished" or fine.status != "finished":
+        out["verdict"] = (
+            f"a run diverged (dt: {coarse.status}, dt/2: {fine.status}); try a smaller sim.dt"
+        )
+        return out
+    rows = list(range(n)) + [-1]
+    Wc, Wc_half = coarse.critic_weights[rows], fine.critic_weights[rows]
+    e1, e1_half = coarse.e1[rows], fine.e1[rows]
+    scale = max(np.linalg.norm(Wc_half, axis=1).max(), 1e-300)
+    difference = np.linalg.norm(Wc - Wc_half, axis=1)
+    out["critic_max_difference"] = float(difference.max() / scale)
+    out["critic_final_difference"] = float(
+        difference[-1] / max(np.linalg.norm(Wc_half[-1]), 1e-300)
+    )
+    out["e1_max_difference"] = float(
+        np.linalg.norm(e1 - e1_half, axis=1).max()
+        / max(np.linalg.norm(e1_half, axis=1).max(), 1e-300)
+    )
+    worst = max(out["critic_max_difference"], out["e1_max_difference"])
+    out["verdict"] = (
+        "ok"
+        if worst <= STEP_TOLERANCE
+        else f"sim.dt = {dt:g} s leaves {100 * worst:.2g} % of integration error in the first "
+        f"{T:g} s (critic weights or e1 against a dt/2 run); try sim.dt = {dt / 2:g}"
+    )
+    return out
+
+
+def warn_if_approximate(result: SimulationResult, stacklevel: int = 3) -> None:
+    """Emits ApproximationWarning when :func:`diagnose` finds that the basis cannot represent V*
+    or that learning has not converged (only for finished runs)."""
+    if result.status != "finished":
+        return
+    diagnostics = result.diagnostics
+    kind = diagnostics.get("approximation")
+    if kind is None and not diagnostics.get("problems"):
+        return
+    message = f"adparm: {diagnostics['verdict']}. Try: {'; '.join(diagnostics['advice']) or '-'}"
+    warnings.warn(message, ApproximationWarning, stacklevel=stacklevel)

@@ -1,0 +1,212 @@
+"""Runs that tell the truth: the e2-block projection, the diagnostics and ApproximationWarning,
+and the yardsticks lqr_value (python-control, checked against SciPy) and optimal_cost (CasADi)."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import adparm
+from adparm.truth import e2_block_min_eigenvalue
+
+from conftest import random_optimal_config
+
+
+def test_paper_instance_does_not_warn_and_is_diagnosed_ok() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 30.0, "record_every": 100}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", adparm.ApproximationWarning)
+        result = adparm.simulate(config)
+    d = result.diagnostics
+    assert d["verdict"] == "ok" and not d["problems"], d
+    assert d["hjb_residual_explored"] < 1e-6 and d["critic_relative_error"] < 1e-6
+    assert d["value_yardstick"] == "W*" and d["value_error"] < 1e-6
+    assert d["e2_block_min_eigenvalue"] > 0.3
+
+
+def test_diagonal_cost_on_the_paper_arm_warns_that_the_basis_cannot_represent_v_star() -> None:
+    Q = np.diag([40.0, 40.0, 4.0, 4.0])
+    config = adparm.paper_config().updated({"cost": {"Q": Q}, "sim": {"record_every": 100}})
+    with pytest.warns(adparm.ApproximationWarning, match="basis cannot represent V"):
+        result = adparm.simulate(config)
+    d = result.diagnostics
+    assert d["approximation"] == "basis" and d["hjb_residual_best"] > 0.01
+    assert d["value_yardstick"] == "LQR" and d["value_error"] > 0.1
+    assert "solvable_cost" in " ".join(d["advice"])
+
+
+def test_a_short_run_warns_that_learning_has_not_converged() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 2.0}})
+    with pytest.warns(adparm.ApproximationWarning, match="not converged"):
+        result = adparm.simulate(config)
+    assert "away from the known W*" in result.diagnostics["verdict"]
+    assert result.diagnostics["hjb_residual_best"] < 1e-9  # W* is in the basis
+    assert issubclass(adparm.ApproximationWarning, UserWarning)
+
+
+def test_non_positive_definite_e2_block_is_reported() -> None:
+    # started at the anti-stabilising solution with the projection off, learning stays there
+    W = adparm.optimal_weights(adparm.paper_config())
+    bad = W.copy()
+    bad[3:] *= -1.0
+    assert e2_block_min_eigenvalue(bad) < 0.0 < e2_block_min_eigenvalue(W)
+    config = adparm.paper_config().updated(
+        {
+            "sim": {"T": 0.5},
+            "actor": {"positive_e2": False},
+            "probe": {"until": 0.0},
+            "init": {"critic_weights": bad, "actor_weights": bad},
+        }
+    )
+    try:
+        result = adparm.simulate(config, diagnose=False)
+    except adparm.SimulationDiverged as error:
+        result = error.result
+    assert "non-stabilising" in adparm.diagnose(result)["verdict"]
+
+
+def test_lqr_value_agrees_with_scipy_and_with_the_analytic_solution(rng) -> None:
+    for _ in range(3):
+        config = random_optimal_config(rng)
+        P = adparm.lqr_value(config)
+        alpha1 = np.array(config.control.alpha1)
+        qd2 = config.task.qd[1] if config.task.is_set_point else 0.0
+        M = np.array(
+            adparm._core.arm_terms(
+                adparm.simulation.core_settings(config).model, [0.0, qd2], [0.0, 0.0]
+            )["M"]
+        )
+        A = np.block([[-alpha1, np.eye(2)], [np.zeros((2, 2)), np.zeros((2, 2))]])
+        B = np.vstack([np.zeros((2, 2)), np.linalg.inv(M)])
+        Q, R = np.array(config.cost.Q), np.array(config.cost.R)
+        np.testing.assert_allclose(P, scipy.linalg.solve_continuous_are(A, B, Q, R), rtol=1e-8)
+        K = -Q[:2, 2:]
+        np.testing.assert_allclose(P, scipy.linalg.block_diag(K, M), rtol=1e-8, atol=1e-9)
+    # any cost: P solves the Riccati equation
+    config = adparm.paper_config().updated({"cost": {"Q": np.diag([40.0, 40.0, 4.0, 4.0])}})
+    P = adparm.lqr_value(config)
+    np.testing.assert_allclose(
+        P,
+        scipy.linalg.solve_continuous_are(
+            *_linear(config), np.diag([40, 40, 4, 4]), np.array(config.cost.R)
+        ),
+        rtol=1e-8,
+    )
+
+
+def _linear(config):
+    from adparm.truth import _linearisation
+
+    return _linearisation(config)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_optimal_cost_equals_the_analytic_value_on_errata_instances(seed) -> None:
+    rng = np.random.default_rng(seed)
+    config = random_optimal_config(rng)
+    if seed == 0:
+        config = adparm.paper_config()
+    x0 = adparm.initial_error_state(config)
+    expected = adparm.optimal_value(config, x0)
+    assert adparm.optimal_cost(config, x0) == pytest.approx(expected, rel=5e-3)
+
+
+def test_no_controller_beats_the_optimal_cost() -> None:
+    config = adparm.paper_config().updated(
+        {
+            "plant": {"disturbance": [0.0, 0.0], "coulomb": 0.0},
+            "controller": {"rise": False},
+            "sim": {"T": 10.0, "record_every": 100},
+        }
+    )
+    best = adparm.optimal_cost(config)
+    for kind in ("pd", "optimal"):
+        result = adparm.simulate(config.updated({"controller": {"kind": kind}}))
+        assert result.cost[-1] >= best * (1 - 1e-3), kind
+    # the exact optimal policy reaches it
+    optimal = adparm.simulate(config.updated({"controller": {"kind": "optimal"}}))
+    assert optimal.cost[-1] == pytest.approx(best, rel=5e-3)
+
+
+def test_verdict_reaches_summary_sweep_rows_and_cli(tmp_path, capsys) -> None:
+    from adparm.cli import main
+    from adparm.summary import summary_markdown
+
+    config = adparm.paper_config().updated({"sim": {"T": 3.0, "record_every": 100}})
+    result = adparm.simulate(config, diagnose=False)
+    summary = result.summary()
+    assert "away from the known W*" in summary["verdict"]
+    assert summary["diagnostics"]["verdict"] == summary["verdict"]
+    assert "**Verdict: ended away from the known W*" in summary_markdown(summary)
+    table = adparm.sweep(config, {"task.q0": [[0.1, 0.2]]}, threads=1)
+    assert "away from the known W*" in table.rows[0]["verdict"]
+    assert table.rows[0]["e2_block_min_eigenvalue"] > 0.0
+    path = tmp_path / "run.toml"
+    path.write_text(config.to_toml())
+    with pytest.warns(adparm.ApproximationWarning, match="not converged"):
+        status = main(
+            ["run", str(path), "--out", str(tmp_path / "out"), "--no-figures", "--no-progress"]
+        )
+    assert status == 0
+    assert "verdict: ended away from the known W*" in capsys.readouterr().err
+    saved = (tmp_path / "out" / "summary.json").read_text()
+    assert '"verdict": "ended away from the known W*' in saved
+
+
+def test_compare_reports_every_controller_against_the_optimal_cost_for_any_cost() -> None:
+    config = adparm.paper_config().updated(
+        {
+            "cost": {"Q": np.diag([40.0, 40.0, 4.0, 4.0])},
+            "plant": {"disturbance": [0.0, 0.0], "coulomb": 0.0},
+            "controller": {"rise": False},
+            "sim": {"T": 8.0, "record_every": 100},
+        }
+    )
+    comparison = adparm.compare(config, ["pd", "optimal"])
+    best = comparison.optimal_cost
+    assert best == pytest.approx(adparm.optimal_cost(config), rel=1e-9)
+    for row in comparison.rows:
+        J = comparison.results[row["controller"]].cost[-1]
+        assert row["cost_vs_optimal_cost"] == pytest.approx(J / best - 1.0, rel=1e-12)
+        assert row["cost_vs_optimal_cost"] > -1e-3  # nobody beats J*
+    assert "J / J* - 1" in comparison.table_markdown()
+
+
+def test_check_step_size_sees_the_integration_error_of_the_transient(tmp_path, capsys) -> None:
+    from adparm.cli import main
+
+    coarse = adparm.check_step_size(adparm.paper_config(), transient=0.5)
+    fine = adparm.check_step_size(
+        adparm.paper_config().updated({"sim": {"dt": 2.5e-4}}), transient=0.5
+    )
+    assert coarse["dt"] == 1e-3 and coarse["transient"] == 0.5
+    # dt = 1 ms: a few per cent in the critic's transient; a 4x smaller step: well below 1 %
+    assert coarse["critic_max_difference"] > 0.01 and "try sim.dt = 0.0005" in coarse["verdict"]
+    assert fine["critic_max_difference"] < 0.01 and fine["verdict"] == "ok"
+    assert fine["critic_max_difference"] < coarse["critic_max_difference"] / 8
+    assert fine["e1_max_difference"] < coarse["e1_max_difference"]
+    path = tmp_path / "run.toml"
+    path.write_text(adparm.paper_config().updated({"sim": {"T": 1.0}}).to_toml())
+    out = tmp_path / "out"
+    argv = ["run", str(path), "--out", str(out), "--no-figures", "--no-progress", "--check-dt"]
+    with pytest.warns(adparm.ApproximationWarning, match="not converged"):  # a 1 s run
+        assert main(argv) == 0
+    assert "step size (first 1 s against dt/2): sim.dt = 0.001 s leaves" in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["step_size_check"]["critic_max_difference"] > 0.01
+    assert "- step size: against a dt/2 run" in (out / "summary.md").read_text()
+
+
+def test_diagnostics_cover_the_extrapolation_box() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 2.0}, "extrapolation": {"points": 10}})
+    d = adparm.simulate(config).diagnostics  # extrapolation learns W* within 2 s: no warning
+    assert d["verdict"] == "ok"
+    assert d["hjb_residual_box"] is not None and d["hjb_residual_box"] < 0.05
+    assert (
+        adparm.diagnose(adparm.simulate(config.updated({"controller": {"kind": "pd"}})))["verdict"]
+        == "not a learning run"
+    )
