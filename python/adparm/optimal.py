@@ -118,8 +118,10 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
 
 
 def value_scale(config: Config, *, rtol: float = 1e-9) -> float | None:
-    """s > 0 with Q22 = s^2 R^-1 (to relative tolerance rtol), or None when there is none. In
-    the exact family V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2 (s = 1: the paper's corrected example)."""
+    """s > 0 with Q22 = s^2 R^-1 (to relative tolerance rtol), or None when there is none.
+
+    In the exact family V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2 (s = 1: the paper's
+    corrected example)."""
     Q22 = np.array(config.cost.Q)[2:, 2:]
     R = np.array(config.cost.R)
     product = Q22 @ R  # = s^2 I
