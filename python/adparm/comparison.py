@@ -180,9 +180,9 @@ class Comparison:
       optimal cost from the same x(0) for the believed model without disturbance, for any cost
       (``optimal_cost`` holds J*; None for a moving qd or when IPOPT fails). Below 0 only where
       the run is not that problem: RISE effort is not charged, a disturbance or model error acts;
-    - rms_e1: sqrt(1/T int |e1|^2 dt) over the recorded rows (trapezoid rule), rad;
-    - final_e1: |e1| at the last row, rad;
-    - peak_torque: max |tau| over both joints and all rows, N m;
+    - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
+    - final_e1: ``|e1|`` at the last row, rad;
+    - peak_torque: max ``|tau|`` over both joints and all rows, N m;
     - t_end: the last recorded time (earlier than sim.T for a diverged run), s;
     - wall_time (s) and status (finished, diverged or interrupted) of the run."""
 
