@@ -52,11 +52,10 @@ def test_batch_equals_one_by_one_runs(configs, one_by_one, threads) -> None:
         assert batched.wall_time > 0.0
 
 
-def test_batch_over_many_chunks_equals_one_by_one_runs(configs, one_by_one, monkeypatch) -> None:
-    """Runs of different lengths, advanced in many short chunks (returns to Python between)."""
-    monkeypatch.setattr(adparm.simulation, "CALL_SECONDS", 0.0)
-    monkeypatch.setattr(adparm.simulation, "MIN_CALL_STEPS", 50)
-    results = adparm.simulate_batch(configs, threads=2, progress=False)
+def test_batch_polled_often_equals_one_by_one_runs(configs, one_by_one, monkeypatch) -> None:
+    """Runs of different lengths, polled by Python every 0.1 ms while the workers run."""
+    monkeypatch.setattr(adparm.simulation, "POLL_SECONDS", 1e-4)
+    results = adparm.simulate_batch(configs, threads=2, progress=True)
     for alone, batched in zip(one_by_one, results, strict=True):
         assert_same_run(alone, batched)
 
@@ -138,4 +137,31 @@ def test_core_batch_names_the_failing_settings() -> None:
     with pytest.raises(ValueError, match=r"settings\[1\]: sim.dt"):
         adparm._core.Batch([settings, broken])
     with pytest.raises(ValueError, match="threads: must be >= 1"):
-        adparm._core.Batch([settings]).advance(10, 0)
+        adparm._core.Batch([settings]).start(0)
+
+
+def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
+    """Workers build at most `window` runs not yet taken; each run handed over equals its
+    one-by-one run, and a stopped batch hands over the part-way and the unstarted runs."""
+    settings = [adparm.simulation.core_settings(c) for c in configs]
+    batch = adparm._core.Batch(settings)
+    assert batch.total_steps == sum(round(c.sim.T / c.sim.dt) for c in configs)
+    batch.start(2, 1)
+    ended: list[int] = []
+    while not batch.done:
+        for i in batch.wait(0.05):
+            ended.append(i)
+            run = batch.take(i)
+            result = adparm.simulation._result(run, configs[i], batch.seconds(i))
+            assert_same_run(one_by_one[i], result)
+    assert sorted(ended) == list(range(len(configs)))
+    assert batch.steps_done == batch.total_steps
+    with pytest.raises(RuntimeError, match="already taken"):
+        batch.take(0)
+    stopped = adparm._core.Batch(settings)
+    stopped.start(1, 1)
+    stopped.stop()
+    runs = {}
+    adparm.simulation._take_rest(stopped, runs)
+    assert sorted(runs) == list(range(len(configs)))
+    assert all(run.status in ("running", "finished") for run in runs.values())
