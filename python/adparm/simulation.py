@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Callable, Iterable
@@ -213,6 +214,14 @@ class SimulationResult:
         object.__setattr__(self, "covariance_reset_times", resets)
         if self.status not in STATUSES:
             raise ValueError(f"status: expected one of {', '.join(STATUSES)}, got {self.status!r}")
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        # pickle and copy.deepcopy rebuild through __init__, so the arrays are checked and
+        # read-only again (the default would restore them writable)
+        return (
+            SimulationResult,
+            tuple(getattr(self, f.name) for f in dataclasses.fields(self)),
+        )
 
     @property
     def covariance_resets(self) -> int:
@@ -452,13 +461,15 @@ def _check_memory(configs: list[Config], at_once: int | None = None, threads: in
     if needed > available:
         which = "these runs" if len(configs) > 1 else "this run"
         points = max(c.extrapolation.points for c in configs)
+        field = "sim.record_every"
         change = "record fewer rows (a larger sim.record_every or a shorter sim.T)"
         if points and POINT_BYTES * points > needed / 4:
-            change += " or use fewer extrapolation.points"
+            field = "extrapolation.points"
+            change = "use fewer extrapolation.points, or " + change
         if len(configs) > 1 and at_once is None:
             change += ", or run fewer configs at once (adparm.sweep keeps only summary rows)"
         raise ValueError(
-            f"sim.record_every: {which} would need about {needed / 2**30:.3g} GiB of memory, "
+            f"{field}: {which} would need about {needed / 2**30:.3g} GiB of memory, "
             f"more than the {available / 2**30:.3g} GiB available now; {change}"
         )
 

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from tqdm.auto import tqdm
 
+from ._files import write_text
 from .config import _SECTIONS, Config, _hint
 from .simulation import (
     SimulationInterrupted,
@@ -213,9 +214,9 @@ class SweepResult:
         if path.suffix == ".csv":
             return write_csv(path, self.columns, self.rows)
         if path.suffix == ".json":
-            path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
+            write_text(path, json.dumps(self.to_json(), indent=2) + "\n")
         elif path.suffix == ".md":
-            path.write_text("# adparm sweep\n\n" + self.to_markdown())
+            write_text(path, "# adparm sweep\n\n" + self.to_markdown())
         else:
             raise ValueError(f"path: expected a .csv, .json or .md file, got {str(path)!r}")
         return path
