@@ -21,7 +21,9 @@
 //     each in chunks of 7 and 13 steps, compared bit for bit with a one-shot run: local and grid
 //     extrapolation points, the paper basis with a model error, sinusoid and spline tracking with
 //     points, the rise, pd and optimal controllers, a run that diverges (dt = 4 ms);
-//   bench=check run=batch_threads ... 16 runs in chunks on 3 threads against one by one;
+//   bench=check run=batch_threads ... 16 runs on 3 worker threads against one by one;
+//   bench=check run=batch_stream_stop ... the same runs streamed (window 2), stopped after 4 ended;
+//     the part-way and unstarted runs, advanced to the end, equal one-by-one runs;
 //   bench=checks invalid_settings=k refused=k failed=f
 //     k invalid Settings (and a Batch with one, and threads = 0), each expected to throw
 //     std::invalid_argument; f counts the failures of the whole section.

@@ -72,11 +72,9 @@ class _Signals:
 
     @contextmanager
     def writing_files(self) -> Iterator[None]:
+        """From here to the command's end, signals are noted, not raised."""
         self.writing = True
-        try:
-            yield
-        finally:
-            self.writing = False
+        yield
 
     def status(self) -> int:
         return 128 + (self.received or signal.SIGINT)
@@ -101,8 +99,13 @@ EXIT_STATUS_TEXT = (
 )
 
 
-class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Defaults shown after each option's help; descriptions kept as written."""
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Each option's default after its help, except flags and defaults the help already says."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        if action.default in (None, False) or "default" in (action.help or ""):
+            return action.help or ""
+        return super()._get_help_string(action)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -308,6 +311,7 @@ def _run(args: argparse.Namespace) -> int:
         except ValueError as error:  # the memory guard, before the run
             _say(command, str(error))
             return EXIT_BAD_INPUT
+        signals.writing = True  # from here on a signal lets the files be finished
         summary = result.summary()
         try:
             _writing(
@@ -381,6 +385,7 @@ def _sweep(args: argparse.Namespace) -> int:
         except (ValueError, TypeError) as error:
             _say(command, str(error))
             return EXIT_BAD_INPUT
+        signals.writing = True
         try:
             with signals.writing_files():
                 folder.write(args.out.name, table.save)
@@ -432,6 +437,7 @@ def _compare(args: argparse.Namespace) -> int:
         except ValueError as error:
             _say(command, str(error))
             return EXIT_BAD_INPUT
+        signals.writing = True
         try:
             _writing(
                 signals,
