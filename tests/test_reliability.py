@@ -155,7 +155,7 @@ def test_disk_full_leaves_no_truncated_file_and_says_what_was_kept(
     out = tmp_path / "out"
     assert run_cli("reproduce", "--out", str(out), "--no-figures", *SHORT) == cli.EXIT_WRITE_FAILED
     err = capsys.readouterr().err
-    assert "could not write" in err and "No space left on device" in err
+    assert "could not write " + str(out / "result.csv") in err and "No space left on device" in err
     assert "complete files kept" in err and "result.npz" in err
     assert not (out / "result.csv").exists()
     assert leftovers(out) == []
@@ -378,6 +378,19 @@ def test_result_arrays_stay_read_only_after_pickle_and_deepcopy() -> None:
             assert not getattr(copied, name).flags.writeable, name
             with pytest.raises(ValueError):
                 getattr(copied, name)[0] = 1.0
+
+
+def test_memory_estimate_is_within_1_5x_of_the_measured_peak() -> None:
+    """bench/memory_peak.py: the peak resident set of a fresh process over simulate (and
+    writing the result) against memory_needed, for a long recording and for many points."""
+    bench = Path(__file__).parent.parent / "bench" / "memory_peak.py"
+    out = subprocess.run(
+        [sys.executable, str(bench), "--save", "--case", "paper_3e5_rows", "--case", "points_1e5"],
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "worst_factor=" in out.stdout
 
 
 def test_memory_estimate_names_the_settings_to_change(monkeypatch) -> None:

@@ -135,7 +135,12 @@ class OutputFolder:
 
     def write(self, name: str, write: Callable[[Path], Any]) -> Path:
         """Write ``name`` atomically with ``write(temporary_path)`` and record it."""
-        path = atomic_write(self.folder / name, write)
+        try:
+            path = atomic_write(self.folder / name, write)
+        except OSError as error:  # name the file, not its temporary
+            raise OSError(
+                error.errno, error.strerror or str(error), str(self.folder / name)
+            ) from error
         self._record(path)
         return path
 
@@ -145,21 +150,32 @@ class OutputFolder:
     def write_figures(self, figures: dict[str, Figure], formats: Iterable[str]) -> list[Path]:
         """Each figure as ``<name>.<format>`` (adparm.plotting.save_figures into a temporary
         folder beside, then each file renamed into place)."""
-        from .plotting import save_figures
-
+        formats = list(formats)
         staging = Path(tempfile.mkdtemp(dir=self.folder, prefix=".adparm-figures-"))
-        paths = []
+        paths: list[Path] = []
         try:
-            for path in save_figures(figures, staging, formats):
-                with open(path, "rb+") as stream:
-                    os.fsync(stream.fileno())
-                final = self.folder / path.name
-                os.replace(path, final)
-                self._record(final)
-                paths.append(final)
+            self._write_figures(figures, formats, staging, paths)
+        except OSError as error:
+            names = ", ".join(f"{name}.{fmt}" for name in figures for fmt in formats)
+            raise OSError(
+                error.errno, error.strerror or str(error), f"{self.folder}/ ({names})"
+            ) from error
         finally:
             shutil.rmtree(staging, ignore_errors=True)
         return paths
+
+    def _write_figures(
+        self, figures: dict[str, Figure], formats: Iterable[str], staging: Path, paths: list[Path]
+    ) -> None:
+        from .plotting import save_figures
+
+        for path in save_figures(figures, staging, formats):
+            with open(path, "rb+") as stream:
+                os.fsync(stream.fileno())
+            final = self.folder / path.name
+            os.replace(path, final)
+            self._record(final)
+            paths.append(final)
 
     def _record(self, path: Path) -> None:
         self.written.append(path)

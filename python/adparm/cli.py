@@ -268,12 +268,10 @@ def _writing(
         folder.remove_stale()
 
 
-def _interrupted(
-    command: str, signals: _Signals, interrupt: SimulationInterrupted, kept: str
-) -> int:
+def _interrupted(command: str, signals: _Signals, what: str, kept: str) -> int:
     """Reports a Ctrl-C or SIGTERM after the partial results were written; returns 128 + signal."""
     name = signal.Signals(signals.received or signal.SIGINT).name
-    _say(command, f"stopped by {name}: {interrupt}; kept what was done: {kept}")
+    _say(command, f"stopped by {name} {what}; wrote what was done: {kept}")
     return signals.status()
 
 
@@ -332,7 +330,11 @@ def _run(args: argparse.Namespace) -> int:
             return _write_failed(command, folder, error)
         written = f"wrote {folder.describe_written()}"
         if interrupt is not None:
-            return _interrupted(command, signals, interrupt, folder.describe_written())
+            what = (
+                f"at t = {interrupt.time:.6g} s of sim.T = {config.sim.T:g} s "
+                f"({result.t.size} rows recorded)"
+            )
+            return _interrupted(command, signals, what, folder.describe_written())
         print(written)
         error_value = summary.get("critic_relative_error")
         if error_value is not None:
@@ -392,7 +394,12 @@ def _sweep(args: argparse.Namespace) -> int:
         except OSError as error:
             return _write_failed(command, folder, error)
         if interrupt is not None:
-            return _interrupted(command, signals, interrupt, f"{args.out} ({len(table)} runs)")
+            return _interrupted(
+                command,
+                signals,
+                "(the points not done have no row)",
+                f"{args.out} ({len(table)} runs)",
+            )
         print(table.to_markdown(), end="")
         print(f"wrote {args.out} ({len(table)} runs)")
         if signals.received is not None:
@@ -448,7 +455,9 @@ def _compare(args: argparse.Namespace) -> int:
         except OSError as error:
             return _write_failed(command, folder, error)
         if interrupt is not None:
-            return _interrupted(command, signals, interrupt, folder.describe_written())
+            runs = ", ".join(comparison.results) or "none"
+            what = f"(runs so far, the last one partial: {runs})"
+            return _interrupted(command, signals, what, folder.describe_written())
         print(comparison.table_markdown(), end="")
         print(f"wrote {folder.describe_written()}")
         if signals.received is not None:

@@ -35,10 +35,9 @@ class Batch {
       : settings_(std::move(settings)),
         runs_(settings_.size()),
         seconds_(settings_.size(), 0.0),
-        steps_(new std::atomic<long>[settings_.size()]),
+        steps_(new StepCounter[settings_.size()]),
         totals_(settings_.size(), 0) {
     for (std::size_t i = 0; i < settings_.size(); ++i) {
-      steps_[i].store(0);
       try {
         totals_[i] = Run(settings_[i]).steps();
       } catch (const std::invalid_argument& error) {
@@ -59,7 +58,8 @@ class Batch {
   }
   long steps_done() const {
     long done = 0;
-    for (std::size_t i = 0; i < size(); ++i) done += steps_[i].load(std::memory_order_relaxed);
+    for (std::size_t i = 0; i < size(); ++i)
+      done += steps_[i].value.load(std::memory_order_relaxed);
     return done;
   }
 
@@ -168,8 +168,8 @@ class Batch {
         }
         const auto start = std::chrono::steady_clock::now();
         auto run = std::make_unique<Run>(settings_[i]);
-        run->advance(std::numeric_limits<long>::max(), RunControl{&stop_, &steps_[i]});
-        steps_[i].store(run->step(), std::memory_order_relaxed);
+        run->advance(std::numeric_limits<long>::max(), RunControl{&stop_, &steps_[i].value});
+        steps_[i].value.store(run->step(), std::memory_order_relaxed);
         seconds_[i] =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const bool ended = run->status() != RunStatus::running;
@@ -194,7 +194,12 @@ class Batch {
   std::vector<Settings> settings_;
   std::vector<std::unique_ptr<Run>> runs_;
   std::vector<double> seconds_;
-  std::unique_ptr<std::atomic<long>[]> steps_;
+  // One cache line per run's step counter: the workers write theirs at every step, and counters
+  // sharing a line would bounce it between the cores.
+  struct alignas(64) StepCounter {
+    std::atomic<long> value{0};
+  };
+  std::unique_ptr<StepCounter[]> steps_;
   std::vector<long> totals_;
   std::vector<bool> taken_;
   std::vector<std::thread> pool_;
