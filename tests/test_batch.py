@@ -161,7 +161,6 @@ def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
     stopped = adparm._core.Batch(settings)
     stopped.start(1, 1)
     stopped.stop()
-    runs = {}
-    adparm.simulation._take_rest(stopped, runs)
+    runs = dict(adparm.simulation._take_rest(stopped))
     assert sorted(runs) == list(range(len(configs)))
     assert all(run.status in ("running", "finished") for run in runs.values())

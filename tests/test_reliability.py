@@ -495,5 +495,56 @@ def test_atomic_write_leaves_old_or_new_never_partial(tmp_path_factory, data, fa
     assert [p.name for p in folder.iterdir()] == ["file.bin"]
 
 
+toml_pieces = st.sampled_from(
+    [
+        "[sim]\n",
+        "[task]\n",
+        "T = 1.0\n",
+        "q0 = ",
+        "[",
+        "]",
+        "0.1",
+        ",",
+        "{",
+        "}",
+        '"x"',
+        "\n",
+        "\ufeff",
+        "#",
+        "=",
+        "é",
+        "\x00",
+    ]
+)
+
+
+@settings(
+    max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    text=st.lists(toml_pieces, max_size=60).map("".join) | st.text(max_size=80),
+    depth=st.integers(0, 3000),
+    encoding=st.sampled_from(["utf-8", "utf-8-sig", "latin-1", "utf-16"]),
+)
+def test_any_config_file_loads_or_is_refused_with_a_value_error(
+    tmp_path_factory, text, depth, encoding
+) -> None:
+    """Garbage, deep nesting, BOMs and other encodings: a Config or a ValueError/TypeError naming
+    the file or a field, never another exception (RecursionError, UnicodeDecodeError, ...)."""
+    path = tmp_path_factory.mktemp("cfg") / "garbage.toml"
+    body = text + ("\n[task]\nq0 = " + "[" * depth + "]" * depth + "\n" if depth else "")
+    try:
+        path.write_bytes(body.encode(encoding, errors="replace"))
+    except UnicodeEncodeError:
+        return
+    try:
+        config = adparm.load_config(path)
+    except (ValueError, TypeError) as error:
+        message = str(error)
+        assert "garbage.toml" in message or "." in message.split(":")[0] or "[" in message
+    else:
+        assert isinstance(config, adparm.Config)
+
+
 def test_files_module_documents_the_manifest() -> None:
     assert MANIFEST in (_files.__doc__ or "")

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -386,16 +387,21 @@ def _run_batch(
 
 
 def _take_rest(
-    batch: _core.Batch, runs: dict[int, _core.Simulation], skip: Iterable[int] = ()
-) -> None:
-    """After batch.stop(): adds to ``runs`` every run not yet handed over (ended, part-way or
-    unstarted), except those in ``skip`` (already handed over)."""
+    batch: _core.Batch, skip: Iterable[int] = ()
+) -> Iterator[tuple[int, _core.Simulation]]:
+    """After batch.stop(): (index, run) of every run not yet handed over (ended, part-way or
+    unstarted), one at a time, except those in ``skip`` (already handed over)."""
     skip = set(skip)
-    for i in batch.wait(0.0):
-        runs[i] = batch.take(i)
-    for i in range(len(batch)):
-        if i not in runs and i not in skip:
-            runs[i] = batch.take(i)
+    ended = batch.wait(0.0)
+    for i in [*ended, *(i for i in range(len(batch)) if i not in ended)]:
+        if i in skip:
+            continue
+        skip.add(i)
+        try:
+            run = batch.take(i)
+        except RuntimeError:  # taken by an on_end that a second interrupt cut short
+            continue
+        yield i, run
 
 
 # Values of one recorded row besides the weights: t, hjb_error, cost and ten joint series of 2.
@@ -494,7 +500,9 @@ def simulate(config: Config, *, progress: bool = False) -> SimulationResult:
 
             _run_batch(batch, 1, runs.__setitem__, poll)
     except KeyboardInterrupt:
-        _take_rest(batch, runs)
+        runs.update(_take_rest(batch, skip=runs))
+        if 0 not in runs:  # pragma: no cover - the run was lost to a second interrupt
+            raise
         run = runs[0]
         result = _result(run, config, batch.seconds(0))
         reached = config.sim.T * run.step / run.steps
@@ -571,20 +579,22 @@ def simulate_batch(
     batch = _core.Batch(settings)
     done_runs: dict[int, SimulationResult] = {}
     divergence: dict[int, tuple[str, float]] = {}
+    pending: dict[int, _core.Simulation] = {}  # handed over, not yet converted
 
     def on_end(i: int, run: _core.Simulation) -> None:  # the core's copy is freed on return
+        pending[i] = run
         done_runs[i] = _result(run, configs[i], batch.seconds(i))
         if run.status == "diverged":
             divergence[i] = (_divergence_message(run, configs[i]), run.divergence_time)
+        del pending[i]
 
     try:
         with _progress_bar(batch.total_steps, "steps", "simulating", progress) as bar:
             _run_batch(batch, workers, on_end, lambda: bar.update(batch.steps_done - bar.n))
     except KeyboardInterrupt:
-        taken: dict[int, _core.Simulation] = {}
-        _take_rest(batch, taken, skip=done_runs)
-        for i, run in taken.items():
-            done_runs[i] = _result(run, configs[i], batch.seconds(i))
+        rest = _take_rest(batch, skip={*done_runs, *pending})
+        for i, run in itertools.chain(list(pending.items()), rest):
+            done_runs[i] = _result(run, configs[i], batch.seconds(i))  # each, then freed
         results = [done_runs[i] for i in range(len(configs))]
         done = sum(result.status != "interrupted" for result in results)
         raise SimulationInterrupted(
