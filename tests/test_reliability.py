@@ -381,16 +381,29 @@ def test_result_arrays_stay_read_only_after_pickle_and_deepcopy() -> None:
 
 
 def test_memory_estimate_is_within_1_5x_of_the_measured_peak() -> None:
-    """bench/memory_peak.py: the peak resident set of a fresh process over simulate (and
-    writing the result) against memory_needed, for a long recording and for many points."""
+    """bench/memory_peak.py: the peak resident set of a fresh process over simulate against
+    memory_needed, for a long recording and for many points (writing the result does not raise
+    the peak: bench/memory_peak.py --save)."""
     bench = Path(__file__).parent.parent / "bench" / "memory_peak.py"
     out = subprocess.run(
-        [sys.executable, str(bench), "--save", "--case", "paper_3e5_rows", "--case", "points_1e5"],
+        [sys.executable, str(bench), "--case", "paper_3e5_rows", "--case", "points_1e5"],
         capture_output=True,
         text=True,
     )
     assert out.returncode == 0, out.stdout + out.stderr
     assert "worst_factor=" in out.stdout
+
+
+def test_the_cli_refuses_a_run_that_would_not_fit_before_running(monkeypatch, tmp_path, capsys):
+    from adparm.simulation import memory_needed
+
+    config = adparm.paper_config().updated({"sim": {"T": 0.2}})
+    with_figures = memory_needed([config], figures=True)
+    assert with_figures > memory_needed([config])
+    monkeypatch.setattr(adparm.simulation, "available_memory", lambda: with_figures - 1)
+    monkeypatch.setattr(cli, "simulate", no_computation)
+    assert run_cli("reproduce", "--out", str(tmp_path / "o"), *SHORT) == cli.EXIT_BAD_INPUT
+    assert "--no-figures" in capsys.readouterr().err
 
 
 def test_memory_estimate_names_the_settings_to_change(monkeypatch) -> None:

@@ -24,7 +24,13 @@ from ._files import OutputError, OutputFolder
 from .comparison import DEFAULT_KINDS, Comparison, _controller_configs, compare
 from .config import Config, load_config, paper_config, tomllib
 from .report import FIGURE_FORMATS, check_formats, report_files, write_report
-from .simulation import SimulationDiverged, SimulationInterrupted, SimulationResult, simulate
+from .simulation import (
+    SimulationDiverged,
+    SimulationInterrupted,
+    SimulationResult,
+    _check_memory,
+    simulate,
+)
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_DIVERGED", "EXIT_WRITE_FAILED", "main"]
 
@@ -294,6 +300,7 @@ def _run(args: argparse.Namespace) -> int:
         config = _config(args)
         folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
         folder.check()
+        _check_memory([config], figures=figures)  # the run, its files and figures
     except (OSError, ValueError, TypeError) as error:
         _say(command, str(error))
         return EXIT_BAD_INPUT

@@ -412,6 +412,9 @@ _ROW_VALUES = 3 + 2 * len(_ARRAYS_2)
 # point (the points and their prepared basis values), and RUN_BYTES of fixed cost.
 POINT_BYTES = 240
 RUN_BYTES = 1 << 20
+# Drawing a run's figures (matplotlib's lines of every recorded row), measured with adparm run
+# (/usr/bin/time's maximum resident set): about 1.7 times one copy of the recording.
+FIGURE_COPIES = 1.7
 
 
 def _recording_bytes(config: Config) -> int:
@@ -427,13 +430,19 @@ def _core_bytes(config: Config) -> int:
     return _recording_bytes(config) + POINT_BYTES * config.extrapolation.points + RUN_BYTES
 
 
-def memory_needed(configs: list[Config], at_once: int | None = None, threads: int = 1) -> int:
+def memory_needed(
+    configs: list[Config], at_once: int | None = None, threads: int = 1, figures: bool = False
+) -> int:
     """The peak memory, in bytes, of running ``configs``: every result kept (simulate and
     simulate_batch: the NumPy recordings of all runs, plus the core's copies of up to ``threads``
     runs at once), or, with ``at_once`` (sweep: runs summarised and freed as they end), at most
-    ``at_once`` runs in memory, each with both copies."""
+    ``at_once`` runs in memory, each with both copies. ``figures``: plus the figures of the
+    largest run (``adparm run`` and ``reproduce``, FIGURE_COPIES recordings)."""
     if not configs:
         return 0
+    if figures:
+        largest = max(_recording_bytes(c) for c in configs)
+        return memory_needed(configs, at_once, threads) + int(FIGURE_COPIES * largest)
     core = sorted((_core_bytes(c) for c in configs), reverse=True)
     if at_once is not None:
         return sum(core[:at_once]) + sum(
@@ -458,12 +467,14 @@ def available_memory() -> int | None:
         return None
 
 
-def _check_memory(configs: list[Config], at_once: int | None = None, threads: int = 1) -> None:
+def _check_memory(
+    configs: list[Config], at_once: int | None = None, threads: int = 1, figures: bool = False
+) -> None:
     """Refuse runs whose peak memory (memory_needed) exceeds the memory available now."""
     available = available_memory()
     if available is None:  # pragma: no cover - not POSIX
         return
-    needed = memory_needed(configs, at_once, threads)
+    needed = memory_needed(configs, at_once, threads, figures)
     if needed > available:
         which = "these runs" if len(configs) > 1 else "this run"
         points = max(c.extrapolation.points for c in configs)
@@ -474,6 +485,8 @@ def _check_memory(configs: list[Config], at_once: int | None = None, threads: in
             change = "use fewer extrapolation.points, or " + change
         if len(configs) > 1 and at_once is None:
             change += ", or run fewer configs at once (adparm.sweep keeps only summary rows)"
+        if figures:
+            change += ", or write no figures (--no-figures)"
         raise ValueError(
             f"{field}: {which} would need about {needed / 2**30:.3g} GiB of memory, "
             f"more than the {available / 2**30:.3g} GiB available now; {change}"
