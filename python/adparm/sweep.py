@@ -305,14 +305,13 @@ def _run_in_process(
             i, run = ended.popitem()
             rows.append((i, _metrics(_result(run, configs[i], batch.seconds(i)), tolerance)))
 
+    def on_end(i: int, run: Any) -> None:  # summarised at once: the run is freed on return
+        ended[i] = run
+        summarise()
+
     with tqdm(total=len(configs), disable=not progress, desc="sweep", unit="run") as bar:
-
-        def poll() -> None:
-            summarise()
-            bar.update(len(rows) - bar.n)
-
         try:
-            _run_batch(batch, workers, ended.__setitem__, poll, window=window)
+            _run_batch(batch, workers, on_end, lambda: bar.update(len(rows) - bar.n), window=window)
             summarise()
         except KeyboardInterrupt:  # keep the rows of the runs that ended
             for i in batch.wait(0.0):  # after the stop: runs that ended before it
