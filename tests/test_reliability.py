@@ -402,8 +402,10 @@ def test_the_cli_refuses_a_run_that_would_not_fit_before_running(monkeypatch, tm
     assert with_figures > memory_needed([config])
     monkeypatch.setattr(adparm.simulation, "available_memory", lambda: with_figures - 1)
     monkeypatch.setattr(cli, "simulate", no_computation)
-    assert run_cli("reproduce", "--out", str(tmp_path / "o"), *SHORT) == cli.EXIT_BAD_INPUT
-    assert "--no-figures" in capsys.readouterr().err
+    monkeypatch.setattr(cli, "compare", no_computation)
+    for command in ("reproduce", "compare"):
+        assert run_cli(command, "--out", str(tmp_path / command), *SHORT) == cli.EXIT_BAD_INPUT
+        assert "--no-figures" in capsys.readouterr().err
 
 
 def test_memory_estimate_names_the_settings_to_change(monkeypatch) -> None:

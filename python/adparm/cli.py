@@ -436,9 +436,12 @@ def _compare(args: argparse.Namespace) -> int:
     try:
         config = _config(args)
         kinds = _kinds(args.kinds)
-        _controller_configs(config, kinds)  # every check before the first run
+        runs = _controller_configs(config, kinds)  # every check before the first run
         folder = OutputFolder(args.out, names, "compare")
         folder.check()
+        # every run is kept (adp twice: learning, then from the learned weights) for the table
+        kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
+        _check_memory(kept, figures=figures)
     except (OSError, ValueError, TypeError) as error:
         _say(command, str(error))
         return EXIT_BAD_INPUT
