@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import adparm
 
@@ -164,3 +168,37 @@ def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
     runs = dict(adparm.simulation._take_rest(stopped))
     assert sorted(runs) == list(range(len(configs)))
     assert all(run.status in ("running", "finished") for run in runs.values())
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    runs=st.integers(1, 6),
+    threads=st.integers(1, 4),
+    window=st.integers(1, 5),
+    stop_after=st.sampled_from([None, 0.0, 0.002, 0.01]),
+)
+def test_any_threads_window_and_stop_give_one_by_one_numbers(runs, threads, window, stop_after):
+    """The engine under any thread count, window and stop time: every run handed over, ended
+    or not, continues to exactly the numbers of a one-by-one run."""
+    base = adparm.paper_config().updated({"sim": {"T": 0.3}})
+    configs = [base.updated({"task": {"q0": [0.1 + 0.05 * i, 0.2]}}) for i in range(runs)]
+    settings_list = [adparm.simulation.core_settings(c) for c in configs]
+    batch = adparm._core.Batch(settings_list)
+    batch.start(threads, window)
+    taken = {}
+    if stop_after is not None:
+        time.sleep(stop_after)
+        batch.stop()
+        taken.update(adparm.simulation._take_rest(batch))
+    else:
+        while not batch.done:
+            for i in batch.wait(0.01):
+                taken[i] = batch.take(i)
+    assert sorted(taken) == list(range(runs))
+    for i, run in taken.items():
+        run.advance(run.steps)  # a part-way or unstarted run continues to its end
+        alone = adparm._core.Simulation(settings_list[i])
+        alone.advance(alone.steps)
+        assert run.status == alone.status == "finished"
+        for name, values in alone.recording().items():
+            np.testing.assert_array_equal(run.recording()[name], values, err_msg=name)
