@@ -25,10 +25,12 @@ __all__ = [
     "SimulationDiverged",
     "SimulationInterrupted",
     "SimulationResult",
+    "available_memory",
     "core_settings",
     "desired_state",
     "extrapolation_points",
     "default_threads",
+    "memory_needed",
     "simulate",
     "simulate_batch",
 ]
