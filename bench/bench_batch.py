@@ -5,6 +5,9 @@ adparm.sweep over task.q0. Checks that every batched run equals its one-thread r
 
 The last lines are machine-readable:
 bench=batch runs=16 steps=110000 threads=1 seconds=... (and threads=N ... speedup=...)
+(cpu_ratio: CPU time of all threads over that of one thread; near 1 means the threads add no
+work, so on otherwise idle cores the speed-up approaches the thread count. On a loaded machine
+speedup measures the load, not adparm: read it when the cores are free.)
 bench=sweep runs=16 threads=N seconds=... runs_per_second=...
 
     python bench/bench_batch.py [--runs 16] [--seconds 110] [--threads N]
@@ -29,10 +32,11 @@ def configs(runs: int, seconds: float) -> list[adparm.Config]:
     ]
 
 
-def timed_batch(batch: list[adparm.Config], threads: int) -> tuple[float, list]:
-    start = time.perf_counter()
+def timed_batch(batch: list[adparm.Config], threads: int) -> tuple[float, float, list]:
+    """Wall seconds, CPU seconds of all threads, results."""
+    start, cpu = time.perf_counter(), time.process_time()
     results = adparm.simulate_batch(batch, threads=threads)
-    return time.perf_counter() - start, results
+    return time.perf_counter() - start, time.process_time() - cpu, results
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -44,17 +48,18 @@ def main(argv: list[str] | None = None) -> int:
 
     batch = configs(args.runs, args.seconds)
     steps = round(args.seconds / batch[0].sim.dt)
-    serial, one = timed_batch(batch, 1)
-    parallel, many = timed_batch(batch, args.threads)
+    serial, serial_cpu, one = timed_batch(batch, 1)
+    parallel, parallel_cpu, many = timed_batch(batch, args.threads)
     identical = all(
         np.array_equal(a.critic_weights, b.critic_weights) and np.array_equal(a.q, b.q)
         for a, b in zip(one, many, strict=True)
     )
-    for threads, seconds in ((1, serial), (args.threads, parallel)):
+    for threads, seconds, cpu in ((1, serial, serial_cpu), (args.threads, parallel, parallel_cpu)):
         print(
             f"bench=batch runs={args.runs} steps={steps} threads={threads} seconds={seconds:.4f} "
-            f"us_per_step={1e6 * seconds / (args.runs * steps):.4f} "
-            f"speedup={serial / seconds:.2f} identical={int(identical)}"
+            f"cpu_seconds={cpu:.4f} us_per_step={1e6 * seconds / (args.runs * steps):.4f} "
+            f"speedup={serial / seconds:.2f} cpu_ratio={cpu / serial_cpu:.3f} "
+            f"identical={int(identical)}"
         )
 
     grid = {"task.q0": [c.task.q0 for c in batch]}

@@ -21,7 +21,9 @@
 //     each in chunks of 7 and 13 steps, compared bit for bit with a one-shot run: local and grid
 //     extrapolation points, the paper basis with a model error, sinusoid and spline tracking with
 //     points, the rise, pd and optimal controllers, a run that diverges (dt = 4 ms);
-//   bench=check run=batch_threads ... 16 runs in chunks on 3 threads against one by one;
+//   bench=check run=batch_threads ... 16 runs on 3 worker threads against one by one;
+//   bench=check run=batch_stream_stop ... the same runs streamed (window 2), stopped after 4 ended;
+//     the part-way and unstarted runs, advanced to the end, equal one-by-one runs;
 //   bench=checks invalid_settings=k refused=k failed=f
 //     k invalid Settings (and a Batch with one, and threads = 0), each expected to throw
 //     std::invalid_argument; f counts the failures of the whole section.
@@ -112,10 +114,10 @@ double time_batch(const std::vector<adparm::Settings>& settings, int threads,
                   std::vector<Eigen::VectorXd>& final_states) {
   adparm::Batch<adparm::AnySimulation> batch(settings);
   const auto start = Clock::now();
-  batch.advance(batch[0].steps(), threads);
+  const auto runs = batch.run_all(threads);
   const double seconds = seconds_since(start);
   final_states.clear();
-  for (std::size_t i = 0; i < batch.size(); ++i) final_states.push_back(batch[i].state());
+  for (const auto& run : runs) final_states.push_back(run->state());
   return seconds;
 }
 
@@ -248,19 +250,50 @@ void check_runs(double horizon) {
       s.basis = i % 2 ? adparm::BasisKind::paper : adparm::BasisKind::augmented;
     }));
   adparm::Batch<adparm::AnySimulation> batch(settings);
-  while (batch.advance(333, 3)) {
-  }
+  const auto runs = batch.run_all(3);
   bool ok = true;
   for (std::size_t i = 0; i < settings.size(); ++i) {
     adparm::AnySimulation alone(settings[i]);
     alone.advance(alone.steps());
-    ok = ok && batch[i].status() == adparm::RunStatus::finished &&
-         batch[i].state() == alone.state() && same(batch[i].recording(), alone.recording());
+    ok = ok && runs[i]->status() == adparm::RunStatus::finished &&
+         runs[i]->state() == alone.state() && same(runs[i]->recording(), alone.recording());
   }
   std::printf("bench=check run=batch_threads status=%s steps=%ld rows=%ld ok=%d\n",
-              status_name(batch[0].status()), batch[0].step(),
-              static_cast<long>(batch[0].recording().rows), ok ? 1 : 0);
+              status_name(runs[0]->status()), runs[0]->step(),
+              static_cast<long>(runs[0]->recording().rows), ok ? 1 : 0);
   if (!ok) fail("batch_threads");
+  // A streamed batch (window 2, taking each run as it ends) stopped part-way, then resumed run by
+  // run: the stopped runs continue to the same numbers, the never-started ones are built by take().
+  adparm::Batch<adparm::AnySimulation> stream(settings);
+  stream.start(2, 2);
+  std::size_t seen = 0;
+  bool stream_ok = true;
+  while (seen < 4 && !stream.done()) {
+    for (std::size_t i : stream.wait(1.0)) {
+      auto run = stream.take(i);
+      adparm::AnySimulation alone(settings[i]);
+      alone.advance(alone.steps());
+      stream_ok = stream_ok && run->state() == alone.state();
+      ++seen;
+    }
+  }
+  stream.stop();
+  for (std::size_t i : stream.wait(0.0)) stream.take(i);
+  for (std::size_t i = 0; i < settings.size(); ++i) {
+    std::unique_ptr<adparm::AnySimulation> run;
+    try {
+      run = stream.take(i);
+    } catch (const std::logic_error&) {
+      continue;  // already taken above
+    }
+    run->advance(run->steps());
+    adparm::AnySimulation alone(settings[i]);
+    alone.advance(alone.steps());
+    stream_ok =
+        stream_ok && run->state() == alone.state() && same(run->recording(), alone.recording());
+  }
+  std::printf("bench=check run=batch_stream_stop seen=%zu ok=%d\n", seen, stream_ok ? 1 : 0);
+  if (!stream_ok) fail("batch_stream_stop");
 }
 
 // Each invalid setting must be refused with std::invalid_argument: not accepted, not another
@@ -369,7 +402,7 @@ void check_invalid_settings() {
   ++batch_cases;
   try {
     adparm::Batch<adparm::AnySimulation> batch(settings);
-    batch.advance(10, 0);
+    batch.start(0);
     fail("batch threads = 0: accepted");
   } catch (const std::invalid_argument&) {
     ++refused;

@@ -3,7 +3,8 @@
 # and libstdc++'s assertions on: builds only the bench in build-sanitize/ (-DADPARM_SANITIZE=ON, see
 # CMakeLists.txt) and runs it briefly with --checks: the paper loop, fixed extrapolation points, the
 # 16-run batch on 1 and 2 threads, then local/grid points, tracking, the other controllers, a
-# diverging run, chunked and threaded runs, and invalid settings that must throw.
+# diverging run, chunked and threaded runs, a streamed batch (window 2) stopped part-way and resumed,
+# and invalid settings that must throw.
 # Any finding stops the bench and makes this script exit non-zero.
 #
 # Usage: bench/sanitize.sh [simulated_seconds [points ...]]   (default: 1 s, N = 0 and 10)

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import adparm
 
@@ -55,11 +59,10 @@ def test_batch_equals_one_by_one_runs(configs, one_by_one, threads) -> None:
         assert batched.wall_time > 0.0
 
 
-def test_batch_over_many_chunks_equals_one_by_one_runs(configs, one_by_one, monkeypatch) -> None:
-    """Runs of different lengths, advanced in many short chunks (returns to Python between)."""
-    monkeypatch.setattr(adparm.simulation, "CALL_SECONDS", 0.0)
-    monkeypatch.setattr(adparm.simulation, "MIN_CALL_STEPS", 50)
-    results = adparm.simulate_batch(configs, threads=2, progress=False)
+def test_batch_polled_often_equals_one_by_one_runs(configs, one_by_one, monkeypatch) -> None:
+    """Runs of different lengths, polled by Python every 0.1 ms while the workers run."""
+    monkeypatch.setattr(adparm.simulation, "POLL_SECONDS", 1e-4)
+    results = adparm.simulate_batch(configs, threads=2, progress=True)
     for alone, batched in zip(one_by_one, results, strict=True):
         assert_same_run(alone, batched)
 
@@ -141,4 +144,64 @@ def test_core_batch_names_the_failing_settings() -> None:
     with pytest.raises(ValueError, match=r"settings\[1\]: sim.dt"):
         adparm._core.Batch([settings, broken])
     with pytest.raises(ValueError, match="threads: must be >= 1"):
-        adparm._core.Batch([settings]).advance(10, 0)
+        adparm._core.Batch([settings]).start(0)
+
+
+def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
+    """Workers build at most `window` runs not yet taken; each run handed over equals its
+    one-by-one run, and a stopped batch hands over the part-way and the unstarted runs."""
+    settings = [adparm.simulation.core_settings(c) for c in configs]
+    batch = adparm._core.Batch(settings)
+    assert batch.total_steps == sum(round(c.sim.T / c.sim.dt) for c in configs)
+    batch.start(2, 1)
+    ended: list[int] = []
+    while not batch.done:
+        for i in batch.wait(0.05):
+            ended.append(i)
+            run = batch.take(i)
+            result = adparm.simulation._result(run, configs[i], batch.seconds(i))
+            assert_same_run(one_by_one[i], result)
+    assert sorted(ended) == list(range(len(configs)))
+    assert batch.steps_done == batch.total_steps
+    with pytest.raises(RuntimeError, match="already taken"):
+        batch.take(0)
+    stopped = adparm._core.Batch(settings)
+    stopped.start(1, 1)
+    stopped.stop()
+    runs = dict(adparm.simulation._take_rest(stopped))
+    assert sorted(runs) == list(range(len(configs)))
+    assert all(run.status in ("running", "finished") for run in runs.values())
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    runs=st.integers(1, 6),
+    threads=st.integers(1, 4),
+    window=st.integers(1, 5),
+    stop_after=st.sampled_from([None, 0.0, 0.002, 0.01]),
+)
+def test_any_threads_window_and_stop_give_one_by_one_numbers(runs, threads, window, stop_after):
+    """The engine under any thread count, window and stop time: every run handed over, ended
+    or not, continues to exactly the numbers of a one-by-one run."""
+    base = adparm.paper_config().updated({"sim": {"T": 0.3}})
+    configs = [base.updated({"task": {"q0": [0.1 + 0.05 * i, 0.2]}}) for i in range(runs)]
+    settings_list = [adparm.simulation.core_settings(c) for c in configs]
+    batch = adparm._core.Batch(settings_list)
+    batch.start(threads, window)
+    taken = {}
+    if stop_after is not None:
+        time.sleep(stop_after)
+        batch.stop()
+        taken.update(adparm.simulation._take_rest(batch))
+    else:
+        while not batch.done:
+            for i in batch.wait(0.01):
+                taken[i] = batch.take(i)
+    assert sorted(taken) == list(range(runs))
+    for i, run in taken.items():
+        run.advance(run.steps)  # a part-way or unstarted run continues to its end
+        alone = adparm._core.Simulation(settings_list[i])
+        alone.advance(alone.steps)
+        assert run.status == alone.status == "finished"
+        for name, values in alone.recording().items():
+            np.testing.assert_array_equal(run.recording()[name], values, err_msg=name)

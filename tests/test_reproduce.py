@@ -125,8 +125,20 @@ def test_save_and_load_round_trip(short_result, tmp_path) -> None:
     assert loaded.status == short_result.status and loaded.wall_time == short_result.wall_time
     with pytest.raises(ValueError, match="path: expected a .npz or .csv"):
         short_result.save(tmp_path / "run.txt")
-    with pytest.raises(ValueError, match="path: expected a .npz file"):
-        adparm.load_result(tmp_path / "run.csv")
+    with pytest.raises(ValueError, match="path: expected a .npz or .csv file"):
+        adparm.load_result(tmp_path / "run.txt")
+    with pytest.raises(ValueError, match="no such file"):
+        adparm.load_result(tmp_path / "missing.npz")
+
+
+def test_load_result_reads_the_csv_that_save_writes(short_result, tmp_path) -> None:
+    loaded = adparm.load_result(short_result.save(tmp_path / "run.csv"))
+    assert_same_arrays(loaded, short_result)  # 19 significant digits: bit for bit
+    assert loaded.config == short_result.config
+    assert loaded.status == short_result.status and loaded.wall_time == short_result.wall_time
+    np.testing.assert_array_equal(
+        loaded.covariance_reset_times, short_result.covariance_reset_times
+    )
 
 
 def test_csv_and_dataframe_hold_the_time_series(short_result, tmp_path) -> None:
@@ -135,10 +147,13 @@ def test_csv_and_dataframe_hold_the_time_series(short_result, tmp_path) -> None:
     np.testing.assert_array_equal(frame["Wc5"], short_result.critic_weights[:, 4])
     np.testing.assert_array_equal(frame["tau2"], short_result.tau[:, 1])
     path = short_result.save(tmp_path / "run.csv")
-    header = path.read_text().splitlines()[0].split(",")
-    data = np.loadtxt(path, delimiter=",", skiprows=1)
-    assert header == list(frame.columns)
-    np.testing.assert_allclose(data, frame.to_numpy(), rtol=1e-15)
+    first, header = path.read_text().splitlines()[:2]
+    assert first.startswith("# adparm result {")
+    data = np.loadtxt(path, delimiter=",", skiprows=2)
+    assert header.split(",") == list(frame.columns)
+    np.testing.assert_array_equal(data, frame.to_numpy())
+    pandas = pytest.importorskip("pandas")
+    np.testing.assert_array_equal(pandas.read_csv(path, comment="#").to_numpy(), data)
 
 
 def test_plot_returns_labelled_figures(short_result) -> None:

@@ -79,10 +79,30 @@ def test_leaving_the_divergence_bound_stops_the_run() -> None:
 
 def test_recordings_larger_than_memory_are_refused_before_running() -> None:
     huge = adparm.paper_config().updated({"sim": {"T": 1e7, "record_every": 1}})  # 1e10 rows
-    with pytest.raises(ValueError, match="sim.record_every: the recording would take"):
+    with pytest.raises(ValueError, match="sim.record_every: this run would need about .* GiB"):
         adparm.simulate(huge)
-    with pytest.raises(ValueError, match="sim.record_every: the runs' recordings would take"):
+    with pytest.raises(
+        ValueError, match="sim.record_every: these runs would need .* fewer configs"
+    ):
         adparm.simulate_batch([adparm.paper_config(), huge])
+
+
+def test_memory_guard_uses_the_memory_available_now(monkeypatch) -> None:
+    """A run estimated at 10 GiB is refused when only 8 GiB are available, whatever the RAM."""
+    config = adparm.paper_config().updated({"sim": {"T": 10.0}})
+    need = adparm.simulation.memory_needed([config])
+    assert need > 2 * adparm.simulation._recording_bytes(config)
+    monkeypatch.setattr(adparm.simulation, "available_memory", lambda: need - 1)
+    with pytest.raises(ValueError, match="would need about .* GiB of memory, more than"):
+        adparm.simulate(config)
+    monkeypatch.setattr(adparm.simulation, "available_memory", lambda: need)
+    assert adparm.simulate(config).status == "finished"
+    many = adparm.paper_config().updated({"extrapolation": {"points": 10**5}, "sim": {"T": 1.0}})
+    monkeypatch.setattr(adparm.simulation, "available_memory", lambda: 1000)
+    with pytest.raises(
+        ValueError, match="^extrapolation.points: .* use fewer extrapolation.points"
+    ):
+        adparm.simulate(many)
 
 
 def test_zero_initial_weights_are_inadmissible() -> None:

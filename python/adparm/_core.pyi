@@ -288,17 +288,31 @@ class Simulation:
         weights (n, 8)."""
 
 class Batch:
-    """Independent runs advanced in parallel C++ threads; run i is a Simulation. Not for use
-    from several Python threads at once: advance() releases the GIL while the runs change."""
+    """Independent runs on a pool of C++ worker threads that take runs from a shared queue and
+    run each to its end (no barrier between threads); the caller polls with wait() and takes
+    each run as it ends. Not for use from several Python threads at once."""
 
-    def __init__(self, settings: list[Settings]) -> None: ...
+    def __init__(self, settings: list[Settings]) -> None:
+        """Checks every run's settings (ValueError naming settings[i])."""
     def __len__(self) -> int: ...
-    def advance(self, max_steps: int, threads: int) -> bool:
-        """Advance every running run by up to max_steps steps on `threads` threads (GIL
-        released); returns whether any is still running."""
+    def start(self, threads: int, window: int = ...) -> None:
+        """Start min(threads, len) workers; at most `window` runs are built and not yet
+        taken at any time."""
+    def wait(self, seconds: float) -> list[int]:
+        """Wait up to `seconds` (GIL released) for a run to end; the indices of the runs that
+        ended since the last call. Re-raises an error a worker met."""
     @property
-    def running(self) -> bool: ...
-    def simulation(self, index: int) -> Simulation:
-        """Run `index` (a view that keeps the batch alive)."""
+    def done(self) -> bool:
+        """Every run ended (or the batch was stopped) and every ending was reported."""
+    def stop(self) -> None:
+        """Stop every worker within one step of its run and join them (GIL released)."""
+    @property
+    def steps_done(self) -> int:
+        """Steps taken so far by all runs (readable while the workers run)."""
+    @property
+    def total_steps(self) -> int: ...
+    def take(self, index: int) -> Simulation:
+        """Hand run `index` over: ended, stopped part-way, or built now if it never started
+        (RuntimeError if it is still running or already taken)."""
     def seconds(self, index: int) -> float:
-        """Wall time spent advancing run `index`, s."""
+        """Wall time spent building and advancing run `index`, s."""

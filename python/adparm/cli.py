@@ -1,19 +1,89 @@
 """Command line: ``adparm reproduce``, ``adparm run CONFIG``, ``adparm compare [CONFIG]`` and
-``adparm sweep [CONFIG] --grid section.key=v1,v2`` (also ``python -m adparm``)."""
+``adparm sweep [CONFIG] --grid section.key=v1,v2`` (also ``python -m adparm``).
+
+Exit status (one per cause): 0 done; 1 a run diverged (its rows are written); 2 bad input (a
+configuration, an option, an output path that cannot or must not be written, a run that would not
+fit in memory), found before anything runs; 3 a file could not be written (the message says what
+was kept and where); 130 interrupted by Ctrl-C (SIGINT) and 143 by SIGTERM, after writing what was
+done."""
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
+from tqdm.auto import tqdm
+
+from ._files import OutputError, OutputFolder
 from .comparison import DEFAULT_KINDS, Comparison, _controller_configs, compare
 from .config import Config, load_config, paper_config, tomllib
-from .report import FIGURE_FORMATS, check_formats, write_report
-from .simulation import SimulationInterrupted, SimulationResult, _simulate_keeping_divergence
+from .report import FIGURE_FORMATS, check_formats, report_files, write_report
+from .simulation import (
+    SimulationDiverged,
+    SimulationInterrupted,
+    SimulationResult,
+    _check_memory,
+    simulate,
+)
 
-__all__ = ["main"]
+__all__ = ["EXIT_BAD_INPUT", "EXIT_DIVERGED", "EXIT_WRITE_FAILED", "main"]
+
+EXIT_DIVERGED = 1
+EXIT_BAD_INPUT = 2
+EXIT_WRITE_FAILED = 3
+# Interrupted: 128 + the signal's number (130 for SIGINT, 143 for SIGTERM), as a shell reports it.
+
+
+class _Signals:
+    """SIGINT and SIGTERM during a command: while computing, either stops the computation (as a
+    KeyboardInterrupt, so the partial results are kept and written); while writing, both are
+    noted and the files being written are finished (never a half-written set). ``received`` is
+    the first signal's number."""
+
+    def __init__(self, command: str) -> None:
+        self.command = command
+        self.received: int | None = None
+        self.writing = False
+        self._previous: dict[int, Any] = {}
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        first = self.received is None
+        if first:
+            self.received = signum
+        if self.writing:
+            if first or signum == signal.SIGTERM:
+                print(
+                    f"\nadparm {self.command}: {signal.Signals(signum).name} received; finishing "
+                    "the files being written",
+                    file=sys.stderr,
+                )
+            return
+        raise KeyboardInterrupt
+
+    def __enter__(self) -> _Signals:
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+
+    @contextmanager
+    def writing_files(self) -> Iterator[None]:
+        """From here to the command's end, signals are noted, not raised."""
+        self.writing = True
+        yield
+
+    def status(self) -> int:
+        return 128 + (self.received or signal.SIGINT)
 
 
 def _formats(text: str) -> tuple[str, ...]:
@@ -28,30 +98,78 @@ def _formats(text: str) -> tuple[str, ...]:
     return formats
 
 
+EXIT_STATUS_TEXT = (
+    "exit status: 0 done; 1 a run diverged (its rows are written); 2 bad input or output path "
+    "(nothing was run); 3 a file could not be written; 130 Ctrl-C, 143 SIGTERM (what was done is "
+    "written)"
+)
+
+
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Each option's default after its help, except flags and defaults the help already says."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        if action.default in (None, False) or "default" in (action.help or ""):
+            return action.help or ""
+        return super()._get_help_string(action)
+
+
 def _parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     parser = argparse.ArgumentParser(
         prog="adparm",
-        description="Exact linearization, RISE and online actor-critic ADP for a two-link arm.",
+        description="Exact linearization, RISE and online actor-critic ADP for robot arms: run "
+        "the paper's instance or your own configuration and write figures, summaries and data.",
+        epilog=EXIT_STATUS_TEXT,
+        formatter_class=_HelpFormatter,
     )
+    parser.add_argument("--version", action="version", version=f"adparm {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
+    def add(name: str, help: str, description: str) -> argparse.ArgumentParser:
+        return commands.add_parser(
+            name,
+            help=help,
+            description=description,
+            epilog=EXIT_STATUS_TEXT,
+            formatter_class=_HelpFormatter,
+        )
+
     def common(sub: argparse.ArgumentParser, default_out: str) -> None:
-        sub.add_argument("--out", type=Path, default=Path(default_out), help="output directory")
+        sub.add_argument(
+            "--out",
+            type=Path,
+            default=Path(default_out),
+            help="output folder (created if needed; adparm overwrites only files it wrote)",
+        )
         sub.add_argument(
             "--formats",
             type=_formats,
-            default=("png", "svg"),
-            help="figure formats, comma-separated (png, svg, pdf); default png,svg",
+            default="png,svg",
+            help="figure formats, comma-separated (png, svg, pdf)",
         )
-        sub.add_argument("--no-figures", action="store_true", help="skip the figures")
-        sub.add_argument("--no-progress", action="store_true", help="no progress bar")
-        sub.add_argument("--T", type=float, default=None, help="override the horizon sim.T (s)")
+        sub.add_argument("--no-figures", action="store_true", help="write no figures")
+        sub.add_argument("--no-progress", action="store_true", help="show no progress bar")
+        sub.add_argument(
+            "--T", type=float, default=None, help="horizon sim.T in s (default: the config's)"
+        )
 
-    reproduce = commands.add_parser(
-        "reproduce", help="run the paper's instance and write Figures 2-4, summary and data"
+    reproduce = add(
+        "reproduce",
+        "run the paper's instance and write Figures 2-4, summary and data",
+        "Run the paper's two-link instance (Section 4, with the corrections of the errata) and "
+        "write to --out: result.npz and result.csv (every recorded step), config.toml, "
+        "summary.json and summary.md (metrics and deviations from the paper) and the figures "
+        "fig2_critic_weights, fig3_actor_weights, fig4_errors and torques.",
     )
     common(reproduce, "results")
-    run = commands.add_parser("run", help="run a TOML configuration and write the same artefacts")
+    run = add(
+        "run",
+        "run a TOML configuration and write the same files",
+        "Run the configuration in CONFIG (keys left out take the paper's values) and write the "
+        "same files as reproduce to --out.",
+    )
     run.add_argument("config", type=Path, help="TOML file ([plant] [task] [cost] ... [sim])")
     common(run, "results")
     for sub in (reproduce, run):
@@ -61,13 +179,13 @@ def _parser() -> argparse.ArgumentParser:
             help="also run the first second with sim.dt and sim.dt/2 and report the integration "
             "error of the learning transient (summary field step_size_check)",
         )
-    comparison = commands.add_parser(
+    comparison = add(
         "compare",
-        help="run the same arm, task and initial state under several controllers and tabulate "
+        "run the same arm, task and initial state under several controllers and tabulate "
         "cost, errors and torques",
-        description="Run adp (the learning run and a second run from its learned weights without "
+        "Run adp (the learning run and a second run from its learned weights without "
         "probing), rise, pd and optimal on the same arm, task and initial state; write "
-        "compare.md/csv/json, the figure compare.<format> and config.toml.",
+        "compare.md/csv/json, the figure compare.<format> and config.toml to --out.",
     )
     comparison.add_argument(
         "config",
@@ -80,15 +198,14 @@ def _parser() -> argparse.ArgumentParser:
     comparison.add_argument(
         "--kinds",
         default=",".join(DEFAULT_KINDS),
-        help=f"controllers, comma-separated; default {','.join(DEFAULT_KINDS)}",
+        help="controllers, comma-separated",
     )
-    sweeping = commands.add_parser(
+    sweeping = add(
         "sweep",
-        help="run a grid of settings and tabulate the summary metrics of each point",
-        description="Run every combination of the --grid values from the configuration (the "
+        "run a grid of settings and tabulate the summary metrics of each point",
+        "Run every combination of the --grid values from the configuration (the "
         "paper's instance without a file) in parallel threads and write one row of summary "
-        "metrics per point. Exit status: 0, 1 if a run diverged (its row is kept), 2 for a bad "
-        "grid or configuration.",
+        "metrics per point to --out (a diverged run keeps its row, status diverged).",
     )
     sweeping.add_argument("config", type=Path, nargs="?", default=None, help="base TOML file")
     sweeping.add_argument(
@@ -104,9 +221,16 @@ def _parser() -> argparse.ArgumentParser:
     sweeping.add_argument(
         "--out", type=Path, default=Path("sweep.csv"), help="table file: .csv, .json or .md"
     )
-    sweeping.add_argument("--threads", type=int, default=None, help="threads (default: all CPUs)")
-    sweeping.add_argument("--no-progress", action="store_true", help="no progress bar")
-    sweeping.add_argument("--T", type=float, default=None, help="override the horizon sim.T (s)")
+    sweeping.add_argument(
+        "--threads",
+        type=int,
+        default=None,
+        help="threads (default: every CPU this process can use)",
+    )
+    sweeping.add_argument("--no-progress", action="store_true", help="show no progress bar")
+    sweeping.add_argument(
+        "--T", type=float, default=None, help="horizon sim.T in s (default: the config's)"
+    )
     return parser
 
 
@@ -123,9 +247,141 @@ def _grid_entry(text: str) -> tuple[str, list]:
     return name.strip(), parsed
 
 
+def _say(command: str, text: str) -> None:
+    print(f"adparm {command}: {text}", file=sys.stderr)
+
+
+def _config(args: argparse.Namespace) -> Config:
+    """The command's configuration (the paper's without a file) with --T applied."""
+    config = paper_config() if getattr(args, "config", None) is None else load_config(args.config)
+    return config if args.T is None else config.updated({"sim": {"T": args.T}})
+
+
+def _write_failed(command: str, folder: OutputFolder, error: OSError) -> int:
+    """Reports a write that failed: what failed, and the complete files kept."""
+    target = f" {error.filename}" if getattr(error, "filename", None) else ""
+    _say(
+        command,
+        f"could not write{target}: {error.strerror or error}; no partial file was left; "
+        f"complete files kept: {folder.describe_written()}",
+    )
+    return EXIT_WRITE_FAILED
+
+
+def _writing(
+    signals: _Signals, folder: OutputFolder, progress: bool, write: Callable[[Callable], None]
+) -> None:
+    """Runs ``write(on_file)`` with signals deferred and a 'writing' progress bar in files, then
+    removes the stale files of an earlier run."""
+    with (
+        signals.writing_files(),
+        tqdm(total=len(folder.names), disable=not progress, desc="writing", unit="file") as bar,
+    ):
+        write(lambda path: bar.update(1))
+        folder.remove_stale()
+
+
+def _interrupted(command: str, signals: _Signals, what: str, kept: str) -> int:
+    """Reports a Ctrl-C or SIGTERM after the partial results were written; returns 128 + signal."""
+    name = signal.Signals(signals.received or signal.SIGINT).name
+    _say(command, f"stopped by {name} {what}; wrote what was done: {kept}")
+    return signals.status()
+
+
+def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str:
+    config = result.config
+    return (
+        f"the run diverged at t = {error.time:.6g} s (the state or an output became non-finite "
+        f"or exceeded sim.divergence_bound = {config.sim.divergence_bound:g}); its "
+        f"{result.t.size} rows up to then are written. To change: start from nonzero weights "
+        "(init.critic_weights, init.actor_weights), a smaller sim.dt, or smaller learning rates "
+        "(critic.eta_c, actor.eta_a1, actor.eta_a2)"
+    )
+
+
+def _run(args: argparse.Namespace) -> int:
+    command = args.command
+    progress = not args.no_progress
+    figures = not args.no_figures
+    try:
+        config = _config(args)
+        folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
+        folder.check()
+        _check_memory([config], figures=figures)  # the run, its files and figures
+    except (OSError, ValueError, TypeError) as error:
+        _say(command, str(error))
+        return EXIT_BAD_INPUT
+    with _Signals(command) as signals:
+        interrupt: SimulationInterrupted | None = None
+        diverged: SimulationDiverged | None = None
+        try:
+            # diagnose=False: no Python warning; the verdict is printed below in the CLI's words
+            result = simulate(config, progress=progress, diagnose=False)
+        except SimulationDiverged as error:
+            diverged, result = error, error.result
+        except SimulationInterrupted as stopped:
+            interrupt, result = stopped, stopped.result
+        except ValueError as error:  # the memory guard, before the run
+            _say(command, str(error))
+            return EXIT_BAD_INPUT
+        signals.writing = True  # from here on a signal lets the files be finished
+        summary = result.summary()
+        if getattr(args, "check_dt", False) and interrupt is None:
+            from .truth import check_step_size
+
+            summary["step_size_check"] = check_step_size(result.config)
+        try:
+            _writing(
+                signals,
+                folder,
+                progress,
+                lambda on_file: write_report(
+                    result,
+                    args.out,
+                    formats=args.formats,
+                    figures=figures,
+                    summary=summary,
+                    folder=folder,
+                    on_file=on_file,
+                ),
+            )
+        except OSError as error:
+            return _write_failed(command, folder, error)
+        written = f"wrote {folder.describe_written()}"
+        if interrupt is not None:
+            what = (
+                f"at t = {interrupt.time:.6g} s of sim.T = {config.sim.T:g} s "
+                f"({result.t.size} rows recorded)"
+            )
+            return _interrupted(command, signals, what, folder.describe_written())
+        print(written)
+        error_value = summary.get("critic_relative_error")
+        if error_value is not None:
+            claim = summary["critic_relative_error_at_claim"]
+            claim_text = "-" if claim is None else f"{claim:.3g}"
+            print(
+                f"critic ||Wc - W*|| / ||W*||: {claim_text} at t = "
+                f"{summary['paper_claim_time']:g} s, {error_value:.3g} at t = "
+                f"{summary['t_end']:g} s; final |e1| = {summary['final_e1_norm']:.3g} rad"
+            )
+        check = summary.get("step_size_check")
+        if check is not None:
+            print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
+        if summary["verdict"] not in ("ok", "not a learning run"):
+            _say(command, f"verdict: {summary['verdict']}")
+        if signals.received is not None:  # a signal while writing: the files are complete
+            _say(command, f"{signal.Signals(signals.received).name} received while writing")
+            return signals.status()
+        if diverged is not None:
+            _say(command, _divergence_text(result, diverged))
+            return EXIT_DIVERGED
+    return 0
+
+
 def _sweep(args: argparse.Namespace) -> int:
     from .sweep import sweep
 
+    command = "sweep"
     try:
         names = [name for name, _ in args.grid]
         repeated = sorted({name for name in names if names.count(name) > 1})
@@ -136,32 +392,60 @@ def _sweep(args: argparse.Namespace) -> int:
             )
         if args.out.suffix not in (".csv", ".json", ".md"):
             raise ValueError(f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}")
+        if args.out.is_dir():
+            raise OutputError(f"--out: {args.out} is a folder; give a .csv, .json or .md file")
         config = _config(args)
-        args.out.parent.mkdir(parents=True, exist_ok=True)
+        folder = OutputFolder(args.out.parent, [args.out.name], f"sweep:{args.out.name}")
+        folder.check()
+    except (OSError, ValueError, TypeError) as error:
+        _say(command, str(error))
+        return EXIT_BAD_INPUT
+    with _Signals(command) as signals:
+        interrupt: SimulationInterrupted | None = None
         try:
             table = sweep(
                 config, dict(args.grid), threads=args.threads, progress=not args.no_progress
             )
-        except SimulationInterrupted as interrupt:
-            interrupt.result.save(args.out)
-            return _interrupted("sweep", interrupt, f"{args.out} ({len(interrupt.result)} runs)")
-        table.save(args.out)
-    except (OSError, ValueError, TypeError) as error:
-        print(f"adparm sweep: {error}", file=sys.stderr)
-        return 2
-    print(table.to_markdown(), end="")
-    print(f"wrote {args.out} ({len(table)} runs)")
-    off = [row["verdict"] for row in table if row["verdict"] not in ("ok", "not a learning run")]
-    if off:
-        print(
-            f"adparm sweep: {len(off)} of {len(table)} runs did not find the optimum (see the "
-            f"verdict column), e.g.: {off[0]}",
-            file=sys.stderr,
-        )
+        except SimulationInterrupted as stopped:
+            interrupt, table = stopped, stopped.result
+        except (ValueError, TypeError) as error:
+            _say(command, str(error))
+            return EXIT_BAD_INPUT
+        signals.writing = True
+        try:
+            with signals.writing_files():
+                folder.write(args.out.name, table.save)
+        except OSError as error:
+            return _write_failed(command, folder, error)
+        if interrupt is not None:
+            return _interrupted(
+                command,
+                signals,
+                "(the points not done have no row)",
+                f"{args.out} ({len(table)} runs)",
+            )
+        print(table.to_markdown(), end="")
+        print(f"wrote {args.out} ({len(table)} runs)")
+        if signals.received is not None:
+            _say(command, f"{signal.Signals(signals.received).name} received while writing")
+            return signals.status()
+        off = [
+            row["verdict"] for row in table if row["verdict"] not in ("ok", "not a learning run")
+        ]
+        if off:
+            _say(
+                command,
+                f"{len(off)} of {len(table)} runs did not find the optimum (see the verdict "
+                f"column of {args.out}), e.g.: {off[0]}",
+            )
     diverged = sum(row["status"] == "diverged" for row in table)
     if diverged:
-        print(f"adparm sweep: {diverged} of {len(table)} runs diverged", file=sys.stderr)
-        return 1
+        _say(
+            command,
+            f"{diverged} of {len(table)} runs diverged (status diverged in {args.out}); see "
+            "adparm run on one of them for what to change",
+        )
+        return EXIT_DIVERGED
     return 0
 
 
@@ -169,102 +453,104 @@ def _kinds(text: str) -> tuple[str, ...]:
     return tuple(kind.strip() for kind in text.split(",") if kind.strip())
 
 
-def _config(args: argparse.Namespace) -> Config:
-    """The command's configuration (the paper's without a file) with --T applied."""
-    config = paper_config() if getattr(args, "config", None) is None else load_config(args.config)
-    return config if args.T is None else config.updated({"sim": {"T": args.T}})
-
-
 def _compare(args: argparse.Namespace) -> int:
+    command = "compare"
+    figures = not args.no_figures
+    names = ["compare.csv", "compare.json", "compare.md", "config.toml"]
+    if figures:
+        names += [f"compare.{fmt}" for fmt in args.formats]
     try:
         config = _config(args)
         kinds = _kinds(args.kinds)
-        _controller_configs(config, kinds)  # every check before the first run
+        runs = _controller_configs(config, kinds)  # every check before the first run
+        folder = OutputFolder(args.out, names, "compare")
+        folder.check()
+        # every run is kept (adp twice: learning, then from the learned weights) for the table
+        kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
+        _check_memory(kept, figures=figures)
     except (OSError, ValueError, TypeError) as error:
-        print(f"adparm compare: {error}", file=sys.stderr)
-        return 2
-    try:
-        comparison = compare(config, kinds, progress=not args.no_progress)
-    except SimulationInterrupted as interrupt:
-        written = _write_comparison(args, config, interrupt.result)
-        return _interrupted("compare", interrupt, written)
-    print(_write_comparison(args, config, comparison))
+        _say(command, str(error))
+        return EXIT_BAD_INPUT
+    with _Signals(command) as signals:
+        interrupt: SimulationInterrupted | None = None
+        try:
+            comparison = compare(config, kinds, progress=not args.no_progress)
+        except SimulationInterrupted as stopped:
+            interrupt, comparison = stopped, stopped.result
+        except ValueError as error:
+            _say(command, str(error))
+            return EXIT_BAD_INPUT
+        signals.writing = True
+        try:
+            _writing(
+                signals,
+                folder,
+                not args.no_progress,
+                lambda on_file: _write_comparison(args, folder, config, comparison, on_file),
+            )
+        except OSError as error:
+            return _write_failed(command, folder, error)
+        if interrupt is not None:
+            runs = ", ".join(comparison.results) or "none"
+            what = f"(runs so far, the last one partial: {runs})"
+            return _interrupted(command, signals, what, folder.describe_written())
+        print(comparison.table_markdown(), end="")
+        print(f"wrote {folder.describe_written()}")
+        if signals.received is not None:
+            _say(command, f"{signal.Signals(signals.received).name} received while writing")
+            return signals.status()
     if comparison.diverged:
-        print(f"adparm compare: diverged: {', '.join(comparison.diverged)}", file=sys.stderr)
-        return 1
+        _say(
+            command,
+            f"diverged: {', '.join(comparison.diverged)} (their rows are in the table, status "
+            "diverged); adparm run with that controller.kind shows where and what to change",
+        )
+        return EXIT_DIVERGED
     return 0
 
 
-def _write_comparison(args: argparse.Namespace, config: Config, comparison: Comparison) -> str:
-    """Writes the comparison's files and prints its table; returns what was written."""
-    out = Path(args.out)
-    comparison.save(out)
-    (out / "config.toml").write_text(config.to_toml())
+def _write_comparison(
+    args: argparse.Namespace,
+    folder: OutputFolder,
+    config: Config,
+    comparison: Comparison,
+    on_file: Callable,
+) -> None:
+    """Writes the comparison's files (each atomically, recorded in the folder's manifest)."""
+    for name in ("compare.csv", "compare.json", "compare.md"):
+        on_file(folder.write(name, lambda t, n=name: _save_one(comparison, n, t)))
+    on_file(folder.write_text("config.toml", config.to_toml()))
     if not args.no_figures:
-        from .plotting import save_figures
-
-        save_figures({"compare": comparison.plot()}, out, args.formats)
-    print(comparison.table_markdown(), end="")
-    figures = "" if args.no_figures else ", compare." + "/".join(args.formats)
-    return f"wrote {out}/ (compare.md, compare.csv, compare.json, config.toml{figures})"
+        for path in folder.write_figures({"compare": comparison.plot()}, args.formats):
+            on_file(path)
 
 
-def _interrupted(command: str, interrupt: SimulationInterrupted, written: str) -> int:
-    """Reports a Ctrl-C after the partial results were written; the exit status of SIGINT."""
-    print(f"adparm {command}: {interrupt}; kept what was done: {written}", file=sys.stderr)
-    return 130
+def _save_one(comparison: Comparison, name: str, temporary: Path) -> None:
+    """Comparison.save writes all three tables; write the one named ``name`` to ``temporary``."""
+    import json
 
+    from .table import write_csv
 
-def _write_run(args: argparse.Namespace, result: SimulationResult) -> dict:
-    """Writes the report of a run (finished, diverged or interrupted); returns its summary."""
-    summary = result.summary()
-    if getattr(args, "check_dt", False):
-        from .truth import check_step_size
+    if name.endswith(".csv"):
+        from .comparison import COMPARE_COLUMNS
 
-        summary["step_size_check"] = check_step_size(result.config)
-    write_report(
-        result, args.out, formats=args.formats, figures=not args.no_figures, summary=summary
-    )
-    return summary
+        write_csv(temporary, COMPARE_COLUMNS, comparison.rows)
+    elif name.endswith(".json"):
+        temporary.write_text(json.dumps(comparison.to_json(), indent=2) + "\n", encoding="utf-8")
+    else:
+        temporary.write_text(
+            "# adparm controller comparison\n\n" + comparison.table_markdown(), encoding="utf-8"
+        )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``adparm`` command; returns the exit status."""
+    """Entry point of the ``adparm`` command; returns the exit status (see the module's doc)."""
     args = _parser().parse_args(argv)
     if args.command == "compare":
         return _compare(args)
     if args.command == "sweep":
         return _sweep(args)
-    try:
-        config = _config(args)
-    except (OSError, ValueError, TypeError) as error:
-        print(f"adparm {args.command}: {error}", file=sys.stderr)
-        return 2
-    try:
-        result, failure = _simulate_keeping_divergence(config, progress=not args.no_progress)
-    except SimulationInterrupted as interrupt:
-        _write_run(args, interrupt.result)
-        return _interrupted(args.command, interrupt, f"{args.out}/")
-    summary = _write_run(args, result)
-    print(f"wrote {args.out}/ (summary.md, summary.json, result.npz, result.csv, figures)")
-    error = summary.get("critic_relative_error")
-    if error is not None:
-        claim = summary["critic_relative_error_at_claim"]
-        claim_text = "-" if claim is None else f"{claim:.3g}"
-        print(
-            f"critic ||Wc - W*|| / ||W*||: {claim_text} at t = {summary['paper_claim_time']:g} s, "
-            f"{error:.3g} at t = {summary['t_end']:g} s; final |e1| = "
-            f"{summary['final_e1_norm']:.3g} rad"
-        )
-    check = summary.get("step_size_check")
-    if check is not None:
-        print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
-    if summary["verdict"] not in ("ok", "not a learning run"):
-        print(f"adparm {args.command}: verdict: {summary['verdict']}", file=sys.stderr)
-    if failure is not None:
-        print(f"adparm {args.command}: {failure}", file=sys.stderr)
-        return 1
-    return 0
+    return _run(args)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._files import write_text
 from .config import CONTROLLER_KINDS, Config, _check_known
 from .simulation import SimulationInterrupted, SimulationResult, _simulate_keeping_divergence
 from .table import rows_dataframe, rows_json, rows_markdown, write_csv
@@ -228,8 +229,8 @@ class Comparison:
         directory.mkdir(parents=True, exist_ok=True)
         paths = [directory / f"compare.{ext}" for ext in ("csv", "json", "md")]
         write_csv(paths[0], COMPARE_COLUMNS, self.rows)
-        paths[1].write_text(json.dumps(self.to_json(), indent=2) + "\n")
-        paths[2].write_text("# adparm controller comparison\n\n" + self.table_markdown())
+        write_text(paths[1], json.dumps(self.to_json(), indent=2) + "\n")
+        write_text(paths[2], "# adparm controller comparison\n\n" + self.table_markdown())
         return paths
 
     def plot(

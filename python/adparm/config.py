@@ -126,11 +126,51 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
+#: Deepest nesting of lists and tables a config value may have (the deepest field needs 3).
+MAX_DEPTH = 16
+
+
+def _check_depth(value: Any, name: str) -> None:
+    """Refuses values nested deeper than MAX_DEPTH (lists, tuples, mappings, arrays), naming the
+    field, before NumPy (32 dimensions at most) or a recursion meets them."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, Mapping):
+            children = list(item.values())
+        elif isinstance(item, (list, tuple)):
+            children = list(item)
+        elif isinstance(item, np.ndarray) and item.dtype == object:
+            children = list(item.flat)
+        else:
+            continue
+        if depth > MAX_DEPTH:
+            raise ValueError(f"{name}: nested more than {MAX_DEPTH} levels deep")
+        stack.extend((child, depth + 1) for child in children)
+
+
+def _plain_array(value: Any, name: str) -> Any:
+    """np.matrix as a plain array; a masked array without masked entries as its data; a masked
+    array with masked entries refused (NumPy would turn them into NaN or a fill value)."""
+    if isinstance(value, np.ma.MaskedArray):
+        if np.ma.count_masked(value):
+            raise ValueError(
+                f"{name}: a masked array with {np.ma.count_masked(value)} masked entries; give "
+                "plain numbers (e.g. value.filled(...))"
+            )
+        return np.asarray(value.data)
+    if isinstance(value, np.matrix):
+        return np.asarray(value)
+    return value
+
+
 def _array(value: Any, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
     """A finite float array of ``shape`` (None: any length) from nested lists or an array of
     real numbers; strings, bools, complex numbers, None and mappings are refused (TypeError),
     as are ragged lists."""
     expected = f"an array of numbers of shape {_shape_text(shape)}"
+    value = _plain_array(value, name)
+    _check_depth(value, name)
     if isinstance(value, (str, bytes, Mapping, bool, np.bool_)) or value is None:
         raise TypeError(f"{name}: expected {expected}, got {_text(value)}")
     if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
@@ -166,7 +206,7 @@ def _ndim(value: Any) -> int:
     """np.ndim, or -1 for what is no array (a ragged list): the checks then name the field."""
     try:
         return int(np.ndim(value))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, RuntimeError):  # RuntimeError: more than 32 dimensions
         return -1
 
 
@@ -384,6 +424,8 @@ class SampledTrajectory:
             object.__setattr__(self, "t", t)
             object.__setattr__(self, "q", q)
         object.__setattr__(self, "t", _vector(self.t, "task.qd.t", None))
+        if len(self.t) > MAX_SAMPLES:
+            raise ValueError(f"task.qd.t: at most {MAX_SAMPLES} samples, got {len(self.t)}")
         q = _matrix(self.q, "task.qd.q", None, 2)
         if len(q) != len(self.t):
             raise ValueError(
@@ -425,11 +467,54 @@ def _empty(value: Any) -> bool:
     return isinstance(value, (tuple, list)) and len(value) == 0
 
 
-def _read_samples(path: Path) -> tuple[Vector, Matrix]:
+#: Limits on what a run may ask for: sinusoids of the probing signal, trajectory samples, and the
+#: size of the files read (a configuration, a samples file).
+MAX_FREQUENCIES = 1_000
+MAX_SAMPLES = 1_000_000
+MAX_CONFIG_BYTES = 16 * 2**20
+MAX_SAMPLES_FILE_BYTES = 256 * 2**20
+
+
+def read_text_file(path: str | Path, what: str, limit: int) -> str:
+    """The UTF-8 text of the regular file ``path`` (a leading byte-order mark is dropped); a
+    FIFO, a device, a folder, a file larger than ``limit`` bytes or one that is not UTF-8 text
+    is refused with a ValueError naming ``what`` and the file."""
+    import os
+    import stat
+
+    path = Path(path)
     try:
-        lines = path.read_text().splitlines()
-    except (OSError, ValueError) as error:  # ValueError: a NUL in the path, not UTF-8 text
-        raise ValueError(f"task.qd.file: cannot read {str(path)!r}: {error}") from error
+        descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except (OSError, ValueError) as error:  # ValueError: a NUL in the path
+        raise ValueError(f"{what}: cannot read {str(path)!r}: {error}") from None
+    try:
+        info = os.fstat(descriptor)
+        if not stat.S_ISREG(info.st_mode):
+            raise ValueError(f"{what}: {str(path)!r} is not a regular file")
+        if info.st_size > limit:
+            raise ValueError(
+                f"{what}: {str(path)!r} is {info.st_size} bytes, more than the {limit} bytes "
+                "adparm reads"
+            )
+        with os.fdopen(descriptor, "rb", closefd=False) as stream:
+            data = stream.read(limit + 1)
+    except OSError as error:
+        raise ValueError(f"{what}: cannot read {str(path)!r}: {error}") from None
+    finally:
+        os.close(descriptor)
+    if len(data) > limit:
+        raise ValueError(f"{what}: {str(path)!r} is more than the {limit} bytes adparm reads")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise ValueError(
+            f"{what}: {str(path)!r} is not UTF-8 text (byte 0x{data[error.start]:02x} at "
+            f"offset {error.start})"
+        ) from None
+
+
+def _read_samples(path: Path) -> tuple[Vector, Matrix]:
+    lines = read_text_file(path, "task.qd.file", MAX_SAMPLES_FILE_BYTES).splitlines()
     rows = []
     for number, line in enumerate(lines, start=1):
         text = line.split("#", 1)[0].strip()
@@ -650,6 +735,11 @@ class ProbeConfig:
             self, "frequencies", _vector(self.frequencies, "probe.frequencies", None)
         )
         n = len(self.frequencies)
+        if n > MAX_FREQUENCIES:
+            raise ValueError(
+                f"probe.frequencies: at most {MAX_FREQUENCIES} sinusoids (each costs every step "
+                f"of the run), got {n}"
+            )
         amplitude = self.amplitude
         if _is_number(amplitude):
             amplitude = (amplitude, amplitude)
@@ -920,6 +1010,8 @@ class Config:
                     f"[{section}]: expected a table of keys, got {type(values).__name__}"
                 )
             _check_keys(values, [f.name for f in dataclasses.fields(_SECTIONS[section])], section)
+            for key, value in values.items():
+                _check_depth(value, f"{section}.{key}")
             sections[section] = dataclasses.replace(getattr(base, section), **values)
         return dataclasses.replace(base, **sections)
 
@@ -970,6 +1062,21 @@ def _plain(value: Any) -> Any:
     return value
 
 
+def _deep_toml(text: str) -> str:
+    """Where a TOML text nests too deep for the reader: the first line with more than MAX_DEPTH
+    open brackets, and its key."""
+    for number, line in enumerate(text.splitlines(), start=1):
+        depth = deepest = 0
+        for char in line:
+            depth += char in "[{"
+            depth -= char in "]}"
+            deepest = max(deepest, depth)
+        if deepest > MAX_DEPTH:
+            key = line.split("=", 1)[0].strip() if "=" in line else "?"
+            return f"line {number}, key {_name(key)!r}: nested more than {MAX_DEPTH} levels deep"
+    return f"nested more than {MAX_DEPTH} levels deep"
+
+
 def paper_config() -> Config:
     """The paper's instance (Section 4, corrected) with our documented open choices."""
     return Config()
@@ -980,11 +1087,13 @@ def load_config(path: str | Path) -> Config:
     [init] [probe] [controller] [extrapolation] [sim]; keys left out take the paper default. A
     relative ``task.qd.file`` is relative to the TOML file's folder."""
     path = Path(path)
+    text = read_text_file(path, "config", MAX_CONFIG_BYTES)
     try:
-        with path.open("rb") as stream:
-            data = tomllib.load(stream)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ValueError(f"{path}: invalid TOML: {error}") from error
+    except RecursionError:
+        raise ValueError(f"{path}: {_deep_toml(text)}") from None
     qd = data.get("task", {}).get("qd") if isinstance(data.get("task"), Mapping) else None
     if isinstance(qd, Mapping) and isinstance(qd.get("file"), str):
         data["task"]["qd"] = {**qd, "file": str(path.parent / Path(qd["file"]).expanduser())}

@@ -9,16 +9,17 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ._files import OutputFolder
 from .summary import summarize, summary_markdown
 
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import SimulationResult
 
-__all__ = ["check_formats", "write_report"]
+__all__ = ["check_formats", "report_files", "write_report"]
 
 FIGURE_FORMATS = ("png", "svg", "pdf")
 
@@ -33,6 +34,16 @@ def check_formats(formats: Iterable[str]) -> tuple[str, ...]:
     return formats
 
 
+def report_files(formats: Iterable[str] = ("png", "svg"), figures: bool = True) -> list[str]:
+    """The names of the files write_report writes."""
+    from .plotting import FIGURES
+
+    names = ["result.npz", "result.csv", "config.toml", "summary.json", "summary.md"]
+    if figures:
+        names += [f"{name}.{fmt}" for name in FIGURES for fmt in check_formats(formats)]
+    return names
+
+
 def write_report(
     result: SimulationResult,
     directory: str | Path,
@@ -40,23 +51,41 @@ def write_report(
     formats: Iterable[str] = ("png", "svg"),
     figures: bool = True,
     summary: dict[str, Any] | None = None,
+    folder: OutputFolder | None = None,
+    on_file: Callable[[Path], None] | None = None,
 ) -> list[Path]:
-    """Write figures, summaries, the recorded result and the config to ``directory``; returns
-    the paths written. ``summary`` is ``summarize(result)`` if the caller already has it."""
+    """Write the recorded result, the config, summaries and figures to ``directory``; returns
+    the paths written. Each file is written atomically (never a truncated file). ``summary`` is
+    ``summarize(result)`` if the caller already has it; ``folder`` (the command line's
+    OutputFolder of ``directory``) records each file in its manifest; ``on_file(path)`` is
+    called after each file (progress)."""
     formats = check_formats(formats)
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
+    if folder is None:
+        directory.mkdir(parents=True, exist_ok=True)
+        folder = OutputFolder(directory, report_files(formats, figures), "report")
     if summary is None:
         summary = summarize(result)
-    written = []
-    (directory / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (directory / "summary.md").write_text(summary_markdown(summary))
-    (directory / "config.toml").write_text(result.config.to_toml())
-    written += [directory / name for name in ("summary.json", "summary.md", "config.toml")]
-    written.append(result.save(directory / "result.npz"))
-    written.append(result.save(directory / "result.csv"))
-    if figures:
-        from .plotting import save_figures
+    done = on_file or (lambda path: None)
+    from .storage import _write_csv, _write_npz
 
-        written += save_figures(result.plot(), directory, formats)
+    written = []
+    for name, writer in (("result.npz", _write_npz), ("result.csv", _write_csv)):
+        written.append(folder.write(name, lambda temporary, w=writer: w(result, temporary)))
+        done(written[-1])
+    for name, text in (
+        ("config.toml", result.config.to_toml()),
+        ("summary.json", json.dumps(summary, indent=2) + "\n"),
+        ("summary.md", summary_markdown(summary)),
+    ):
+        written.append(folder.write_text(name, text))
+        done(written[-1])
+    if figures:
+        from .plotting import FIGURES
+
+        for name in FIGURES:  # one figure at a time: progress, and one figure in memory
+            paths = folder.write_figures(result.plot([name]), formats)
+            written += paths
+            for path in paths:
+                done(path)
     return written

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import itertools
 import math
 import os
-import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -25,20 +26,20 @@ __all__ = [
     "SimulationDiverged",
     "SimulationInterrupted",
     "SimulationResult",
+    "available_memory",
     "core_settings",
     "desired_state",
     "extrapolation_points",
     "default_threads",
+    "memory_needed",
     "simulate",
     "simulate_batch",
 ]
 
-# The C++ core advances a run in chunks of steps, with the GIL released; Python regains control
-# between chunks, to update the progress bar and to act on Ctrl-C. The chunk length adapts so that
-# one call lasts about CALL_SECONDS, whatever a step costs (extrapolation points, batch size).
-CALL_SECONDS = 0.05
-FIRST_CALL_STEPS = 1_000
-MIN_CALL_STEPS = 100
+# The C++ core runs every run on worker threads (adparm._core.Batch: a shared queue, each run to
+# its end, no barrier between threads); Python only polls, every POLL_SECONDS, to update the
+# progress bar and to act on Ctrl-C or SIGTERM, and a stop request is acted on within one step.
+POLL_SECONDS = 0.05
 
 
 def core_settings(config: Config) -> _core.Settings:
@@ -239,7 +240,7 @@ class SimulationResult:
         shapes.update({name: (n, 2) for name in _ARRAYS_2})
         shapes.update({name: (n, 8) for name in _ARRAYS_N})
         for name, shape in shapes.items():
-            array = np.array(getattr(self, name), dtype=float)
+            array = _read_only_float(getattr(self, name))
             if array.shape != shape:
                 raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
             array.flags.writeable = False
@@ -249,6 +250,14 @@ class SimulationResult:
         object.__setattr__(self, "covariance_reset_times", resets)
         if self.status not in STATUSES:
             raise ValueError(f"status: expected one of {', '.join(STATUSES)}, got {self.status!r}")
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        # pickle and copy.deepcopy rebuild through __init__, so the arrays are checked and
+        # read-only again (the default would restore them writable)
+        return (
+            SimulationResult,
+            tuple(getattr(self, f.name) for f in dataclasses.fields(self)),
+        )
 
     @property
     def covariance_resets(self) -> int:
@@ -371,9 +380,27 @@ class SimulationInterrupted(KeyboardInterrupt):
         self.time = time
 
 
+def _read_only_float(value: Any) -> np.ndarray:
+    """``value`` as a float array that nobody else can write: a read-only float64 array that is
+    not a view of another NumPy array is kept as it is (no copy: the core's recordings), anything
+    else is copied."""
+    if (
+        isinstance(value, np.ndarray)
+        and value.dtype == np.float64
+        and not value.flags.writeable
+        and not isinstance(value.base, np.ndarray)
+        and type(value) is np.ndarray
+    ):
+        return value
+    return np.array(value, dtype=float)
+
+
 def _result(run: _core.Simulation, config: Config, wall_time: float) -> SimulationResult:
+    recording = run.recording()
+    for array in recording.values():
+        array.flags.writeable = False  # handed over: SimulationResult keeps them without a copy
     return SimulationResult(
-        **run.recording(),
+        **recording,
         covariance_reset_times=np.array(run.reset_times),
         config=config,
         status="interrupted" if run.status == "running" else run.status,
@@ -400,42 +427,135 @@ def _progress_bar(total: float, unit: str, desc: str, enabled: bool) -> tqdm:
     )
 
 
-class _Pacer:
-    """Calls ``advance(steps)`` with a number of steps adapted after each call so that a call
-    lasts about CALL_SECONDS (at most 8 times more or fewer steps than the call before)."""
+def _run_batch(
+    batch: _core.Batch,
+    threads: int,
+    on_end: Callable[[int, _core.Simulation], None],
+    on_poll: Callable[[], None],
+    window: int | None = None,
+) -> None:
+    """Starts ``batch`` on ``threads`` worker threads and polls it until every run has ended:
+    ``on_end(i, run)`` receives each run as it ends (handed over by the core, which no longer
+    holds it), ``on_poll()`` runs after each poll. Any exception (Ctrl-C) stops the workers
+    (within one step) before it propagates."""
+    if window is None:
+        batch.start(threads)
+    else:
+        batch.start(threads, window)
+    try:
+        while not batch.done:
+            for i in batch.wait(POLL_SECONDS):
+                on_end(i, batch.take(i))
+            on_poll()
+    except BaseException:
+        batch.stop()
+        raise
 
-    def __init__(self) -> None:
-        self.steps = max(MIN_CALL_STEPS, FIRST_CALL_STEPS)
 
-    def advance(self, advance: Callable[[int], Any]) -> None:
-        start = time.perf_counter()
-        advance(self.steps)
-        wanted = self.steps * CALL_SECONDS / max(time.perf_counter() - start, 1e-9)
-        self.steps = int(max(MIN_CALL_STEPS, min(wanted, 8 * self.steps, 10**9)))
+def _take_rest(
+    batch: _core.Batch, skip: Iterable[int] = ()
+) -> Iterator[tuple[int, _core.Simulation]]:
+    """After batch.stop(): (index, run) of every run not yet handed over (ended, part-way or
+    unstarted), one at a time, except those in ``skip`` (already handed over)."""
+    skip = set(skip)
+    ended = batch.wait(0.0)
+    for i in [*ended, *(i for i in range(len(batch)) if i not in ended)]:
+        if i in skip:
+            continue
+        skip.add(i)
+        try:
+            run = batch.take(i)
+        except RuntimeError:  # taken by an on_end that a second interrupt cut short
+            continue
+        yield i, run
 
 
 # Values of one recorded row besides the weights: t, hjb_error, cost and ten joint series of 2.
 _ROW_VALUES = 3 + 2 * len(_ARRAYS_2)
+# Memory of a run at its peak, measured with bench/memory_peak.py (the growth of the peak resident
+# set of a fresh process, ru_maxrss, over simulate()): the core's recording and the NumPy arrays
+# the result takes over from it (2 x 8 bytes per recorded value), POINT_BYTES per extrapolation
+# point (the points and their prepared basis values), and RUN_BYTES of fixed cost.
+POINT_BYTES = 240
+RUN_BYTES = 1 << 20
+# Drawing a run's figures (matplotlib's lines of every recorded row), measured with adparm run
+# (/usr/bin/time's maximum resident set): about 1.7 times one copy of the recording.
+FIGURE_COPIES = 1.7
 
 
-def _check_memory(configs: list[Config]) -> None:
-    """Refuse runs whose recordings would not fit in half of this machine's memory."""
+def _recording_bytes(config: Config) -> int:
+    """Bytes of one copy of the recording of ``config`` (all its rows)."""
+    steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
+    rows = steps // config.sim.record_every + 2
+    width = _ROW_VALUES + len(config.init.critic_weights) + len(config.init.actor_weights)
+    return 8 * rows * width
+
+
+def _core_bytes(config: Config) -> int:
+    """Bytes a run holds in the core while it runs (its recording, points, fixed cost)."""
+    return _recording_bytes(config) + POINT_BYTES * config.extrapolation.points + RUN_BYTES
+
+
+def memory_needed(
+    configs: list[Config], at_once: int | None = None, threads: int = 1, figures: bool = False
+) -> int:
+    """The peak memory, in bytes, of running ``configs``: every result kept (simulate and
+    simulate_batch: the NumPy recordings of all runs, plus the core's copies of up to ``threads``
+    runs at once), or, with ``at_once`` (sweep: runs summarised and freed as they end), at most
+    ``at_once`` runs in memory, each with both copies. ``figures``: plus the figures of the
+    largest run (``adparm run`` and ``reproduce``, FIGURE_COPIES recordings)."""
+    if not configs:
+        return 0
+    if figures:
+        largest = max(_recording_bytes(c) for c in configs)
+        return memory_needed(configs, at_once, threads) + int(FIGURE_COPIES * largest)
+    core = sorted((_core_bytes(c) for c in configs), reverse=True)
+    if at_once is not None:
+        return sum(core[:at_once]) + sum(
+            sorted((_recording_bytes(c) for c in configs), reverse=True)[:at_once]
+        )
+    return sum(_recording_bytes(c) for c in configs) + sum(core[:threads])
+
+
+def available_memory() -> int | None:
+    """Bytes this machine can give without swapping: MemAvailable of /proc/meminfo (Linux), else
+    half the physical memory; None if unknown."""
     try:
-        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        with open("/proc/meminfo", encoding="ascii") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
     except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return None
+
+
+def _check_memory(
+    configs: list[Config], at_once: int | None = None, threads: int = 1, figures: bool = False
+) -> None:
+    """Refuse runs whose peak memory (memory_needed) exceeds the memory available now."""
+    available = available_memory()
+    if available is None:  # pragma: no cover - not POSIX
         return
-    needed = 0
-    for config in configs:
-        steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
-        rows = steps // config.sim.record_every + 2
-        width = _ROW_VALUES + len(config.init.critic_weights) + len(config.init.actor_weights)
-        needed += 8 * rows * width
-    if needed > memory // 2:
-        which = "the runs' recordings" if len(configs) > 1 else "the recording"
+    needed = memory_needed(configs, at_once, threads, figures)
+    if needed > available:
+        which = "these runs" if len(configs) > 1 else "this run"
+        points = max(c.extrapolation.points for c in configs)
+        field = "sim.record_every"
+        change = "record fewer rows (a larger sim.record_every or a shorter sim.T)"
+        if points and POINT_BYTES * points > needed / 4:
+            field = "extrapolation.points"
+            change = "use fewer extrapolation.points, or " + change
+        if len(configs) > 1 and at_once is None:
+            change += ", or run fewer configs at once (adparm.sweep keeps only summary rows)"
+        if figures:
+            change += ", or write no figures (--no-figures)"
         raise ValueError(
-            f"sim.record_every: {which} would take {needed / 2**30:.3g} GiB, more than half of "
-            f"this machine's {memory / 2**30:.3g} GiB; record fewer rows (a larger "
-            "sim.record_every or a shorter sim.T)"
+            f"{field}: {which} would need about {needed / 2**30:.3g} GiB of memory, "
+            f"more than the {available / 2**30:.3g} GiB available now; {change}"
         )
 
 
@@ -465,8 +585,8 @@ def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -
         If the state or a recorded output becomes non-finite or leaves
         ``sim.divergence_bound``; ``.result`` holds the rows up to the last finite step.
     SimulationInterrupted
-        On Ctrl-C, which is acted on between two chunks of about ``CALL_SECONDS``; ``.result``
-        holds the rows recorded so far.
+        On Ctrl-C, which stops the run within one step (the run goes on a worker thread; this
+        thread polls every ``POLL_SECONDS``); ``.result`` holds the rows recorded so far.
 
     Examples
     --------
@@ -477,16 +597,22 @@ def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -
     """
     settings = core_settings(config)
     _check_memory([config])
-    run = _core.Simulation(settings)
-    pacer = _Pacer()
-    start = time.perf_counter()
+    batch = _core.Batch([settings])
+    runs: dict[int, _core.Simulation] = {}
+    total = batch.total_steps
     try:
         with _progress_bar(round(config.sim.T, 6), "s", "simulating", progress) as bar:
-            while run.status == "running":
-                pacer.advance(run.advance)
-                bar.update(round(config.sim.T * run.step / run.steps, 6) - bar.n)
+
+            def poll() -> None:
+                bar.update(round(config.sim.T * batch.steps_done / total, 6) - bar.n)
+
+            _run_batch(batch, 1, runs.__setitem__, poll)
     except KeyboardInterrupt:
-        result = _result(run, config, time.perf_counter() - start)
+        runs.update(_take_rest(batch, skip=runs))
+        if 0 not in runs:  # pragma: no cover - the run was lost to a second interrupt
+            raise
+        run = runs[0]
+        result = _result(run, config, batch.seconds(0))
         reached = config.sim.T * run.step / run.steps
         raise SimulationInterrupted(
             f"simulation interrupted at t = {reached:.6g} s of sim.T = {config.sim.T:g} s; the "
@@ -494,7 +620,8 @@ def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -
             result,
             reached,
         ) from None
-    result = _result(run, config, time.perf_counter() - start)
+    run = runs[0]
+    result = _result(run, config, batch.seconds(0))
     if run.status == "diverged":
         raise SimulationDiverged(_divergence_message(run, config), result, run.divergence_time)
     if diagnose:
@@ -581,33 +708,43 @@ def simulate_batch(
         raise ValueError(f"on_divergence: expected 'raise' or 'keep', got {on_divergence!r}")
     workers = min(_check_threads(threads), max(1, len(configs)))  # no idle threads
     settings = [core_settings(config) for config in configs]
-    _check_memory(configs)
+    _check_memory(configs, threads=workers)
     batch = _core.Batch(settings)
-    runs = [batch.simulation(i) for i in range(len(configs))]
-    total = sum(run.steps for run in runs)
-    pacer = _Pacer()  # steps per run and call
+    done_runs: dict[int, SimulationResult] = {}
+    divergence: dict[int, tuple[str, float]] = {}
+    pending: dict[int, _core.Simulation] = {}  # handed over, not yet converted
+
+    def on_end(i: int, run: _core.Simulation) -> None:  # the core's copy is freed on return
+        pending[i] = run
+        done_runs[i] = _result(run, configs[i], batch.seconds(i))
+        if run.status == "diverged":
+            divergence[i] = (_divergence_message(run, configs[i]), run.divergence_time)
+        del pending[i]
+
     try:
-        with _progress_bar(total, "steps", "simulating", progress) as bar:
-            while batch.running:
-                pacer.advance(lambda steps: batch.advance(steps, workers))
-                bar.update(sum(run.step for run in runs) - bar.n)
+        with _progress_bar(batch.total_steps, "steps", "simulating", progress) as bar:
+            _run_batch(batch, workers, on_end, lambda: bar.update(batch.steps_done - bar.n))
     except KeyboardInterrupt:
-        results = [_result(runs[i], c, batch.seconds(i)) for i, c in enumerate(configs)]
+        rest = _take_rest(batch, skip={*done_runs, *pending})
+        for i, run in itertools.chain(list(pending.items()), rest):
+            done_runs[i] = _result(run, configs[i], batch.seconds(i))  # each, then freed
+        results = [done_runs[i] for i in range(len(configs))]
         done = sum(result.status != "interrupted" for result in results)
         raise SimulationInterrupted(
             f"batch interrupted with {done} of {len(configs)} runs done; every run's result so "
             "far is in the exception's .result",
             results,
         ) from None
-    results = [_result(runs[i], config, batch.seconds(i)) for i, config in enumerate(configs)]
-    diverged = [i for i, run in enumerate(runs) if run.status == "diverged"]
+    results = [done_runs[i] for i in range(len(configs))]
+    diverged = sorted(divergence)
     if diverged and on_divergence == "raise":
         i = diverged[0]
+        message, when = divergence[i]
         raise SimulationDiverged(
-            f"configs[{i}]: {_divergence_message(runs[i], configs[i])}; "
+            f"configs[{i}]: {message}; "
             f"{len(diverged)} of {len(configs)} runs diverged, all results are in .results",
             results[i],
-            runs[i].divergence_time,
+            when,
             index=i,
             results=results,
         )

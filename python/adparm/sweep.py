@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from tqdm.auto import tqdm
 
+from ._files import write_text
 from .config import _SECTIONS, Config, _hint
 from .simulation import (
     SimulationInterrupted,
@@ -54,8 +55,8 @@ SWEEP_METRICS = (
     "wall_time",
 )
 
-# Runs held in memory at once per thread by the in-process sweep (each keeps its recording until
-# it is summarised).
+# Runs built and not yet summarised, per thread, in the in-process sweep (each holds its recording
+# until it is summarised and freed).
 _RUNS_PER_THREAD = 8
 
 
@@ -216,9 +217,9 @@ class SweepResult:
         if path.suffix == ".csv":
             return write_csv(path, self.columns, self.rows)
         if path.suffix == ".json":
-            path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
+            write_text(path, json.dumps(self.to_json(), indent=2) + "\n")
         elif path.suffix == ".md":
-            path.write_text("# adparm sweep\n\n" + self.to_markdown())
+            write_text(path, "# adparm sweep\n\n" + self.to_markdown())
         else:
             raise ValueError(f"path: expected a .csv, .json or .md file, got {str(path)!r}")
         return path
@@ -313,22 +314,39 @@ def _table(
 def _run_in_process(
     configs: list[Config], threads: int, tolerance: float, progress: bool
 ) -> Iterator[tuple[int, dict[str, Any]]]:
-    """(point index, metrics) of every run, group by group of simulate_batch runs."""
-    group = threads * _RUNS_PER_THREAD
+    """(point index, metrics) of every run, as the runs end: one stream through the core's worker
+    threads (no barrier between runs), each run summarised and freed as soon as it ends, so at
+    most _RUNS_PER_THREAD runs per thread are held in memory, however many points."""
+    from . import _core
+    from .simulation import _check_memory, _result, _run_batch, core_settings
+
+    workers = min(threads, max(1, len(configs)))
+    window = workers * _RUNS_PER_THREAD
+    _check_memory(configs, at_once=window + workers)
+    batch = _core.Batch([core_settings(config) for config in configs])
+    ended: dict[int, Any] = {}  # runs handed over by the core, not yet summarised
+    rows: list[tuple[int, dict[str, Any]]] = []
+
+    def summarise() -> None:
+        while ended:
+            i, run = ended.popitem()
+            rows.append((i, _metrics(_result(run, configs[i], batch.seconds(i)), tolerance)))
+
+    def on_end(i: int, run: Any) -> None:  # summarised at once: the run is freed on return
+        ended[i] = run
+        summarise()
+
     with tqdm(total=len(configs), disable=not progress, desc="sweep", unit="run") as bar:
-        for start in range(0, len(configs), group):
-            try:
-                results = simulate_batch(
-                    configs[start : start + group], threads=threads, on_divergence="keep"
-                )
-            except SimulationInterrupted as interrupt:  # keep the runs of the group that ended
-                for i, result in enumerate(interrupt.result):
-                    if result.status != "interrupted":
-                        yield start + i, _metrics(result, tolerance)
-                raise
-            for i, result in enumerate(results):
-                yield start + i, _metrics(result, tolerance)
-            bar.update(len(results))
+        try:
+            _run_batch(batch, workers, on_end, lambda: bar.update(len(rows) - bar.n), window=window)
+            summarise()
+        except KeyboardInterrupt:  # keep the rows of the runs that ended
+            for i in batch.wait(0.0):  # after the stop: runs that ended before it
+                ended[i] = batch.take(i)
+            summarise()
+            yield from rows
+            raise
+    yield from rows
 
 
 def _run_on_executor(

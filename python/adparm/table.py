@@ -47,13 +47,17 @@ def _cell(value: Any) -> str:
 
 
 def write_csv(path: Path, columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> Path:
-    """One header line and one line per row."""
-    with Path(path).open("w", newline="") as stream:
-        writer = csv.writer(stream, lineterminator="\n")
-        writer.writerow(columns)
-        for row in rows:
-            writer.writerow([_cell(row.get(column)) for column in columns])
-    return Path(path)
+    """One header line and one line per row (written atomically)."""
+    from ._files import atomic_write
+
+    def write(temporary: Path) -> None:
+        with temporary.open("w", newline="", encoding="utf-8") as stream:
+            writer = csv.writer(stream, lineterminator="\n")
+            writer.writerow(columns)
+            for row in rows:
+                writer.writerow([_cell(row.get(column)) for column in columns])
+
+    return atomic_write(path, write)
 
 
 def rows_json(columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:

@@ -293,8 +293,9 @@ void bind_simulation(py::module_& m) {
                             "The closed-loop run (basis from settings.basis); advance(n) takes up "
                             "to n RK4 steps.")
       .def(py::init<const Settings&>(), py::arg("settings"))
-      .def("advance", &AnySimulation::advance, py::arg("max_steps"),
-           py::call_guard<py::gil_scoped_release>())
+      .def(
+          "advance", [](AnySimulation& s, long max_steps) { return s.advance(max_steps); },
+          py::arg("max_steps"), py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("status",
                              [](const AnySimulation& s) {
                                switch (s.status()) {
@@ -314,23 +315,29 @@ void bind_simulation(py::module_& m) {
       .def(
           "recording",
           [](const AnySimulation& s) {
-            const Recording r = s.recording();
+            // Each series is freed as soon as NumPy has its copy: at most one series is held
+            // twice besides the run's own recording.
+            Recording r = s.recording();
             py::dict out;
-            out["t"] = r.t;
-            out["q"] = r.q;
-            out["dq"] = r.dq;
-            out["qd"] = r.qd;
-            out["e1"] = r.e1;
-            out["e2"] = r.e2;
-            out["tau"] = r.tau;
-            out["u"] = r.u;
-            out["u_hat"] = r.u_hat;
-            out["mu"] = r.mu;
-            out["probe"] = r.probe;
-            out["critic_weights"] = r.critic_weights;
-            out["actor_weights"] = r.actor_weights;
-            out["hjb_error"] = r.hjb_error;
-            out["cost"] = r.cost;
+            const auto give = [&out](const char* name, auto& series) {
+              out[name] = series;
+              series.resize(0, series.cols() == 1 ? 1 : 0);
+            };
+            give("t", r.t);
+            give("q", r.q);
+            give("dq", r.dq);
+            give("qd", r.qd);
+            give("e1", r.e1);
+            give("e2", r.e2);
+            give("tau", r.tau);
+            give("u", r.u);
+            give("u_hat", r.u_hat);
+            give("mu", r.mu);
+            give("probe", r.probe);
+            give("critic_weights", r.critic_weights);
+            give("actor_weights", r.actor_weights);
+            give("hjb_error", r.hjb_error);
+            give("cost", r.cost);
             return out;
           },
           "Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2), "
@@ -340,19 +347,25 @@ void bind_simulation(py::module_& m) {
 void bind_batch(py::module_& m) {
   using AnyBatch = Batch<AnySimulation>;
   py::class_<AnyBatch>(m, "Batch",
-                       "Independent runs advanced in parallel C++ threads; run i is a Simulation.")
-      .def(py::init<const std::vector<Settings>&>(), py::arg("settings"))
+                       "Independent runs on a pool of C++ threads that take runs from a shared "
+                       "queue and run each to the end; the caller polls with wait().")
+      .def(py::init<std::vector<Settings>>(), py::arg("settings"))
       .def("__len__", &AnyBatch::size)
-      .def("advance", &AnyBatch::advance, py::arg("max_steps"), py::arg("threads"),
-           py::call_guard<py::gil_scoped_release>(),
-           "Advances every running run by up to max_steps steps on `threads` threads; returns "
-           "whether any is still running.")
-      .def_property_readonly("running", &AnyBatch::running)
-      .def(
-          "simulation", [](AnyBatch& b, std::size_t i) -> AnySimulation& { return b[i]; },
-          py::arg("index"), py::return_value_policy::reference_internal)
+      .def("start", &AnyBatch::start, py::arg("threads"),
+           py::arg("window") = std::numeric_limits<std::size_t>::max(),
+           "Starts the workers; at most `window` runs are built and not yet taken.")
+      .def("wait", &AnyBatch::wait, py::arg("seconds"), py::call_guard<py::gil_scoped_release>(),
+           "Waits up to `seconds` for a run to end; returns the indices of the runs that ended "
+           "since the last call.")
+      .def_property_readonly("done", &AnyBatch::done)
+      .def("stop", &AnyBatch::stop, py::call_guard<py::gil_scoped_release>(),
+           "Stops every worker within one step and joins them.")
+      .def_property_readonly("steps_done", &AnyBatch::steps_done)
+      .def_property_readonly("total_steps", &AnyBatch::total_steps)
+      .def("take", &AnyBatch::take, py::arg("index"),
+           "Hands run `index` over (ended, stopped part-way, or built now if never started).")
       .def("seconds", &AnyBatch::seconds, py::arg("index"),
-           "Wall time spent advancing run `index`, s.");
+           "Wall time spent building and advancing run `index`, s.");
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <variant>
 #include <vector>
@@ -16,6 +17,14 @@
 namespace adparm {
 
 enum class RunStatus { running, finished, diverged };
+
+// Lets another thread follow and stop a run while advance() works: `stop` is read before every
+// step (advance returns at once when it is set) and `step` receives the step count after every
+// step, so a stop request is acted on within one step, whatever a step costs.
+struct RunControl {
+  const std::atomic<bool>* stop = nullptr;
+  std::atomic<long>* step = nullptr;
+};
 
 // One row per recorded step; matrices are (rows x columns), row-major.
 struct Recording {
@@ -92,9 +101,10 @@ class Simulation {
   // that very (t, state); the last row of a chunk is written before returning. A row whose
   // outputs are not finite (a torque or an HJB error that overflows while the state is still
   // finite) is not written: the run stops there as diverged, with state() and step() at that row.
-  long advance(long max_steps) {
+  long advance(long max_steps, const RunControl& control = {}) {
     long taken = 0;
     while (status_ == RunStatus::running && taken < max_steps) {
+      if (control.stop != nullptr && control.stop->load(std::memory_order_relaxed)) break;
       const double t_begin = step_ * sim_.dt;
       const double t_end = std::min((step_ + 1) * sim_.dt, sim_.T);
       const State& previous = states_[current_];
@@ -117,6 +127,7 @@ class Simulation {
         return taken;
       }
       current_ = 1 - current_;
+      if (control.step != nullptr) control.step->store(step_, std::memory_order_relaxed);
       if (system_.reset_covariance_if_needed(state)) reset_times_.push_back(t_end);
       system_.begin_step(t_end, state);  // for the next step (and the row recorded at t_end)
       if (step_ == steps_) {
@@ -220,8 +231,8 @@ class AnySimulation {
  public:
   explicit AnySimulation(const Settings& settings) : impl_(make(settings)) {}
 
-  long advance(long max_steps) {
-    return std::visit([&](auto& s) { return s.advance(max_steps); }, impl_);
+  long advance(long max_steps, const RunControl& control = {}) {
+    return std::visit([&](auto& s) { return s.advance(max_steps, control); }, impl_);
   }
   RunStatus status() const {
     return std::visit([](const auto& s) { return s.status(); }, impl_);

@@ -1,0 +1,214 @@
+"""Writing files so that nothing is ever left half-written, and knowing which files are adparm's.
+
+Every file adparm writes goes first to a temporary file in the same folder (a hidden name ending
+in ``.tmp`` and the real suffix), is flushed to disk, then renamed over its final name with
+``os.replace``, which is atomic: a reader, a crash, a full disk or a signal sees either the old
+file or the new one, never a truncated one; on any failure the temporary file is removed.
+
+A folder written by the command line holds ``.adparm-outputs.json``, the manifest of the files
+adparm wrote there (size and modification time of each). Before a run, :class:`OutputFolder`
+refuses to overwrite a file that is not in the manifest or was changed since (a user's file); after
+the run it removes the files an earlier run of the same command wrote and this one did not (stale
+figures), and only those.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import secrets
+import shutil
+import tempfile
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+__all__ = ["MANIFEST", "OutputError", "OutputFolder", "atomic_write", "write_text"]
+
+MANIFEST = ".adparm-outputs.json"
+
+
+def _temporary(path: Path) -> Path:
+    return path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.tmp{path.suffix}")
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], Any]) -> Path:
+    """Call ``write(temporary)`` to write a file in ``path``'s folder, flush it to disk and
+    rename it to ``path`` (atomic); on any failure or interrupt, remove the temporary file and
+    leave ``path`` as it was. Returns ``path``."""
+    path = Path(path)
+    temporary = _temporary(path)
+    try:
+        write(temporary)
+        with open(temporary, "rb+") as stream:
+            os.fsync(stream.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        raise
+    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    return atomic_write(path, lambda temporary: temporary.write_text(text, encoding="utf-8"))
+
+
+class OutputError(ValueError):
+    """An output path that cannot or must not be written (found before anything runs)."""
+
+
+def _stamp(path: Path) -> list[int]:
+    stat = path.stat()
+    return [stat.st_size, stat.st_mtime_ns]
+
+
+class OutputFolder:
+    """A folder a command writes ``names`` into, as the group ``group`` of the manifest.
+
+    ``check()`` (before any computation) creates the folder, proves it writable and refuses
+    files in ``names`` that adparm did not write; ``write``/``write_figures`` write atomically
+    and record each file in the manifest; ``remove_stale()`` removes the group's files of an
+    earlier run that this run did not write. ``written`` lists the files written so far."""
+
+    def __init__(self, folder: str | Path, names: Iterable[str], group: str, option: str = "--out"):
+        self.folder = Path(folder)
+        self.names = list(names)
+        self.group = group
+        self.option = option
+        self.written: list[Path] = []
+        self._manifest: dict[str, dict[str, Any]] = {}
+
+    # -- before the run -------------------------------------------------------------------------
+
+    def check(self) -> None:
+        folder = self.folder
+        if folder.exists() and not folder.is_dir():
+            raise OutputError(f"{self.option}: {folder} exists and is not a folder")
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            with tempfile.NamedTemporaryFile(dir=folder, prefix=".adparm-probe-"):
+                pass
+        except OSError as error:
+            raise OutputError(f"{self.option}: cannot write in {folder}: {error}") from None
+        self._manifest = self._read_manifest()
+        for name in self.names:
+            path = folder / name
+            if not (path.exists() or path.is_symlink()):
+                continue
+            if path.is_symlink() or not path.is_file():
+                raise OutputError(
+                    f"{self.option}: {path} exists and is not a regular file; adparm does not "
+                    "replace it (choose another folder or move it away)"
+                )
+            if not self._owned(name):
+                raise OutputError(
+                    f"{self.option}: {path} exists and was not written by adparm (or was changed "
+                    "since); adparm does not overwrite it: choose another folder or move the "
+                    "file away"
+                )
+
+    def _read_manifest(self) -> dict[str, dict[str, Any]]:
+        try:
+            data = json.loads((self.folder / MANIFEST).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return {}
+        files = data.get("files") if isinstance(data, dict) else None
+        if not isinstance(files, dict):
+            return {}
+        return {k: v for k, v in files.items() if isinstance(v, dict) and isinstance(k, str)}
+
+    def _owned(self, name: str) -> bool:
+        entry = self._manifest.get(name)
+        path = self.folder / name
+        try:
+            return entry is not None and entry.get("stamp") == _stamp(path)
+        except OSError:
+            return False
+
+    # -- writing --------------------------------------------------------------------------------
+
+    def write(self, name: str, write: Callable[[Path], Any]) -> Path:
+        """Write ``name`` atomically with ``write(temporary_path)`` and record it."""
+        try:
+            path = atomic_write(self.folder / name, write)
+        except OSError as error:  # name the file, not its temporary
+            raise OSError(
+                error.errno, error.strerror or str(error), str(self.folder / name)
+            ) from error
+        self._record(path)
+        return path
+
+    def write_text(self, name: str, text: str) -> Path:
+        return self.write(name, lambda temporary: temporary.write_text(text, encoding="utf-8"))
+
+    def write_figures(self, figures: dict[str, Figure], formats: Iterable[str]) -> list[Path]:
+        """Each figure as ``<name>.<format>`` (adparm.plotting.save_figures into a temporary
+        folder beside, then each file renamed into place)."""
+        formats = list(formats)
+        staging = Path(tempfile.mkdtemp(dir=self.folder, prefix=".adparm-figures-"))
+        paths: list[Path] = []
+        try:
+            self._write_figures(figures, formats, staging, paths)
+        except OSError as error:
+            names = ", ".join(f"{name}.{fmt}" for name in figures for fmt in formats)
+            raise OSError(
+                error.errno, error.strerror or str(error), f"{self.folder}/ ({names})"
+            ) from error
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+        return paths
+
+    def _write_figures(
+        self, figures: dict[str, Figure], formats: Iterable[str], staging: Path, paths: list[Path]
+    ) -> None:
+        from .plotting import save_figures
+
+        for path in save_figures(figures, staging, formats):
+            with open(path, "rb+") as stream:
+                os.fsync(stream.fileno())
+            final = self.folder / path.name
+            os.replace(path, final)
+            self._record(final)
+            paths.append(final)
+
+    def _record(self, path: Path) -> None:
+        self.written.append(path)
+        self._manifest[path.name] = {"group": self.group, "stamp": _stamp(path)}
+        self._save_manifest()
+
+    def _save_manifest(self) -> None:
+        text = json.dumps({"written_by": "adparm", "files": self._manifest}, indent=1) + "\n"
+        atomic_write(self.folder / MANIFEST, lambda t: t.write_text(text, encoding="utf-8"))
+
+    # -- after the run --------------------------------------------------------------------------
+
+    def remove_stale(self) -> list[Path]:
+        """Remove the files of this group that an earlier run wrote and this one did not (only
+        those unchanged since adparm wrote them); returns them."""
+        written = {path.name for path in self.written}
+        removed = []
+        for name, entry in list(self._manifest.items()):
+            if entry.get("group") != self.group or name in written or Path(name).name != name:
+                continue
+            path = self.folder / name
+            if self._owned(name):
+                with contextlib.suppress(OSError):
+                    path.unlink()
+                    removed.append(path)
+            if not path.exists():
+                del self._manifest[name]
+        if removed:
+            self._save_manifest()
+        return removed
+
+    def describe_written(self) -> str:
+        """``folder/ (a, b, c)`` of the files written so far, or a sentence saying none was."""
+        if not self.written:
+            return f"nothing was written in {self.folder}/"
+        return f"{self.folder}/ ({', '.join(path.name for path in self.written)})"
