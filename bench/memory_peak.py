@@ -1,7 +1,8 @@
 """The memory guard's estimate against the measured peak: each case runs in a fresh process,
-which reads its peak resident set (resource.getrusage(...).ru_maxrss) after the imports and the
-config, then after adparm.simulate (and, with --save, after writing result.npz and result.csv);
-the growth is the run's real peak, compared with adparm.simulation.memory_needed.
+which reads its peak resident set (resource.getrusage(...).ru_maxrss) after the imports (also
+those the run's diagnosis makes lazily, a one-off cost of the process) and the config, then after
+adparm.simulate (and, with --save, after writing result.npz and result.csv); the growth is the
+run's real peak, compared with adparm.simulation.memory_needed.
 
 The last lines are machine-readable:
 bench=memory case=NAME estimate_mib=E measured_mib=M ratio=E/M
@@ -27,6 +28,7 @@ CHILD = """
 import json, resource, sys, tempfile, pathlib
 import adparm
 from adparm.simulation import memory_needed
+import control, scipy.optimize  # imported lazily by the run's diagnosis: a one-off cost
 config = adparm.paper_config().updated(json.loads(sys.argv[1]))
 save = sys.argv[2] == "1"
 before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024

@@ -147,12 +147,14 @@ def test_verdict_reaches_summary_sweep_rows_and_cli(tmp_path, capsys) -> None:
     assert table.rows[0]["e2_block_min_eigenvalue"] > 0.0
     path = tmp_path / "run.toml"
     path.write_text(config.to_toml())
-    with pytest.warns(adparm.ApproximationWarning, match="not converged"):
-        status = main(
-            ["run", str(path), "--out", str(tmp_path / "out"), "--no-figures", "--no-progress"]
-        )
+    # The CLI says it in its own words on stderr, not as a Python warning (which pytest would
+    # turn into an error here).
+    status = main(
+        ["run", str(path), "--out", str(tmp_path / "out"), "--no-figures", "--no-progress"]
+    )
     assert status == 0
-    assert "verdict: ended away from the known W*" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "verdict: ended away from the known W*" in err and "not converged" in err
     saved = (tmp_path / "out" / "summary.json").read_text()
     assert '"verdict": "ended away from the known W*' in saved
 
@@ -193,9 +195,10 @@ def test_check_step_size_sees_the_integration_error_of_the_transient(tmp_path, c
     path.write_text(adparm.paper_config().updated({"sim": {"T": 1.0}}).to_toml())
     out = tmp_path / "out"
     argv = ["run", str(path), "--out", str(out), "--no-figures", "--no-progress", "--check-dt"]
-    with pytest.warns(adparm.ApproximationWarning, match="not converged"):  # a 1 s run
-        assert main(argv) == 0
-    assert "step size (first 1 s against dt/2): sim.dt = 0.001 s leaves" in capsys.readouterr().out
+    assert main(argv) == 0  # a 1 s run: the CLI prints its verdict, no Python warning
+    captured = capsys.readouterr()
+    assert "step size (first 1 s against dt/2): sim.dt = 0.001 s leaves" in captured.out
+    assert "verdict: " in captured.err and "not converged" in captured.err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["step_size_check"]["critic_max_difference"] > 0.01
     assert "- step size: against a dt/2 run" in (out / "summary.md").read_text()

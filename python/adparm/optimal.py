@@ -191,6 +191,15 @@ def _weights(value: Any, name: str) -> np.ndarray:
     return array
 
 
+def residual_settings(config: Config) -> _core.Settings:
+    """The core settings of ``config`` for evaluating the HJB error at given states: without
+    extrapolation points, which that evaluation does not use (N of them would be drawn and
+    prepared at every call)."""
+    settings = core_settings(config)
+    settings.extrapolation.points = 0
+    return settings
+
+
 def hjb_residual(
     config: Config, x: Any, critic_weights: Any, actor_weights: Any, *, t: float = 0.0
 ) -> np.ndarray | float:
@@ -222,7 +231,7 @@ def hjb_residual(
     if not np.all(np.isfinite(states)):
         raise ValueError("x: must be finite")
     residual = _core.hjb_residual(
-        core_settings(config),
+        residual_settings(config),
         np.ascontiguousarray(states.reshape(-1, 4)),
         _weights(critic_weights, "critic_weights"),
         _weights(actor_weights, "actor_weights"),

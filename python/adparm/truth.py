@@ -243,11 +243,11 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
     from scipy.optimize import least_squares
 
     from . import _core
-    from .simulation import core_settings
+    from .optimal import residual_settings
 
     Q = np.array(config.cost.Q)
     scale = max(np.sqrt(np.mean(np.einsum("ni,ij,nj->n", X, Q, X) ** 2)), 1e-300)
-    settings = core_settings(config)  # converted once
+    settings = residual_settings(config)  # converted once
     times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
     groups = [np.ascontiguousarray(g) for g in np.array_split(X, len(times))]
 
