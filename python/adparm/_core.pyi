@@ -164,7 +164,9 @@ class SimSettings:
 
 class Settings:
     """All settings of one run. Eigen members are copied on access: assign them whole.
-    Q (4, 4), R (2, 2), disturbance (2,), critic_weights and actor_weights (8,)."""
+    Q (2n, 2n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,) for n joints
+    (2 for the two-link arm) and K basis functions. dynamic_sizes runs the two-link arm through
+    the n-joint (dynamic-size) loop, a check of that loop."""
 
     plant: ArmParameters
     model: ArmParameters
@@ -174,23 +176,24 @@ class Settings:
     actor: ActorSettings
     controller: ControllerSettings
     basis: BasisKind
+    dynamic_sizes: bool
     extrapolation: ExtrapolationSettings
     probe: ProbeSettings
     sim: SimSettings
     def __init__(self) -> None: ...
     @property
     def disturbance(self) -> _FloatArray:
-        """(2,)"""
+        """(n,)"""
     @disturbance.setter
     def disturbance(self, value: ArrayLike) -> None: ...
     @property
     def Q(self) -> _FloatArray:
-        """(4, 4)"""
+        """(2n, 2n)"""
     @Q.setter
     def Q(self, value: ArrayLike) -> None: ...
     @property
     def R(self) -> _FloatArray:
-        """(2, 2)"""
+        """(n, n)"""
     @R.setter
     def R(self, value: ArrayLike) -> None: ...
     @property
@@ -223,7 +226,8 @@ def simulate_open_loop(
     """RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4)."""
 
 def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
-    """The desired state at times t (n,): rows [qd1, qd2, dqd1, dqd2, ddqd1, ddqd2] (n, 6)."""
+    """The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)]
+    (m, 3 n)."""
 
 def basis(
     kind: BasisKind, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike

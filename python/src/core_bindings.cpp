@@ -46,7 +46,8 @@ void bind_settings(py::module_& m) {
       .def_readwrite("eta_a2", &ActorSettings::eta_a2)
       .def_readwrite("weight_bound", &ActorSettings::weight_bound);
   py::class_<ProbeSettings>(m, "ProbeSettings",
-                            "amplitude (2, n), until, ramp, frequencies (n,), phases (2, n).")
+                            "amplitude (n, k), until, ramp, frequencies (k,), phases (n, k) for n "
+                            "joints and k sinusoids.")
       .def(py::init<>())
       .def_readwrite("amplitude", &ProbeSettings::amplitude)
       .def_readwrite("until", &ProbeSettings::until)
@@ -58,8 +59,8 @@ void bind_settings(py::module_& m) {
       .value("sinusoid", TrajectoryKind::sinusoid)
       .value("spline", TrajectoryKind::spline);
   py::class_<TrajectorySettings>(m, "TrajectorySettings",
-                                 "kind, offset (2,); sinusoid: amplitude, frequency, phase (2, n); "
-                                 "spline: breaks (n + 1,), coefficients (n, 8).")
+                                 "kind, offset (n,); sinusoid: amplitude, frequency, phase (n, k); "
+                                 "spline: breaks (m + 1,), coefficients (m, 4 n).")
       .def(py::init<>())
       .def_readwrite("kind", &TrajectorySettings::kind)
       .def_readwrite("offset", &TrajectorySettings::offset)
@@ -68,12 +69,12 @@ void bind_settings(py::module_& m) {
       .def_readwrite("phase", &TrajectorySettings::phase)
       .def_readwrite("breaks", &TrajectorySettings::breaks)
       .def_readwrite("coefficients", &TrajectorySettings::coefficients);
-  py::class_<TaskSettings>(m, "TaskSettings", "q0 (2,), dq0 (2,), qd (TrajectorySettings).")
+  py::class_<TaskSettings>(m, "TaskSettings", "q0 (n,), dq0 (n,), qd (TrajectorySettings).")
       .def(py::init<>())
       .def_readwrite("q0", &TaskSettings::q0)
       .def_readwrite("dq0", &TaskSettings::dq0)
       .def_readwrite("qd", &TaskSettings::qd);
-  py::class_<ControlSettings>(m, "ControlSettings", "alpha1 (2, 2) and the RISE gains.")
+  py::class_<ControlSettings>(m, "ControlSettings", "alpha1 (n, n) and the RISE gains.")
       .def(py::init<>())
       .def_readwrite("alpha1", &ControlSettings::alpha1)
       .def_readwrite("rise", &ControlSettings::rise);
@@ -82,7 +83,7 @@ void bind_settings(py::module_& m) {
       .value("rise", ControllerKind::rise)
       .value("pd", ControllerKind::pd)
       .value("optimal", ControllerKind::optimal);
-  py::class_<ControllerSettings>(m, "ControllerSettings", "kind, rise, kp (2, 2), kd (2, 2).")
+  py::class_<ControllerSettings>(m, "ControllerSettings", "kind, rise, kp (n, n), kd (n, n).")
       .def(py::init<>())
       .def_readwrite("kind", &ControllerSettings::kind)
       .def_readwrite("rise", &ControllerSettings::rise)
@@ -95,7 +96,7 @@ void bind_settings(py::module_& m) {
       .value("fixed", ExtrapolationMode::fixed)
       .value("grid", ExtrapolationMode::grid)
       .value("local", ExtrapolationMode::local);
-  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings", "points, box (4,), mode, seed.")
+  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings", "points, box (2 n,), mode, seed.")
       .def(py::init<>())
       .def_readwrite("points", &ExtrapolationSettings::points)
       .def_readwrite("box", &ExtrapolationSettings::box)
@@ -109,8 +110,10 @@ void bind_settings(py::module_& m) {
       .def_readwrite("divergence_bound", &SimSettings::divergence_bound);
   py::class_<Settings>(m, "Settings",
                        "All settings of one run. Eigen members are copied on access: assign them "
-                       "whole. Q (4, 4), R (2, 2), disturbance (2,), critic_weights and "
-                       "actor_weights (8,).")
+                       "whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and "
+                       "actor_weights (K,); n = 2 joints for the two-link arm, K the basis size. "
+                       "dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) "
+                       "loop.")
       .def(py::init<>())
       .def_readwrite("plant", &Settings::plant)
       .def_readwrite("model", &Settings::model)
@@ -123,6 +126,7 @@ void bind_settings(py::module_& m) {
       .def_readwrite("actor", &Settings::actor)
       .def_readwrite("controller", &Settings::controller)
       .def_readwrite("basis", &Settings::basis)
+      .def_readwrite("dynamic_sizes", &Settings::dynamic_sizes)
       .def_readwrite("extrapolation", &Settings::extrapolation)
       .def_readwrite("critic_weights", &Settings::critic_weights)
       .def_readwrite("actor_weights", &Settings::actor_weights)
@@ -166,16 +170,19 @@ void bind_trajectory(py::module_& m) {
       "desired_state",
       [](const TrajectorySettings& settings, const Eigen::VectorXd& times) {
         check_finite(times, "t");
-        const Trajectory trajectory(settings);
-        Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> out(times.size(), 6);
+        const TrajectoryT<Dynamic> trajectory(settings, settings.offset.size());
+        const Eigen::Index n = trajectory.dof();
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(times.size(),
+                                                                                   3 * n);
         for (Eigen::Index i = 0; i < times.size(); ++i) {
-          const DesiredState d = trajectory(times[i]);
+          const auto d = trajectory(times[i]);
           out.row(i) << d.q.transpose(), d.dq.transpose(), d.ddq.transpose();
         }
         return out;
       },
       py::arg("trajectory"), py::arg("t"),
-      "The desired state at times t (n,): rows [qd1, qd2, dqd1, dqd2, ddqd1, ddqd2] (n, 6).");
+      "The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)] "
+      "(m, 3 n).");
 }
 
 void bind_basis(py::module_& m) {
@@ -218,8 +225,8 @@ void bind_hjb(py::module_& m) {
           Eigen::VectorXd residual(states.rows());
           py::gil_scoped_release release;
           for (Eigen::Index i = 0; i < states.rows(); ++i)
-            residual[i] = hjb_error<Basis>(loop.error_system(), loop.cost(),
-                                           states.row(i).transpose(), desired, wc, wa);
+            residual[i] = hjb_error(loop.basis(), loop.error_system(), loop.cost(),
+                                    Vec4(states.row(i).transpose()), desired, wc, wa);
           return residual;
         });
       },

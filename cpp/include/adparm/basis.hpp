@@ -1,7 +1,8 @@
 // The critic/actor bases phi and their Jacobians (eq. 19). A basis may depend on the desired joint
 // position qd as well as on x = [e1; e2] (an augmented state [x; qd]); it then reports the part of
 // d phi / dt that comes from qd moving, (d phi / d qd) dqd, which the HJB regressor omega needs.
-// A basis offers kSize, kStateDim, Vector, Jacobian and
+// A basis offers kSize (K or Dynamic), kStateDim (2n or Dynamic), int size() const, Vector
+// (BasisVector<kSize>), Jacobian (BasisMatrix<kSize, kStateDim>) and
 //   evaluate(x, desired, phi, jacobian, desired_rate)
 //   evaluate(x, desired, terms, phi, jacobian, desired_rate)
 // and the loop takes it unchanged. The second form also receives the arm model's terms at the
@@ -30,6 +31,7 @@ namespace adparm {
 struct QuadraticArmBasis {
   static constexpr int kSize = 8;
   static constexpr int kStateDim = 4;
+  static constexpr int size() { return kSize; }
   using Vector = Eigen::Matrix<double, kSize, 1>;
   using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;  // d phi / d x
 
