@@ -22,8 +22,8 @@
 //   bench=check run=NAME status=S steps=n rows=r ok=1
 //     each in chunks of 7 and 13 steps, compared bit for bit with a one-shot run: local and grid
 //     extrapolation points, the paper basis with a model error, sinusoid and spline tracking with
-//     points, the rise, pd and optimal controllers, a run that diverges (dt = 4 ms);
-//     then dynamic-size runs (Settings::dynamic_sizes) the same way;
+//     points, the structured basis tracking with points, the rise, pd and optimal controllers, a
+//     run that diverges (dt = 4 ms); then dynamic-size runs (Settings::dynamic_sizes) the same way;
 //   bench=check run=dynamic_vs_fixed points=N rows=r difference=d ok=1
 //     the paper run (and tracking with 6 points) through both paths: max relative difference
 //     <= 1e-9 (round-off of differently associated sums, amplified by the learning laws);
@@ -225,6 +225,16 @@ void check_runs(double horizon) {
               s.task.qd = spline(horizon);
               s.extrapolation.points = 3;
               s.extrapolation.mode = adparm::ExtrapolationMode::local;
+            }),
+            finished);
+  check_run("structured_basis_points", variant([](Settings& s) {
+              s.basis = adparm::BasisKind::structured;
+              s.critic_weights.resize(6);
+              s.critic_weights << 1, 0, 1, 5, 1, 1;  // K = I, the arm's inertia p
+              s.actor_weights = s.critic_weights;
+              s.probe.until = 0.0;
+              s.extrapolation.points = 8;
+              s.task.qd = sinusoid();
             }),
             finished);
   check_run("rise", variant([](Settings& s) { s.controller.kind = adparm::ControllerKind::rise; }),

@@ -138,6 +138,7 @@ class ControllerSettings:
 class BasisKind:
     paper: BasisKind
     augmented: BasisKind
+    structured: BasisKind
 
 class ExtrapolationMode:
     fixed: ExtrapolationMode
@@ -232,8 +233,8 @@ def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
 def basis(
     kind: BasisKind, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
 ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-    """A basis at x (4,) and desired qd, dqd (2,): phi (8,), d phi / dx (8, 4) and
-    (d phi / d qd) dqd (8,)."""
+    """A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4)
+    and (d phi / d qd) dqd (K,)."""
 
 def hjb_residual(
     settings: Settings,

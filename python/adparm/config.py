@@ -597,18 +597,27 @@ class ActorConfig:
 
 @dataclass(frozen=True)
 class InitConfig:
-    """Initial critic and actor weights (8 each, in the basis order of adparm.BASIS_NAMES).
+    """Initial critic and actor weights (one per basis function, in the order of
+    adparm.basis_names(config)); None (left out) takes the basis' default
+    (Config.initial_weights):
 
-    Not printed in the paper. All ones (ERRATA): the initial actor must stabilise the model, and
-    all-zero weights are inadmissible (omega = 0 at rest while the HJB error is x^T Q x > 0, so the
-    critic diverges within milliseconds; simulate() then raises SimulationDiverged)."""
+    - paper and augmented bases: all ones (ERRATA; not printed in the paper). The initial actor
+      must stabilise the model, and all-zero weights are inadmissible (omega = 0 at rest while the
+      HJB error is x^T Q x > 0, so the critic diverges within milliseconds; simulate() then raises
+      SimulationDiverged).
+    - structured basis: [1, 0, 1, p1, p2, p3], i.e. K = I for the e1 block and the inertia
+      parameters of the believed model ([model], default the plant) for the e2 block. The actor's
+      policy depends on the e2 block only (u_hat = -R^-1 M(q)^-1 M_w(q) e2 with M_w the inertia the
+      weights describe), so these weights start at u_hat = -R^-1 e2, the optimal policy of the
+      believed model; all-ones weights give an indefinite M_w on other arms and blow up."""
 
-    critic_weights: Vector = (1.0,) * 8
-    actor_weights: Vector = (1.0,) * 8
+    critic_weights: Vector | None = None
+    actor_weights: Vector | None = None
 
     def __post_init__(self) -> None:
         for key in ("critic_weights", "actor_weights"):
-            object.__setattr__(self, key, _vector(getattr(self, key), f"init.{key}", 8))
+            if getattr(self, key) is not None:
+                object.__setattr__(self, key, _vector(getattr(self, key), f"init.{key}", None))
 
 
 @dataclass(frozen=True)
@@ -665,7 +674,9 @@ class ProbeConfig:
 
 
 CONTROLLER_KINDS = ("adp", "rise", "pd", "optimal")
-BASIS_KINDS = ("augmented", "paper")
+BASIS_KINDS = ("augmented", "paper", "structured")
+#: The number of functions of each basis (the length of init.critic_weights and actor_weights).
+BASIS_SIZES = {"augmented": 8, "paper": 8, "structured": 6}
 EXTRAPOLATION_MODES = ("fixed", "grid", "local")
 
 
@@ -680,7 +691,10 @@ class ControllerConfig:
     basis: the critic/actor basis. ``augmented`` (default) is the paper's 8 functions over the
     augmented state [x; qd] with cos x2 replaced by cos(qd2 - x2) = cos q2: identical to the
     paper's basis while qd2 = 0 (the paper's task), and exact for V* = x^T blockdiag(K, M(q)) x
-    with the same W* for any qd(t). ``paper`` is the printed phi(x), exact only for qd2 = 0."""
+    with the same W* for any qd(t). ``paper`` is the printed phi(x), exact only for qd2 = 0.
+    ``structured`` has 6 functions, [e1_1^2, e1_1 e1_2, e1_2^2, e2^T M_k(q) e2 (k = 1..3)] with
+    M(q) = p1 M1 + p2 M2 + p3 M3: exact for any qd(t) with W* = [K11, 2 K12, K22, p1, p2, p3], so
+    the critic learns the arm's inertia parameters (docs, "The structured basis")."""
 
     kind: str = "adp"
     basis: str = "augmented"
@@ -838,6 +852,14 @@ class Config:
                 )
         model = self.model.resolve(self.plant)
         _check_arm(model["p1"], model["p2"], model["p3"], "model")
+        size = BASIS_SIZES[self.controller.basis]
+        for key in ("critic_weights", "actor_weights"):
+            value = getattr(self.init, key)
+            if value is not None and len(value) != size:
+                raise ValueError(
+                    f"init.{key}: expected shape ({size},), one weight per function of "
+                    f"controller.basis = {self.controller.basis!r}, got ({len(value)},)"
+                )
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
                 f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
@@ -885,6 +907,17 @@ class Config:
             }
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
+
+    def initial_weights(self, key: str = "critic_weights") -> np.ndarray:
+        """init.critic_weights (or ``key = "actor_weights"``), or the basis' default when left
+        out (InitConfig)."""
+        value = getattr(self.init, key)
+        if value is not None:
+            return np.array(value, dtype=float)
+        if self.controller.basis == "structured":
+            p = self.model.resolve(self.plant)
+            return np.array([1.0, 0.0, 1.0, p["p1"], p["p2"], p["p3"]])
+        return np.ones(BASIS_SIZES[self.controller.basis])
 
     @property
     def resolved_epsilon_T(self) -> float:

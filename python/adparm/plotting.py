@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .optimal import BASIS_NAMES, optimal_weights
+from .optimal import basis_names, optimal_weights
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -69,7 +69,7 @@ def _weights(result: SimulationResult, weights: np.ndarray, title: str) -> Figur
         axes = figure.axes[0]
         target = _known_optimum(result)
         colours = matplotlib.colormaps["tab10"].colors
-        for i, name in enumerate(BASIS_NAMES):
+        for i, name in enumerate(basis_names(result.config)):
             colour = colours[i % len(colours)]
             axes.plot(result.t, weights[:, i], color=colour, lw=1.1, label=f"${_tex(name)}$")
             if target is not None:

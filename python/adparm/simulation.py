@@ -99,8 +99,8 @@ def core_settings(config: Config) -> _core.Settings:
     extrapolation.seed = config.extrapolation.seed
     settings.extrapolation = extrapolation
 
-    settings.critic_weights = np.array(config.init.critic_weights)
-    settings.actor_weights = np.array(config.init.actor_weights)
+    settings.critic_weights = config.initial_weights("critic_weights")
+    settings.actor_weights = config.initial_weights("actor_weights")
 
     probe = _core.ProbeSettings()
     probe.amplitude = config.probe.amplitude_matrix()
@@ -173,8 +173,9 @@ class SimulationResult:
     t (n,) s; q, dq (n, 2) rad, rad/s; qd (n, 2) desired position; e1 = qd - q,
     e2 = de1 + alpha1 e1 (n, 2); tau (n, 2) applied torque N m; u (n, 2) the controller's input
     (adp: u_hat + probe); u_hat (n, 2) actor input (eq. 20); mu (n, 2) RISE term (eq. 27);
-    probe (n, 2) probing signal; critic_weights, actor_weights (n, 8) in the order of
-    adparm.BASIS_NAMES; hjb_error (n,) eq. (21); cost (n,) accumulated cost of eq. (10),
+    probe (n, 2) probing signal; critic_weights, actor_weights (n, K) in the order of
+    adparm.basis_names(config) (K = 8, or 6 for the structured basis);
+    hjb_error (n,) eq. (21); cost (n,) accumulated cost of eq. (10),
     int_0^t x^T Q x + u^T R u, integrated by RK4 with the state; covariance_reset_times (k,) s.
     """
 
@@ -204,7 +205,8 @@ class SimulationResult:
             raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
         shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
         shapes.update({name: (n, 2) for name in _ARRAYS_2})
-        shapes.update({name: (n, 8) for name in _ARRAYS_N})
+        size = len(self.config.initial_weights()) if isinstance(self.config, Config) else 8
+        shapes.update({name: (n, size) for name in _ARRAYS_N})
         for name, shape in shapes.items():
             array = np.array(getattr(self, name), dtype=float)
             if array.shape != shape:
@@ -252,7 +254,7 @@ class SimulationResult:
             raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
         from .storage import columns, table
 
-        return pandas.DataFrame(table(self), columns=columns())
+        return pandas.DataFrame(table(self), columns=columns(self.critic_weights.shape[1]))
 
     def summary(self, tolerance: float = 0.02) -> dict[str, Any]:
         """The metrics of summary.json (adparm.summary.summarize)."""
@@ -364,7 +366,7 @@ def _check_memory(configs: list[Config]) -> None:
     for config in configs:
         steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
         rows = steps // config.sim.record_every + 2
-        width = _ROW_VALUES + len(config.init.critic_weights) + len(config.init.actor_weights)
+        width = _ROW_VALUES + 2 * len(config.initial_weights())
         needed += 8 * rows * width
     if needed > memory // 2:
         which = "the runs' recordings" if len(configs) > 1 else "the recording"

@@ -30,23 +30,34 @@ _COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("u_hat", ("u_hat1", "u_hat2")),
     ("mu", ("mu1", "mu2")),
     ("probe", ("probe1", "probe2")),
-    ("critic_weights", tuple(f"Wc{i}" for i in range(1, 9))),
-    ("actor_weights", tuple(f"Wa{i}" for i in range(1, 9))),
+    ("critic_weights", ("Wc",)),  # Wc1 ... WcK, K the basis size
+    ("actor_weights", ("Wa",)),
     ("hjb_error", ("hjb_error",)),
     ("cost", ("cost",)),
 )
 
 
-def columns() -> list[str]:
-    """Column names of :func:`table`, the CSV file and ``to_dataframe()``."""
-    return [name for _, names in _COLUMNS for name in names]
+def _columns(basis_size: int) -> list[tuple[str, tuple[str, ...]]]:
+    return [
+        (attr, tuple(f"{names[0]}{i}" for i in range(1, basis_size + 1)))
+        if attr in ("critic_weights", "actor_weights")
+        else (attr, names)
+        for attr, names in _COLUMNS
+    ]
+
+
+def columns(basis_size: int = 8) -> list[str]:
+    """Column names of :func:`table`, the CSV file and ``to_dataframe()`` for a basis of
+    ``basis_size`` functions (8; 6 for the structured basis)."""
+    return [name for _, names in _columns(basis_size) for name in names]
 
 
 def table(result: SimulationResult) -> np.ndarray:
-    """The recorded time series as one (rows, len(columns())) array."""
+    """The recorded time series as one (rows, len(columns(K))) array."""
     n = result.t.size
+    size = result.critic_weights.shape[1]
     return np.hstack(
-        [np.asarray(getattr(result, attr)).reshape(n, len(names)) for attr, names in _COLUMNS]
+        [np.asarray(getattr(result, attr)).reshape(n, len(names)) for attr, names in _columns(size)]
     )
 
 
@@ -59,7 +70,8 @@ def save_result(result: SimulationResult, path: str | Path) -> Path:
         raise ValueError(f"path: expected a .npz or .csv file name, got {str(path)!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".csv":
-        np.savetxt(path, table(result), delimiter=",", header=",".join(columns()), comments="")
+        header = ",".join(columns(result.critic_weights.shape[1]))
+        np.savetxt(path, table(result), delimiter=",", header=header, comments="")
         return path
     arrays = result.to_dict()
     arrays.pop("status")

@@ -91,7 +91,8 @@ void bind_settings(py::module_& m) {
       .def_readwrite("kd", &ControllerSettings::kd);
   py::enum_<BasisKind>(m, "BasisKind")
       .value("paper", BasisKind::paper)
-      .value("augmented", BasisKind::augmented);
+      .value("augmented", BasisKind::augmented)
+      .value("structured", BasisKind::structured);
   py::enum_<ExtrapolationMode>(m, "ExtrapolationMode")
       .value("fixed", ExtrapolationMode::fixed)
       .value("grid", ExtrapolationMode::grid)
@@ -202,8 +203,8 @@ void bind_basis(py::module_& m) {
         });
       },
       py::arg("kind"), py::arg("x"), py::arg("qd"), py::arg("dqd"),
-      "A basis at x (4,) and desired qd, dqd (2,): phi (8,), d phi / dx (8, 4) and "
-      "(d phi / d qd) dqd (8,).");
+      "A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4) and "
+      "(d phi / d qd) dqd (K,).");
 }
 
 void bind_hjb(py::module_& m) {
@@ -211,14 +212,14 @@ void bind_hjb(py::module_& m) {
       "hjb_residual",
       [](const Settings& settings, const RowsX4& states, const Eigen::VectorXd& critic_weights,
          const Eigen::VectorXd& actor_weights, double t) {
-        check_size(critic_weights, 8, 1, "critic_weights");
-        check_size(actor_weights, 8, 1, "actor_weights");
         check_finite(critic_weights, "critic_weights");
         check_finite(actor_weights, "actor_weights");
         check_finite(states, "x");
         check_finite(t, "t");
         return with_basis(settings.basis, [&](auto basis) {
           using Basis = decltype(basis);
+          check_size(critic_weights, Basis::kSize, 1, "critic_weights");
+          check_size(actor_weights, Basis::kSize, 1, "actor_weights");
           const ClosedLoop<TwoLinkArm, Basis> loop(settings);
           const typename Basis::Vector wc = critic_weights, wa = actor_weights;
           const DesiredState desired = loop.trajectory()(t);
@@ -232,8 +233,8 @@ void bind_hjb(py::module_& m) {
       },
       py::arg("settings"), py::arg("x"), py::arg("critic_weights"), py::arg("actor_weights"),
       py::arg("t"),
-      "HJB error of eq. (21) at each row of x (n, 4) for weights (8,), with the desired state at "
-      "time t; returns (n,).");
+      "HJB error of eq. (21) at each row of x (n, 4) for weights (K,) of settings.basis, with the "
+      "desired state at time t; returns (n,).");
 }
 
 void bind_closed_loop(py::module_& m) {
@@ -241,12 +242,12 @@ void bind_closed_loop(py::module_& m) {
   m.def(
       "closed_loop_derivative",
       [](const Settings& settings, double t, const Eigen::VectorXd& state) {
-        check_size(state, PaperClosedLoop::kStateSize, 1, "state");
         check_finite(state, "state");
         check_finite(t, "t");
         return with_basis(settings.basis, [&](auto basis) {
           using Loop = ClosedLoop<TwoLinkArm, decltype(basis)>;
           Loop loop(settings);
+          check_size(state, Loop::kStateSize, 1, "state");
           typename Loop::TimeSignals signals;
           typename Loop::State x = state, rate;
           typename Loop::Outputs outputs;
@@ -267,9 +268,10 @@ void bind_closed_loop(py::module_& m) {
         });
       },
       py::arg("settings"), py::arg("t"), py::arg("state"),
-      "Right-hand side at t of state (87,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major), "
-      "nu (2), J]; local extrapolation points are drawn around this state first. Returns "
-      "(rate (87,), outputs dict).");
+      "Right-hand side at t of state (S,) = [q, dq, Wc (K), Wa (K), Gamma (K^2, column-major), "
+      "nu (2), J] (S = 87 for the 8-function bases, 55 for the structured basis); local "
+      "extrapolation points are drawn around this state first. Returns (rate (S,), outputs "
+      "dict).");
   m.def(
       "initial_state",
       [](const Settings& settings) {
@@ -277,7 +279,7 @@ void bind_closed_loop(py::module_& m) {
           return Eigen::VectorXd(ClosedLoop<TwoLinkArm, decltype(basis)>(settings).initial_state());
         });
       },
-      py::arg("settings"), "The closed loop's initial state (87,).");
+      py::arg("settings"), "The closed loop's initial state (S,).");
   m.def(
       "extrapolation_points",
       [](const Settings& settings) {

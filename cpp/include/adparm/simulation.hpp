@@ -263,8 +263,10 @@ class AnySimulation {
  private:
   using Variant =
       std::variant<Simulation<TwoLinkArm, PaperBasis>, Simulation<TwoLinkArm, AugmentedBasis>,
+                   Simulation<TwoLinkArm, StructuredBasis>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>>;
+                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
+                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>>;
   static Variant make(const Settings& settings) {
     return with_basis(settings.basis, [&](auto basis) {
       using Basis = decltype(basis);
