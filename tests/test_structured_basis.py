@@ -190,3 +190,18 @@ def test_structured_critic_learns_from_perturbed_weights() -> None:
     result = adparm.simulate(config)
     error = np.linalg.norm(result.critic_weights[-1] - W) / np.linalg.norm(W)
     assert error < 0.01, error
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 6])
+def test_solvable_cost_for_n_joints(n: int, rng) -> None:
+    A = rng.normal(size=(n, n))
+    K = A @ A.T + np.eye(n)
+    alpha1 = np.linalg.eigvalsh(K).max() * np.eye(n)  # Q > 0 needs K < 2 alpha1 here
+    R = np.eye(n)
+    Q = adparm.solvable_cost(K, alpha1, R)
+    assert Q.shape == (2 * n, 2 * n)
+    np.testing.assert_allclose(Q[:n, n:], -K)
+    np.testing.assert_allclose(Q[:n, :n], K @ alpha1 + alpha1.T @ K)
+    assert np.linalg.eigvalsh(Q).min() > 0.0
+    with pytest.raises(ValueError, match="alpha1: expected a finite n x n matrix"):
+        adparm.solvable_cost(K, np.eye(n + 1), R)

@@ -908,6 +908,12 @@ class Config:
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
 
+    @property
+    def dof(self) -> int:
+        """The joint count n of the plant: 2 for the built-in two-link arm (the only arm this
+        configuration describes so far; a URDF arm will give its own n)."""
+        return 2
+
     def initial_weights(self, key: str = "critic_weights") -> np.ndarray:
         """init.critic_weights (or ``key = "actor_weights"``), or the basis' default when left
         out (InitConfig)."""

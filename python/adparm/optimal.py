@@ -76,7 +76,7 @@ def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarra
     ``qd`` is the desired position (n,) or (..., n) the basis may depend on (augmented and
     structured bases: through q = qd - e1); default the config's qd at t = 0."""
     _check_config(config)
-    n = 2
+    n = config.dof
     states = _states(x, 2 * n)
     desired = desired_state(config, 0.0)[0] if qd is None else _states(qd, n, "qd")
     desired = np.broadcast_to(desired, states.shape[:-1] + (n,))
@@ -100,7 +100,7 @@ def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[s
     joint position q and velocity dq (n,): {"M": (n, n) inertia, "C": (n, n) Coriolis matrix with
     dM/dt - 2C skew-symmetric, "G": (n,) gravity, "F": (n,) friction}."""
     _check_config(config)
-    n = 2
+    n = config.dof
     q_array, dq_array = _states(q, n, "q"), _states(dq, n, "dq")
     if q_array.shape != (n,) or dq_array.shape != (n,):
         raise ValueError(
@@ -183,15 +183,20 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
 
 
 def solvable_cost(K: Any, alpha1: Any, R: Any) -> np.ndarray:
-    """The state weight Q (4 x 4) for which V* = x^T blockdiag(K, M(q)) x is the exact HJB
-    solution (ERRATA): Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = R^-1. Use it with
+    """The state weight Q (2n x 2n) for which V* = x^T blockdiag(K, M(q)) x is the exact HJB
+    solution (ERRATA) of an n-joint arm: Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K,
+    Q22 = R^-1, with K, alpha1, R n x n (n = 2 for the two-link arm). Use it with
     ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is known. K must be
     symmetric positive definite; raises ValueError if the resulting Q is not positive definite
     (then cost.Q would be refused)."""
     K, alpha1, R = (np.asarray(v, dtype=float) for v in (K, alpha1, R))
+    n = K.shape[0] if K.ndim == 2 else 0
     for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
-        if value.shape != (2, 2) or not np.all(np.isfinite(value)):
-            raise ValueError(f"{name}: expected a finite 2 x 2 matrix, got {value.tolist()}")
+        if n < 1 or value.shape != (n, n) or not np.all(np.isfinite(value)):
+            raise ValueError(
+                f"{name}: expected a finite n x n matrix (n = {n or 'the size of K'}), "
+                f"got {value.tolist()}"
+            )
     if not np.allclose(K, K.T) or np.linalg.eigvalsh(K).min() <= 0.0:
         raise ValueError(f"K: must be symmetric positive definite, got {K.tolist()}")
     Q = np.block([[K @ alpha1 + alpha1.T @ K, -K], [-K, np.linalg.inv(R)]])

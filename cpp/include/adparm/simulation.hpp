@@ -162,7 +162,7 @@ class Simulation {
   // Non-finite anywhere (a NaN or an infinity makes the sum non-finite; a finite state's sum
   // overflows only far beyond any bound), or |q|, |dq|, |Wc|, |Wa| above the bound.
   bool diverged(const State& state) const {
-    const auto watched = state.head(system_.gamma_offset());
+    const auto watched = state.template head<System::kGamma>(system_.gamma_offset());
     return !std::isfinite(state.sum()) || !(watched.cwiseAbs().maxCoeff() <= sim_.divergence_bound);
   }
 
