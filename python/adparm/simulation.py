@@ -88,13 +88,13 @@ def core_settings(config: Config) -> _core.Settings:
     controller = _core.ControllerSettings()
     controller.kind = getattr(_core.ControllerKind, config.controller.kind)
     controller.rise = config.controller.rise
-    controller.kp = config.controller.gain_matrix("kp")
-    controller.kd = config.controller.gain_matrix("kd")
+    controller.kp = config.controller.gain_matrix("kp", config.dof)
+    controller.kd = config.controller.gain_matrix("kd", config.dof)
     settings.controller = controller
     settings.basis = getattr(_core.BasisKind, config.controller.basis)
     extrapolation = _core.ExtrapolationSettings()
     extrapolation.points = config.extrapolation.points
-    extrapolation.box = config.extrapolation.box_vector()
+    extrapolation.box = config.extrapolation.box_vector(config.dof)
     extrapolation.mode = getattr(_core.ExtrapolationMode, config.extrapolation.mode)
     extrapolation.seed = config.extrapolation.seed
     settings.extrapolation = extrapolation
@@ -103,11 +103,11 @@ def core_settings(config: Config) -> _core.Settings:
     settings.actor_weights = config.initial_weights("actor_weights")
 
     probe = _core.ProbeSettings()
-    probe.amplitude = config.probe.amplitude_matrix()
+    probe.amplitude = config.probe.amplitude_matrix(config.dof)
     probe.until = config.probe.until
     probe.ramp = config.probe.ramp
     probe.frequencies = np.array(config.probe.frequencies)
-    probe.phases = config.probe.phase_matrix()
+    probe.phases = config.probe.phase_matrix(config.dof)
     settings.probe = probe
 
     sim = _core.SimSettings()
