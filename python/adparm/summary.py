@@ -96,12 +96,15 @@ _REASONS: dict[str, str] = {
 def _flatten(config: Config) -> dict[str, Any]:
     flat = {}
     for section, values in config.to_dict().items():
+        if section == "init":  # the basis' default when left out
+            values = {key: config.initial_weights(key).tolist() for key in values or _INIT_KEYS}
         for key, value in values.items():
             flat[f"{section}.{key}"] = value
     flat["critic.epsilon_T"] = config.resolved_epsilon_T
-    for key in ("critic_weights", "actor_weights"):  # the basis' default when left out
-        flat[f"init.{key}"] = config.initial_weights(key).tolist()
     return flat
+
+
+_INIT_KEYS = ("critic_weights", "actor_weights")
 
 
 def _same(printed: Any, value: Any) -> bool:
