@@ -83,6 +83,9 @@ def _weights(result: SimulationResult, weights: np.ndarray, title: str) -> Figur
 
 
 def _tex(name: str) -> str:
+    if name.startswith("e2^T M"):  # structured basis: e2^T M_k(q) e2
+        k = name[len("e2^T M")]
+        return rf"e_2^T M_{k}{'(q)' if '(q)' in name else ''}\, e_2"
     return name.replace("cos x2", r"\cos x_2").replace("x", "x_").replace("x__", "x_")
 
 
