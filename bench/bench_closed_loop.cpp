@@ -10,6 +10,8 @@
 // One machine-readable line per measurement (key=value, space separated):
 //   bench=paper_loop points=N steps=n repeats=3 ns_per_step=x steps_per_second=y
 //     ns_per_point_step=z heap_allocations=a final_critic_error=e status=finished
+//   bench=dynamic_two_link points=N steps=n repeats=3 ns_per_step=x heap_allocations=0 ...
+//     the same runs through the dynamic-size loop (Settings::dynamic_sizes)
 //   bench=batch runs=16 steps=n threads=t seconds=s ns_per_step=x speedup=r identical=1
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (glibc only; -1 elsewhere or under
@@ -20,7 +22,11 @@
 //   bench=check run=NAME status=S steps=n rows=r ok=1
 //     each in chunks of 7 and 13 steps, compared bit for bit with a one-shot run: local and grid
 //     extrapolation points, the paper basis with a model error, sinusoid and spline tracking with
-//     points, the rise, pd and optimal controllers, a run that diverges (dt = 4 ms);
+//     points, the structured basis tracking with points, the rise, pd and optimal controllers, a
+//     run that diverges (dt = 4 ms); then dynamic-size runs (Settings::dynamic_sizes) the same way;
+//   bench=check run=dynamic_vs_fixed points=N rows=r difference=d ok=1
+//     the paper run (and tracking with 6 points) through both paths: max relative difference
+//     <= 1e-9 (round-off of differently associated sums, amplified by the learning laws);
 //   bench=check run=batch_threads ... 16 runs on 3 worker threads against one by one;
 //   bench=check run=batch_stream_stop ... the same runs streamed (window 2), stopped after 4 ended;
 //     the part-way and unstarted runs, advanced to the end, equal one-by-one runs;
@@ -87,7 +93,7 @@ double critic_error(const adparm::AnySimulation& simulation) {
   Eigen::Matrix<double, 8, 1> optimal;
   optimal << 4, 6, -8, 5, 2, 1, 2, 2;
   const Eigen::VectorXd weights =
-      simulation.state().segment<8>(adparm::PaperClosedLoop::kCriticWeights);
+      simulation.state().segment(adparm::PaperClosedLoop::kCriticWeights, 8);
   return (weights - optimal).norm() / optimal.norm();
 }
 
@@ -223,6 +229,16 @@ void check_runs(double horizon) {
               s.extrapolation.mode = adparm::ExtrapolationMode::local;
             }),
             finished);
+  check_run("structured_basis_points", variant([](Settings& s) {
+              s.basis = adparm::BasisKind::structured;
+              s.critic_weights.resize(6);
+              s.critic_weights << 1, 0, 1, 5, 1, 1;  // K = I, the arm's inertia p
+              s.actor_weights = s.critic_weights;
+              s.probe.until = 0.0;
+              s.extrapolation.points = 8;
+              s.task.qd = sinusoid();
+            }),
+            finished);
   check_run("rise", variant([](Settings& s) { s.controller.kind = adparm::ControllerKind::rise; }),
             finished);
   check_run("pd", variant([](Settings& s) {
@@ -239,6 +255,47 @@ void check_runs(double horizon) {
               s.sim.record_every = 3;
             }),
             adparm::RunStatus::diverged);
+
+  // The dynamic-size loop (Settings::dynamic_sizes): chunked against one-shot, and against the
+  // fixed-size path (round-off: the sums of dynamic-size reductions associate differently).
+  check_run("dynamic_local_points", variant([](Settings& s) {
+              s.dynamic_sizes = true;
+              s.extrapolation.points = 5;
+              s.extrapolation.mode = adparm::ExtrapolationMode::local;
+            }),
+            finished);
+  check_run("dynamic_sinusoid_paper_basis", variant([](Settings& s) {
+              s.dynamic_sizes = true;
+              s.basis = adparm::BasisKind::paper;
+              s.task.qd = sinusoid();
+              s.extrapolation.points = 4;
+              s.model.p1 = 4.5;
+            }),
+            finished);
+  for (const bool points : {false, true}) {
+    Settings fixed = variant([&](Settings& s) {
+      s.extrapolation.points = points ? 6 : 0;
+      if (points) s.task.qd = sinusoid();
+    });
+    Settings dynamic = fixed;
+    dynamic.dynamic_sizes = true;
+    adparm::AnySimulation a(fixed), b(dynamic);
+    a.advance(a.steps());
+    b.advance(b.steps());
+    const adparm::Recording ra = a.recording(), rb = b.recording();
+    const auto relative = [](const auto& x, const auto& y) {
+      return (x - y).cwiseAbs().maxCoeff() / std::max(1.0, x.cwiseAbs().maxCoeff());
+    };
+    const double difference =
+        std::max({relative(ra.q, rb.q), relative(ra.critic_weights, rb.critic_weights),
+                  relative(ra.actor_weights, rb.actor_weights), relative(ra.tau, rb.tau),
+                  relative(ra.hjb_error, rb.hjb_error), relative(a.state(), b.state())});
+    const bool ok = ra.rows == rb.rows && a.status() == b.status() &&
+                    a.reset_times() == b.reset_times() && difference <= 1e-9;
+    std::printf("bench=check run=dynamic_vs_fixed points=%d rows=%ld difference=%.3g ok=%d\n",
+                points ? 6 : 0, static_cast<long>(ra.rows), difference, ok ? 1 : 0);
+    if (!ok) fail("dynamic_vs_fixed");
+  }
 
   // 16 runs in chunks on 3 threads (more than the 2 cores: runs move between threads) against
   // the same runs one by one.
@@ -368,6 +425,42 @@ void check_invalid_settings() {
          s.task.qd.breaks[1] = -1.0;
        }},
       {"task.qd spline ends before sim.T", [](Settings& s) { s.task.qd = spline(0.5 * s.sim.T); }},
+      {"task.q0 size", [](Settings& s) { s.task.q0.resize(3); }},
+      {"task.dq0 size", [](Settings& s) { s.task.dq0.resize(1); }},
+      {"task.qd offset size", [](Settings& s) { s.task.qd.offset.setZero(3); }},
+      {"plant.disturbance size", [](Settings& s) { s.disturbance.setZero(0); }},
+      {"cost.Q size", [](Settings& s) { s.Q = Eigen::MatrixXd::Identity(6, 6); }},
+      {"cost.R size", [](Settings& s) { s.R = Eigen::MatrixXd::Identity(3, 3); }},
+      {"control.alpha1 size", [](Settings& s) { s.control.alpha1.setIdentity(2, 3); }},
+      {"controller.kd size", [](Settings& s) { s.controller.kd.setIdentity(1, 1); }},
+      {"extrapolation.box size", [](Settings& s) { s.extrapolation.box.setOnes(6); }},
+      {"probe.amplitude rows", [](Settings& s) { s.probe.amplitude.setOnes(3, 4); }},
+      {"task.qd spline coefficients size",
+       [](Settings& s) {
+         s.task.qd = spline(s.sim.T);
+         s.task.qd.coefficients.setZero(2, 12);
+       }},
+      {"dynamic: cost.R size",
+       [](Settings& s) {
+         s.dynamic_sizes = true;
+         s.R = Eigen::MatrixXd::Identity(3, 3);
+       }},
+      {"dynamic: init.actor_weights size",
+       [](Settings& s) {
+         s.dynamic_sizes = true;
+         s.actor_weights.setOnes(9);
+       }},
+      {"dynamic: control.alpha1 not Hurwitz",
+       [](Settings& s) {
+         s.dynamic_sizes = true;
+         s.control.alpha1 = -Eigen::MatrixXd::Identity(2, 2);
+       }},
+      {"dynamic: extrapolation grid not m^4",
+       [](Settings& s) {
+         s.dynamic_sizes = true;
+         s.extrapolation.points = 8;
+         s.extrapolation.mode = adparm::ExtrapolationMode::grid;
+       }},
   };
   int refused = 0;
   for (const auto& [name, change] : cases) {
@@ -477,6 +570,28 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
         best.heap_allocations, best.critic_error, status_name(best.status));
     std::fflush(stdout);
     all_finished = all_finished && best.status == adparm::RunStatus::finished;
+  }
+
+  // The same paper loop through the dynamic-size path (n and K = Eigen::Dynamic, bounded types,
+  // buffers sized once): its cost over the fixed-size fast path, and no allocation per step.
+  for (const long points : point_counts) {
+    adparm::Settings settings = adparm::paper_settings();
+    settings.sim.T = horizon;
+    settings.extrapolation.points = points;
+    settings.dynamic_sizes = true;
+    LoopTiming best;
+    for (int r = 0; r < repeats; ++r) {
+      const LoopTiming timing = time_loop(settings);
+      if (r == 0 || timing.seconds < best.seconds) best = timing;
+    }
+    std::printf(
+        "bench=dynamic_two_link points=%ld steps=%ld repeats=%d ns_per_step=%.1f "
+        "heap_allocations=%ld final_critic_error=%.4g status=%s\n",
+        points, best.steps, repeats, 1e9 * best.seconds / best.steps, best.heap_allocations,
+        best.critic_error, status_name(best.status));
+    std::fflush(stdout);
+    all_finished = all_finished && best.status == adparm::RunStatus::finished;
+    all_finished = all_finished && best.heap_allocations <= 0;
   }
 
   // 16 paper runs from different initial positions, on 1 and 2 threads.

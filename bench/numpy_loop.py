@@ -144,8 +144,8 @@ class NumpyPaperLoop:
         state = np.zeros(STATE_SIZE)
         state[0:2] = cfg.task.q0
         state[2:4] = cfg.task.dq0
-        state[4:12] = cfg.init.critic_weights
-        state[12:20] = cfg.init.actor_weights
+        state[4:12] = cfg.initial_weights("critic_weights")
+        state[12:20] = cfg.initial_weights("actor_weights")
         state[GAMMA] = self.gamma_reset
         return state
 

@@ -106,6 +106,8 @@ def basis(kind: str, x, qd=(0.0, 0.0), dqd=(0.0, 0.0)):
     augmented: the same with cos x2 replaced by cos(qd2 - x2) (= cos q2)."""
     x1, x2, x3, x4 = np.asarray(x, dtype=float)
     qd, dqd = np.asarray(qd, dtype=float), np.asarray(dqd, dtype=float)
+    if kind == "structured":
+        return structured_basis(x, qd, dqd)
     if kind == "paper":
         c, dc_dx2 = np.cos(x2), -np.sin(x2)
         dc_dqd2 = 0.0
@@ -128,6 +130,31 @@ def basis(kind: str, x, qd=(0.0, 0.0), dqd=(0.0, 0.0)):
     rate = np.zeros(8)
     rate[4] = x3**2 * dc_dqd2 * dqd[1]
     rate[7] = x3 * x4 * dc_dqd2 * dqd[1]
+    return phi, J, rate
+
+
+def structured_basis(x, qd=(0.0, 0.0), dqd=(0.0, 0.0)):
+    """phi (6,), d phi / dx (6, 4), (d phi / d qd) dqd (6,) of the structured basis, from its
+    definition: [e1_i e1_j (i <= j); e2^T M_k(q) e2], q = qd - e1, M1 = [[1, 0], [0, 0]],
+    M2 = [[0, 1], [1, 1]], M3 = cos q2 [[2, 1], [1, 0]] (matrix forms, not expanded)."""
+    x = np.asarray(x, dtype=float)
+    e1, e2 = x[:2], x[2:]
+    q2 = qd[1] - e1[1]
+    shape3 = np.array([[2.0, 1.0], [1.0, 0.0]])
+    matrices = [np.array([[1.0, 0.0], [0.0, 0.0]]), np.array([[0.0, 1.0], [1.0, 1.0]])]
+    matrices.append(np.cos(q2) * shape3)
+    pairs = [(0, 0), (0, 1), (1, 1)]
+    phi = np.array([e1[i] * e1[j] for i, j in pairs] + [e2 @ Mk @ e2 for Mk in matrices])
+    J = np.zeros((6, 4))
+    for row, (i, j) in enumerate(pairs):
+        J[row, i] += e1[j]
+        J[row, j] += e1[i]
+    for k, Mk in enumerate(matrices):
+        J[3 + k, 2:] = 2.0 * Mk @ e2  # d (e2^T Mk e2) / d e2
+    # M3 depends on q2 = qd2 - e1_2: d/d e1_2 = sin q2 e2^T shape3 e2, d/d qd2 = the negative
+    J[5, 1] = np.sin(q2) * (e2 @ shape3 @ e2)
+    rate = np.zeros(6)
+    rate[5] = -np.sin(q2) * (e2 @ shape3 @ e2) * dqd[1]
     return phi, J, rate
 
 
@@ -234,8 +261,8 @@ def initial_state(config: Config) -> np.ndarray:
         [
             config.task.q0,
             config.task.dq0,
-            config.init.critic_weights,
-            config.init.actor_weights,
+            config.initial_weights("critic_weights"),
+            config.initial_weights("actor_weights"),
             (config.critic.gamma0 * np.eye(8)).reshape(-1, order="F"),
             np.zeros(2),
             np.zeros(1),

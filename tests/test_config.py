@@ -95,7 +95,8 @@ record_every = 5
     c = adparm.load_config(path)
     assert c.critic.eta_c == 200.0 and c.critic.epsilon_T == 1e-5
     assert c.critic.nu == 1.0 and c.critic.gamma0 == 100.0
-    assert c.probe.amplitude == (3.0, 3.0) and c.probe.phase_matrix().shape == (2, 2)
+    assert c.probe.amplitude == 3.0 and c.probe.phase_matrix().shape == (2, 2)
+    np.testing.assert_array_equal(c.probe.amplitude_matrix(), np.full((2, 2), 3.0))
     assert c.sim.T == 2.5 and c.sim.dt == 1e-3 and c.sim.record_every == 5
     assert c.plant == adparm.PlantConfig()
     assert adparm.optimal_weights(c)[0] == 4.0
@@ -129,12 +130,13 @@ def test_round_trip_through_dict() -> None:
         ({"sim": {"record_every": 2.5}}, TypeError, "sim.record_every: expected an integer"),
         ({"sim": {"dt": 2.0, "T": 1.0}}, ValueError, "sim.dt: must be <= sim.T"),
         ({"task": {"q0": [0.1]}}, ValueError, r"task.q0: expected shape \(2,\), got \(1,\)"),
-        ({"task": {"q0": 0.1}}, TypeError, "task.q0: expected a list of 2 numbers"),
+        ({"task": {"q0": 0.1}}, TypeError, "task.q0: expected a list of n numbers"),
         ({"task": {"qd": [0.0, float("inf")]}}, ValueError, "task.qd: must be finite"),
         ({"cost": {"R": [[1, 0.5], [0, 1]]}}, ValueError, "cost.R: must be symmetric"),
         ({"cost": {"R": [[1, 0], [0, -1]]}}, ValueError, "cost.R: must be positive definite"),
         ({"cost": {"Q": np.zeros((4, 4))}}, ValueError, "cost.Q: must be positive definite"),
-        ({"cost": {"Q": [[1, 2], [3, 4]]}}, ValueError, r"cost.Q: expected shape \(4, 4\)"),
+        ({"cost": {"Q": [[1, 0], [0, 4]]}}, ValueError, r"cost.Q: expected shape \(4, 4\)"),
+        ({"cost": {"Q": [[1, 2], [3, 4]]}}, ValueError, r"cost.Q: must be symmetric"),
         (
             {"control": {"alpha1": [["a", 0], [0, 1]]}},
             TypeError,
@@ -164,7 +166,13 @@ def test_round_trip_through_dict() -> None:
             ValueError,
             "controller.rise: kind = 'rise' is the RISE feedback alone",
         ),
-        ({"controller": {"kp": [1, 2]}}, ValueError, r"controller.kp: expected shape \(2, 2\)"),
+        ({"controller": {"kp": [1, 2]}}, ValueError, r"controller.kp: expected shape \(n, n\)"),
+        ({"controller": {"kd": np.eye(3)}}, ValueError, r"controller.kd: expected shape \(2, 2\)"),
+        (
+            {"task": {"q0": [0.1, 0.2, 0.3]}},
+            ValueError,
+            r"task.q0: .* \(the arm has n = 2 joints\)",
+        ),
         ({"controller": {"kd": float("nan")}}, ValueError, "controller.kd: must be finite"),
         ({"extrapolation": {"points": -1}}, ValueError, "extrapolation.points: must be >= 0"),
         ({"extrapolation": {"points": 2.0}}, TypeError, "extrapolation.points: expected an int"),

@@ -165,7 +165,7 @@ def valid_dicts(draw: st.DrawFn) -> dict[str, dict[str, Any]]:
     gain = reals(0.0, 200.0) | matrices(2, 2, -50.0, 200.0)
     controller = {
         "kind": kind,
-        "basis": draw(st.sampled_from(["augmented", "paper"])),
+        "basis": draw(st.sampled_from(["augmented", "paper", "structured"])),
         "rise": True if kind == "rise" else draw(st.booleans()),
         "kp": draw(gain),
         "kd": draw(gain),
@@ -182,7 +182,8 @@ def valid_dicts(draw: st.DrawFn) -> dict[str, dict[str, Any]]:
             if (key in mass and together) or (key not in mass and key in chosen)
         }
 
-    weights = st.just([0.0] * 8) | vectors(8, -10.0, 10.0)
+    size = 6 if controller["basis"] == "structured" else 8
+    weights = st.just([0.0] * size) | vectors(size, -10.0, 10.0)
     sections = {
         "plant": {**arm_keys(draw(arms())), "disturbance": draw(vectors(2, -2.0, 2.0))},
         "model": arm_keys(draw(arms())),
@@ -223,6 +224,8 @@ def valid_dicts(draw: st.DrawFn) -> dict[str, dict[str, Any]]:
     }
     if "qd" in data.get("task", {}) and isinstance(data["task"]["qd"], dict):
         data["task"]["qd"] = sections["task"]["qd"]  # whole tables only
+    if "init" in data:  # weights of the basis' size: keep the basis with them
+        data.setdefault("controller", {})["basis"] = controller["basis"]
     if data.get("controller", {}).get("kind") == "rise":
         data["controller"].pop("rise", None)  # rise = False is invalid with kind rise
     data["sim"] = sim  # always: the default 150 s would be 150,000 steps
@@ -364,8 +367,10 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         return cases
     if key in ("disturbance", "q0", "dq0"):
         return array_cases((2,), value)
-    if key in ("critic_weights", "actor_weights"):
-        return array_cases((8,), value)
+    if key in ("critic_weights", "actor_weights"):  # None (left out) is the basis' default
+        size = 6 if data.get("controller", {}).get("basis") == "structured" else 8
+        valid = [1.0] * size if value is None else value
+        return [case for case in array_cases((size,), valid) if case is not None]
     if key in ("Q", "R"):
         n = 4 if key == "Q" else 2
         matrix = np.array(value, dtype=float)

@@ -355,7 +355,7 @@ def test_masked_arrays_and_matrices_are_refused_or_converted() -> None:
         warnings.simplefilter("ignore", PendingDeprecationWarning)
         row = np.matrix([[0.1, 0.2]])
         square = np.matrix(np.diag([10.0, 10.0, 1.0, 1.0]))
-    with pytest.raises(ValueError, match=r"task.q0: expected shape \(2,\), got \(1, 2\)"):
+    with pytest.raises(ValueError, match=r"task.q0: expected shape \(n,\), got \(1, 2\)"):
         config.updated({"task": {"q0": row}})
     q = config.updated({"cost": {"Q": square}}).cost.Q
     assert q[0][0] == 10.0

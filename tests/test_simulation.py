@@ -28,7 +28,7 @@ def test_paper_preset_runs_and_records(paper_result) -> None:
     np.testing.assert_allclose(np.diff(r.t), c.sim.dt * c.sim.record_every, rtol=1e-9)
     assert r.t[-1] == pytest.approx(c.sim.T)
     np.testing.assert_array_equal(r.q[0], c.task.q0)
-    np.testing.assert_array_equal(r.critic_weights[0], c.init.critic_weights)
+    np.testing.assert_array_equal(r.critic_weights[0], c.initial_weights())
     for name in ("t", "q", "dq", "e1", "e2", "tau", "critic_weights", "actor_weights", "hjb_error"):
         assert np.all(np.isfinite(getattr(r, name))), name
     with pytest.raises(ValueError):

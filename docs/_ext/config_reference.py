@@ -78,7 +78,7 @@ DESCRIPTIONS = {
     "(units of M).",
     ("actor", "weight_bound"): "The projection keeps ||Wa|| <= weight_bound (the paper's "
     "proj{} has no printed bound).",
-    ("init", "critic_weights"): "Wc(0), in the order of ``adparm.BASIS_NAMES``. Zero is "
+    ("init", "critic_weights"): "Wc(0), in the order of ``adparm.basis_names(config)``. Zero is "
     "inadmissible (:doc:`/paper`).",
     ("init", "actor_weights"): "Wa(0); it must stabilise the model.",
     ("probe", "amplitude"): "Probing torque probe_j = ramp(t) sum_k amplitude_jk "
@@ -120,6 +120,8 @@ RESOLVED_DEFAULTS = {
     ("probe", "phases"): "k rad for sinusoid k, both joints",
     ("task.qd sinusoid", "phase"): "zeros",
     ("task.qd samples", "file"): "none",
+    ("init", "*"): "the basis' default: all ones (paper, augmented); [1, 0, 1, p1, p2, p3] "
+    "(structured: K = I and the believed model's inertia)",
 }
 
 

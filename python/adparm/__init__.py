@@ -26,6 +26,9 @@ from .config import (
 )
 from .optimal import (
     BASIS_NAMES,
+    arm_terms,
+    basis,
+    basis_names,
     hjb_residual,
     initial_error_state,
     optimal_value,
@@ -73,6 +76,9 @@ __all__ = [
     "SinusoidTrajectory",
     "SweepResult",
     "TaskConfig",
+    "arm_terms",
+    "basis",
+    "basis_names",
     "check_step_size",
     "compare",
     "desired_state",

@@ -140,6 +140,7 @@ class ControllerSettings:
 class BasisKind:
     paper: BasisKind
     augmented: BasisKind
+    structured: BasisKind
 
 class ExtrapolationMode:
     fixed: ExtrapolationMode
@@ -166,7 +167,9 @@ class SimSettings:
 
 class Settings:
     """All settings of one run. Eigen members are copied on access: assign them whole.
-    Q (4, 4), R (2, 2), disturbance (2,), critic_weights and actor_weights (8,)."""
+    Q (2n, 2n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,) for n joints
+    (2 for the two-link arm) and K basis functions. dynamic_sizes runs the two-link arm through
+    the n-joint (dynamic-size) loop, a check of that loop."""
 
     plant: ArmParameters
     model: ArmParameters
@@ -176,23 +179,24 @@ class Settings:
     actor: ActorSettings
     controller: ControllerSettings
     basis: BasisKind
+    dynamic_sizes: bool
     extrapolation: ExtrapolationSettings
     probe: ProbeSettings
     sim: SimSettings
     def __init__(self) -> None: ...
     @property
     def disturbance(self) -> _FloatArray:
-        """(2,)"""
+        """(n,)"""
     @disturbance.setter
     def disturbance(self, value: ArrayLike) -> None: ...
     @property
     def Q(self) -> _FloatArray:
-        """(4, 4)"""
+        """(2n, 2n)"""
     @Q.setter
     def Q(self, value: ArrayLike) -> None: ...
     @property
     def R(self) -> _FloatArray:
-        """(2, 2)"""
+        """(n, n)"""
     @R.setter
     def R(self, value: ArrayLike) -> None: ...
     @property
@@ -225,13 +229,14 @@ def simulate_open_loop(
     """RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4)."""
 
 def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
-    """The desired state at times t (n,): rows [qd1, qd2, dqd1, dqd2, ddqd1, ddqd2] (n, 6)."""
+    """The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)]
+    (m, 3 n)."""
 
 def basis(
     kind: BasisKind, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
 ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-    """A basis at x (4,) and desired qd, dqd (2,): phi (8,), d phi / dx (8, 4) and
-    (d phi / d qd) dqd (8,)."""
+    """A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4)
+    and (d phi / d qd) dqd (K,)."""
 
 def hjb_residual(
     settings: Settings,

@@ -116,7 +116,8 @@ def _controller_configs(
 def _learned_config(config: Config, learning: SimulationResult) -> Config:
     """``config`` (kind adp) started from the final weights of ``learning``, probing off."""
     if learning.t.size == 0:  # pragma: no cover - the core always records t = 0
-        critic, actor = config.init.critic_weights, config.init.actor_weights
+        critic = config.initial_weights("critic_weights")
+        actor = config.initial_weights("actor_weights")
     else:
         critic, actor = learning.critic_weights[-1], learning.actor_weights[-1]
     return config.updated(

@@ -220,17 +220,29 @@ def _shape_text(shape: tuple[int | None, ...]) -> str:
 
 
 def _rows(value: Any, name: str, columns: int | None) -> Matrix:
-    """A (2,) vector (one column) or a (2, n) matrix, as a (2, n) matrix."""
+    """An (n,) vector (one column) or an (n, k) matrix, as an (n, k) matrix (n joints: checked
+    by Config against the arm)."""
     if _ndim(value) == 1:
-        return tuple((v,) for v in _vector(value, name, 2))
-    return _matrix(value, name, 2, columns)
+        return tuple((v,) for v in _vector(value, name, None))
+    return _matrix(value, name, None, columns)
+
+
+def _square(value: Any, name: str) -> Matrix:
+    """A square matrix of any size (checked by Config against the arm's joint count)."""
+    matrix = _matrix(value, name, None, None)
+    if len(matrix) == 0 or len(matrix) != len(matrix[0]):
+        raise ValueError(
+            f"{name}: expected a square matrix, got shape ({len(matrix)}, "
+            f"{len(matrix[0]) if matrix else 0})"
+        )
+    return matrix
 
 
 def _gain(value: Any, name: str) -> float | Matrix:
-    """A number (times the identity) or a 2 x 2 matrix."""
+    """A number (times the identity) or an n x n matrix."""
     if _is_number(value):
         return _scalar(value, name)
-    return _matrix(value, name, 2, 2)
+    return _square(value, name)
 
 
 def _check_known(
@@ -299,12 +311,15 @@ def _check_arm(p1: float, p2: float, p3: float, section: str) -> None:
 
 def _check_hurwitz(alpha1: Matrix, name: str) -> None:
     """-alpha1 Hurwitz: every eigenvalue of alpha1 has a positive real part, i.e. (2 x 2) trace > 0
-    and det > 0, evaluated on alpha1 / max|entry| exactly as the core does (closed_loop.hpp)."""
+    and det > 0, evaluated on alpha1 / max|entry| exactly as the core does (closed_loop.hpp);
+    n x n: the eigenvalues of alpha1 / max|entry|."""
     scale = max(abs(v) for row in alpha1 for v in row)
     hurwitz = False
-    if scale > 0.0:
+    if scale > 0.0 and len(alpha1) == 2:
         (a, b), (c, d) = ((v / scale for v in row) for row in alpha1)
         hurwitz = a + d > 0.0 and a * d - b * c > 0.0
+    elif scale > 0.0:
+        hurwitz = bool(np.all(np.linalg.eigvals(np.array(alpha1) / scale).real > 0.0))
     if not hurwitz:
         eigenvalues = ", ".join(f"{v:.3g}" for v in np.linalg.eigvals(np.array(alpha1)))
         raise ValueError(
@@ -336,7 +351,8 @@ class PlantConfig:
     def __post_init__(self) -> None:
         for key in _ARM_KEYS:
             object.__setattr__(self, key, _scalar(getattr(self, key), f"plant.{key}"))
-        object.__setattr__(self, "disturbance", _vector(self.disturbance, "plant.disturbance", 2))
+        disturbance = _vector(self.disturbance, "plant.disturbance", None)
+        object.__setattr__(self, "disturbance", disturbance)
         _check_arm(self.p1, self.p2, self.p3, "plant")
 
 
@@ -371,8 +387,8 @@ class ModelConfig:
 class SinusoidTrajectory:
     """qd_j(t) = offset_j + sum_k amplitude_jk sin(frequency_jk t + phase_jk) (rad, rad/s).
 
-    amplitude, frequency and phase are each a pair (one sinusoid per joint) or a 2 x n matrix
-    (n sinusoids per joint); phase None is all zeros. In TOML: ``[task.qd]`` with
+    amplitude, frequency and phase are each a vector (one sinusoid per joint) or a joints x k matrix
+    (k sinusoids per joint); phase None is all zeros. In TOML: ``[task.qd]`` with
     ``kind = "sinusoid"``."""
 
     kind: ClassVar[str] = "sinusoid"
@@ -386,9 +402,9 @@ class SinusoidTrajectory:
         n = len(amplitude[0])
         object.__setattr__(self, "amplitude", amplitude)
         object.__setattr__(self, "frequency", _rows(self.frequency, "task.qd.frequency", n))
-        phase = ((0.0,) * n,) * 2 if self.phase is None else self.phase
+        phase = ((0.0,) * n,) * len(amplitude) if self.phase is None else self.phase
         object.__setattr__(self, "phase", _rows(phase, "task.qd.phase", n))
-        object.__setattr__(self, "offset", _vector(self.offset, "task.qd.offset", 2))
+        object.__setattr__(self, "offset", _vector(self.offset, "task.qd.offset", None))
         for key in ("frequency", "phase"):
             if len(getattr(self, key)[0]) != n:
                 raise ValueError(
@@ -426,11 +442,12 @@ class SampledTrajectory:
         object.__setattr__(self, "t", _vector(self.t, "task.qd.t", None))
         if len(self.t) > MAX_SAMPLES:
             raise ValueError(f"task.qd.t: at most {MAX_SAMPLES} samples, got {len(self.t)}")
-        q = _matrix(self.q, "task.qd.q", None, 2)
+        q = _matrix(self.q, "task.qd.q", None, None)
         if len(q) != len(self.t):
+            width = len(q[0]) if q else 2
             raise ValueError(
-                f"task.qd.q: expected shape ({len(self.t)}, 2), one row per time in task.qd.t, "
-                f"got ({len(q)}, 2)"
+                f"task.qd.q: expected shape ({len(self.t)}, {width}), one row per time in "
+                f"task.qd.t, got ({len(q)}, {width})"
             )
         object.__setattr__(self, "q", q)
         if len(self.t) < 2:
@@ -526,9 +543,12 @@ def _read_samples(path: Path) -> tuple[Vector, Matrix]:
             if rows:  # only a first line may be a header
                 raise ValueError(f"task.qd.file: {path}:{number}: not numbers: {line!r}") from error
             continue
-        if len(rows[-1]) != 3:
+        columns = len(rows[0])  # t, qd1, ..., qdn (n checked by Config)
+        if len(rows[-1]) != columns or columns < 2:
+            expected = "t, qd1, qd2" if columns == 3 else "t, qd1, ..., qdn"
             raise ValueError(
-                f"task.qd.file: {path}:{number}: expected 3 columns t, qd1, qd2, got {line!r}"
+                f"task.qd.file: {path}:{number}: expected {max(columns, 2)} columns {expected}, "
+                f"got {line!r}"
             )
     if not rows:
         raise ValueError(f"task.qd.file: {path} holds no samples")
@@ -544,7 +564,7 @@ def _trajectory(value: Any) -> Trajectory:
     if isinstance(value, (SinusoidTrajectory, SampledTrajectory)):
         return value
     if not isinstance(value, Mapping):
-        return _vector(value, "task.qd", 2)
+        return _vector(value, "task.qd", None)
     values = dict(value)
     kinds = tuple(_TRAJECTORIES)
     if "kind" not in values:
@@ -569,7 +589,7 @@ class TaskConfig:
 
     def __post_init__(self) -> None:
         for key in ("q0", "dq0"):
-            object.__setattr__(self, key, _vector(getattr(self, key), f"task.{key}", 2))
+            object.__setattr__(self, key, _vector(getattr(self, key), f"task.{key}", None))
         object.__setattr__(self, "qd", _trajectory(self.qd))
 
     @property
@@ -594,8 +614,8 @@ class CostConfig:
     R: Matrix = ((0.25, 0.0), (0.0, 0.25))
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "Q", _matrix(self.Q, "cost.Q", 4, 4))
-        object.__setattr__(self, "R", _matrix(self.R, "cost.R", 2, 2))
+        object.__setattr__(self, "Q", _square(self.Q, "cost.Q"))
+        object.__setattr__(self, "R", _square(self.R, "cost.R"))
         _symmetric_positive_definite(self.Q, "cost.Q")
         _symmetric_positive_definite(self.R, "cost.R")
 
@@ -618,7 +638,7 @@ class ControlConfig:
     beta1: float = 0.5
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "alpha1", _matrix(self.alpha1, "control.alpha1", 2, 2))
+        object.__setattr__(self, "alpha1", _square(self.alpha1, "control.alpha1"))
         _check_hurwitz(self.alpha1, "control.alpha1")
         for key in ("ks", "alpha2", "beta1"):
             object.__setattr__(
@@ -695,19 +715,27 @@ class ActorConfig:
 
 @dataclass(frozen=True)
 class InitConfig:
-    """Initial critic and actor weights (8 each, in the basis order of adparm.BASIS_NAMES).
+    """Initial critic and actor weights (one per basis function, in the order of
+    adparm.basis_names(config)); None (left out) takes the basis' default
+    (Config.initial_weights):
 
-    Not printed in the paper. All ones: the initial actor must stabilise the model, and all-zero
-    weights are inadmissible (omega = 0 at rest while the HJB error is x^T Q x > 0, so the critic
-    diverges within milliseconds; simulate() then raises SimulationDiverged; docs: "The paper and
-    its corrections")."""
+    - paper and augmented bases: all ones (not printed in the paper). The initial actor
+      must stabilise the model, and all-zero weights are inadmissible (omega = 0 at rest while the
+      HJB error is x^T Q x > 0, so the critic diverges within milliseconds; simulate() then raises
+      SimulationDiverged; docs: "The paper and its corrections").
+    - structured basis: [1, 0, 1, p1, p2, p3], i.e. K = I for the e1 block and the inertia
+      parameters of the believed model ([model], default the plant) for the e2 block. The actor's
+      policy depends on the e2 block only (u_hat = -R^-1 M(q)^-1 M_w(q) e2 with M_w the inertia the
+      weights describe), so these weights start at u_hat = -R^-1 e2, the optimal policy of the
+      believed model; all-ones weights give an indefinite M_w on other arms and blow up."""
 
-    critic_weights: Vector = (1.0,) * 8
-    actor_weights: Vector = (1.0,) * 8
+    critic_weights: Vector | None = None
+    actor_weights: Vector | None = None
 
     def __post_init__(self) -> None:
         for key in ("critic_weights", "actor_weights"):
-            object.__setattr__(self, key, _vector(getattr(self, key), f"init.{key}", 8))
+            if getattr(self, key) is not None:
+                object.__setattr__(self, key, _vector(getattr(self, key), f"init.{key}", None))
 
 
 @dataclass(frozen=True)
@@ -742,34 +770,39 @@ class ProbeConfig:
             )
         amplitude = self.amplitude
         if _is_number(amplitude):
-            amplitude = (amplitude, amplitude)
-        if _ndim(amplitude) == 2:
-            amplitude = _matrix(amplitude, "probe.amplitude", 2, n)
+            amplitude = _scalar(amplitude, "probe.amplitude")  # every joint and sinusoid
+        elif _ndim(amplitude) == 2:
+            amplitude = _matrix(amplitude, "probe.amplitude", None, n)
         else:
-            amplitude = _vector(amplitude, "probe.amplitude", 2)
+            amplitude = _vector(amplitude, "probe.amplitude", None)
         object.__setattr__(self, "amplitude", amplitude)
         object.__setattr__(self, "until", _scalar(self.until, "probe.until", minimum=0.0))
         object.__setattr__(self, "ramp", _scalar(self.ramp, "probe.ramp", minimum=0.0))
         if self.phases is not None:
-            object.__setattr__(self, "phases", _matrix(self.phases, "probe.phases", 2, n))
+            object.__setattr__(self, "phases", _matrix(self.phases, "probe.phases", None, n))
 
-    def amplitude_matrix(self) -> np.ndarray:
-        """Amplitudes as a (2, n) array (one column per sinusoid)."""
+    def amplitude_matrix(self, joints: int = 2) -> np.ndarray:
+        """Amplitudes as a (joints, k) array (one column per sinusoid)."""
+        k = len(self.frequencies)
         amplitude = np.array(self.amplitude, dtype=float)
+        if amplitude.ndim == 0:
+            return np.full((joints, k), float(amplitude))
         if amplitude.ndim == 1:
-            amplitude = np.repeat(amplitude[:, None], len(self.frequencies), axis=1)
-        return amplitude.reshape(2, len(self.frequencies))
+            amplitude = np.repeat(amplitude[:, None], k, axis=1)
+        return amplitude.reshape(joints, k)
 
-    def phase_matrix(self) -> np.ndarray:
-        """Phases as a (2, n) array, with the default filled in."""
+    def phase_matrix(self, joints: int = 2) -> np.ndarray:
+        """Phases as a (joints, k) array, with the default filled in."""
+        k = len(self.frequencies)
         if self.phases is not None:
-            return np.array(self.phases, dtype=float).reshape(2, len(self.frequencies))
-        n = len(self.frequencies)
-        return np.vstack([np.arange(n, dtype=float)] * 2)
+            return np.array(self.phases, dtype=float).reshape(joints, k)
+        return np.vstack([np.arange(k, dtype=float)] * joints)
 
 
 CONTROLLER_KINDS = ("adp", "rise", "pd", "optimal")
-BASIS_KINDS = ("augmented", "paper")
+BASIS_KINDS = ("augmented", "paper", "structured")
+#: The number of functions of each basis (the length of init.critic_weights and actor_weights).
+BASIS_SIZES = {"augmented": 8, "paper": 8, "structured": 6}
 EXTRAPOLATION_MODES = ("fixed", "grid", "local")
 
 
@@ -784,7 +817,10 @@ class ControllerConfig:
     basis: the critic/actor basis. ``augmented`` (default) is the paper's 8 functions over the
     augmented state [x; qd] with cos x2 replaced by cos(qd2 - x2) = cos q2: identical to the
     paper's basis while qd2 = 0 (the paper's task), and exact for V* = x^T blockdiag(K, M(q)) x
-    with the same W* for any qd(t). ``paper`` is the printed phi(x), exact only for qd2 = 0."""
+    with the same W* for any qd(t). ``paper`` is the printed phi(x), exact only for qd2 = 0.
+    ``structured`` has 6 functions, [e1_1^2, e1_1 e1_2, e1_2^2, e2^T M_k(q) e2 (k = 1..3)] with
+    M(q) = p1 M1 + p2 M2 + p3 M3: exact for any qd(t) with W* = [K11, 2 K12, K22, p1, p2, p3], so
+    the critic learns the arm's inertia parameters (docs, "The structured basis")."""
 
     kind: str = "adp"
     basis: str = "augmented"
@@ -803,10 +839,10 @@ class ControllerConfig:
         for key in ("kp", "kd"):
             object.__setattr__(self, key, _gain(getattr(self, key), f"controller.{key}"))
 
-    def gain_matrix(self, key: str) -> np.ndarray:
-        """kp or kd as a 2 x 2 array."""
+    def gain_matrix(self, key: str, joints: int = 2) -> np.ndarray:
+        """kp or kd as a (joints x joints) array."""
         value = getattr(self, key)
-        return value * np.eye(2) if isinstance(value, float) else np.array(value)
+        return value * np.eye(joints) if isinstance(value, float) else np.array(value)
 
 
 #: The most extrapolation points a run may have. A point costs about 180 ns per RK4 step, so a
@@ -841,7 +877,7 @@ class ExtrapolationConfig:
         if _is_number(self.box):
             box: float | Vector = _scalar(self.box, "extrapolation.box", minimum=0.0, strict=True)
         else:
-            box = _vector(self.box, "extrapolation.box", 4)
+            box = _vector(self.box, "extrapolation.box", None)
             if min(box) <= 0.0:
                 raise ValueError(f"extrapolation.box: half-widths must be > 0, got {list(box)}")
         object.__setattr__(self, "box", box)
@@ -857,9 +893,9 @@ class ExtrapolationConfig:
                     f"got {self.points}"
                 )
 
-    def box_vector(self) -> np.ndarray:
-        """The half-widths as a (4,) array."""
-        return np.broadcast_to(np.array(self.box, dtype=float), (4,)).copy()
+    def box_vector(self, joints: int = 2) -> np.ndarray:
+        """The half-widths as a (2 joints,) array."""
+        return np.broadcast_to(np.array(self.box, dtype=float), (2 * joints,)).copy()
 
 
 @dataclass(frozen=True)
@@ -974,8 +1010,17 @@ class Config:
                 raise TypeError(
                     f"{name}: expected {cls.__name__}, got {type(getattr(self, name)).__name__}"
                 )
+        self._fit_to_arm()
         model = self.model.resolve(self.plant)
         _check_arm(model["p1"], model["p2"], model["p3"], "model")
+        size = BASIS_SIZES[self.controller.basis]
+        for key in ("critic_weights", "actor_weights"):
+            value = getattr(self.init, key)
+            if value is not None and len(value) != size:
+                raise ValueError(
+                    f"init.{key}: expected shape ({size},), one weight per function of "
+                    f"controller.basis = {self.controller.basis!r}, got ({len(value)},)"
+                )
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
                 f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
@@ -1026,6 +1071,35 @@ class Config:
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
 
+    def _fit_to_arm(self) -> None:
+        """Sized settings follow the arm's joint count n: for n != 2, a setting left at the
+        two-link default takes the n-joint default (_joint_defaults); then every size is checked
+        against n, naming the field and the expected shape."""
+        n = self.dof
+        if n != 2:
+            for (section, key), value in _joint_defaults(n).items():
+                current = getattr(self, section)
+                if getattr(current, key) == getattr(_SECTIONS[section](), key):
+                    object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+        _check_sizes(self, n)
+
+    @property
+    def dof(self) -> int:
+        """The joint count n of the plant: 2 for the built-in two-link arm (the only arm this
+        configuration describes so far; a URDF arm will give its own n)."""
+        return 2
+
+    def initial_weights(self, key: str = "critic_weights") -> np.ndarray:
+        """init.critic_weights (or ``key = "actor_weights"``), or the basis' default when left
+        out (InitConfig)."""
+        value = getattr(self.init, key)
+        if value is not None:
+            return np.array(value, dtype=float)
+        if self.controller.basis == "structured":
+            p = self.model.resolve(self.plant)
+            return np.array([1.0, 0.0, 1.0, p["p1"], p["p2"], p["p3"]])
+        return np.ones(BASIS_SIZES[self.controller.basis])
+
     @property
     def resolved_epsilon_T(self) -> float:
         """critic.epsilon_T, or its default for this run when left out: 1e-6 when learning from
@@ -1044,6 +1118,68 @@ class Config:
         """A copy with ``changes`` (``{section: {key: value}}``) applied, e.g.
         ``config.updated({"critic": {"eta_c": 100}})``."""
         return Config.from_dict(changes, base=self)
+
+
+def _joint_defaults(n: int) -> dict[tuple[str, str], Any]:
+    """The defaults of the sized settings for an arm of n != 2 joints (the two-link arm keeps the
+    paper's): tau_d amplitudes 0.1 and q0 = 0.1 rad on every joint, dq0 = 0, qd = 0; K = I,
+    alpha1 = 2 I, R = I and Q = [[K alpha1 + alpha1^T K, -K], [-K, R^-1]] = [[4 I, -I], [-I, I]]
+    (the ERRATA conditions: V* = e1^T e1 + e2^T M(q) e2 is exact); probe amplitude 1 N m on every
+    joint and sinusoid."""
+    eye = np.eye(n)
+    Q = np.block([[4.0 * eye, -eye], [-eye, eye]])
+    return {
+        ("plant", "disturbance"): (0.1,) * n,
+        ("task", "q0"): (0.1,) * n,
+        ("task", "dq0"): (0.0,) * n,
+        ("task", "qd"): (0.0,) * n,
+        ("cost", "Q"): tuple(map(tuple, Q)),
+        ("cost", "R"): tuple(map(tuple, eye)),
+        ("control", "alpha1"): tuple(map(tuple, 2.0 * eye)),
+        ("probe", "amplitude"): 1.0,
+    }
+
+
+def _check_shape(value: Any, name: str, shape: tuple[int, ...], n: int) -> None:
+    actual = np.shape(value)
+    if actual != shape:
+        raise ValueError(
+            f"{name}: expected shape {_shape_text(shape)}, got {_shape_text(actual)} "
+            f"(the arm has n = {n} joints)"
+        )
+
+
+def _check_sizes(config: Config, n: int) -> None:
+    """Every sized setting against the joint count n (ValueError naming the field)."""
+    _check_shape(config.plant.disturbance, "plant.disturbance", (n,), n)
+    _check_shape(config.task.q0, "task.q0", (n,), n)
+    _check_shape(config.task.dq0, "task.dq0", (n,), n)
+    qd = config.task.qd
+    if isinstance(qd, SinusoidTrajectory):
+        k = len(qd.amplitude[0])
+        _check_shape(qd.offset, "task.qd.offset", (n,), n)
+        for key in ("amplitude", "frequency", "phase"):
+            _check_shape(getattr(qd, key), f"task.qd.{key}", (n, k), n)
+    elif isinstance(qd, SampledTrajectory):
+        _check_shape(qd.q, "task.qd.q", (len(qd.t), n), n)
+    else:
+        _check_shape(qd, "task.qd", (n,), n)
+    _check_shape(config.cost.Q, "cost.Q", (2 * n, 2 * n), n)
+    _check_shape(config.cost.R, "cost.R", (n, n), n)
+    _check_shape(config.control.alpha1, "control.alpha1", (n, n), n)
+    k = len(config.probe.frequencies)
+    amplitude = config.probe.amplitude
+    if not isinstance(amplitude, float):
+        shape = (n, k) if np.ndim(amplitude) == 2 else (n,)
+        _check_shape(amplitude, "probe.amplitude", shape, n)
+    if config.probe.phases is not None:
+        _check_shape(config.probe.phases, "probe.phases", (n, k), n)
+    for key in ("kp", "kd"):
+        gain = getattr(config.controller, key)
+        if not isinstance(gain, float):
+            _check_shape(gain, f"controller.{key}", (n, n), n)
+    if not isinstance(config.extrapolation.box, float):
+        _check_shape(config.extrapolation.box, "extrapolation.box", (2 * n,), n)
 
 
 def _plain(value: Any) -> Any:

@@ -12,6 +12,10 @@ from .simulation import core_settings, desired_state
 
 __all__ = [
     "BASIS_NAMES",
+    "STRUCTURED_BASIS_NAMES",
+    "arm_terms",
+    "basis",
+    "basis_names",
     "hjb_residual",
     "initial_error_state",
     "optimal_value",
@@ -32,15 +36,100 @@ BASIS_NAMES = (
     "x3 x4 cos x2",
 )
 
+#: The structured basis of the two-link arm, x = [e1; e2], q = qd - e1, M(q) = p1 M1 + p2 M2 +
+#: p3 M3 with M1 = [[1, 0], [0, 0]], M2 = [[0, 1], [1, 1]], M3 = [[2 cos q2, cos q2], [cos q2, 0]].
+STRUCTURED_BASIS_NAMES = (
+    "x1^2",
+    "x1 x2",
+    "x2^2",
+    "e2^T M1 e2",
+    "e2^T M2 e2",
+    "e2^T M3(q) e2",
+)
+
+
+def _check_config(config: Any) -> None:
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+
+
+def basis_names(config: Config) -> tuple[str, ...]:
+    """The names of the functions of ``config.controller.basis``, in the order of the weights."""
+    _check_config(config)
+    return STRUCTURED_BASIS_NAMES if config.controller.basis == "structured" else BASIS_NAMES
+
+
+def _states(x: Any, size: int, name: str = "x") -> np.ndarray:
+    try:
+        states = np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise TypeError(f"{name}: expected an array of shape (..., {size}), got {x!r}") from error
+    if states.ndim == 0 or states.shape[-1] != size:
+        raise ValueError(f"{name}: expected shape (..., {size}), got {states.shape}")
+    if not np.all(np.isfinite(states)):
+        raise ValueError(f"{name}: must be finite")
+    return states
+
+
+def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """The basis of ``config.controller.basis`` and its exact Jacobian at error states x of shape
+    (..., 2n) (n = 2 joints): phi (..., K) and d phi / dx (..., K, 2n), computed by the C++ core.
+    ``qd`` is the desired position (n,) or (..., n) the basis may depend on (augmented and
+    structured bases: through q = qd - e1); default the config's qd at t = 0."""
+    _check_config(config)
+    n = config.dof
+    states = _states(x, 2 * n)
+    desired = desired_state(config, 0.0)[0] if qd is None else _states(qd, n, "qd")
+    desired = np.broadcast_to(desired, states.shape[:-1] + (n,))
+    kind = getattr(_core.BasisKind, config.controller.basis)
+    rows = states.reshape(-1, 2 * n)
+    desired_rows = desired.reshape(-1, n)
+    size = len(basis_names(config))
+    phi = np.empty((rows.shape[0], size))
+    jacobian = np.empty((rows.shape[0], size, 2 * n))
+    for i, (row, qd_row) in enumerate(zip(rows, desired_rows, strict=True)):
+        p, j, _ = _core.basis(kind, row, qd_row, np.zeros(n))
+        phi[i], jacobian[i] = p, j
+    return (
+        phi.reshape(states.shape[:-1] + (size,)),
+        jacobian.reshape(states.shape[:-1] + (size, 2 * n)),
+    )
+
+
+def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[str, np.ndarray]:
+    """The terms of eq. (1) of the plant (``model=True``: the arm the controller believes) at
+    joint position q and velocity dq (n,): {"M": (n, n) inertia, "C": (n, n) Coriolis matrix with
+    dM/dt - 2C skew-symmetric, "G": (n,) gravity, "F": (n,) friction}."""
+    _check_config(config)
+    n = config.dof
+    q_array, dq_array = _states(q, n, "q"), _states(dq, n, "dq")
+    if q_array.shape != (n,) or dq_array.shape != (n,):
+        raise ValueError(
+            f"q, dq: expected shape ({n},) each, got {q_array.shape}, {dq_array.shape}"
+        )
+    parameters = _core.ArmParameters()
+    values = (
+        config.model.resolve(config.plant)
+        if model
+        else {
+            key: getattr(config.plant, key)
+            for key in ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+        }
+    )
+    for key, value in values.items():
+        setattr(parameters, key, value)
+    terms = _core.arm_terms(parameters, q_array, dq_array)
+    return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
+
 
 def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
-    """The exact weights W* of V*(x) = x^T blockdiag(K, M(q)) x in the paper's basis.
+    """The exact weights W* of V*(x) = x^T blockdiag(K, M(q)) x in the config's basis.
 
     They exist when K = -Q12 is symmetric positive definite, Q11 = K alpha1 + alpha1^T K and
     Q22 = s^2 R^-1 for some s > 0 (to relative tolerance rtol), for any desired trajectory with
-    the augmented basis and for a set-point with qd2 = 0 with the paper's basis (cos x2 = cos q2
-    there). Then V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2; s = 1 is the case of the
-    paper's corrected example.
+    the augmented and structured bases and for a set-point with qd2 = 0 with the paper's basis
+    (cos x2 = cos q2 there). Then V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2; s = 1 is
+    the case of the paper's corrected example.
 
     Parameters
     ----------
@@ -52,9 +141,10 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (8,)
-        W* = [K11, K22, 2 K12, s p1, 2 s p3, s p2, 2 s p2, 2 s p3], in the order of
-        ``BASIS_NAMES``; for the paper's example [4, 6, -8, 5, 2, 1, 2, 2].
+    ndarray, shape (8,) or (6,)
+        In the order of ``adparm.basis_names(config)``: W* = [K11, K22, 2 K12, s p1, 2 s p3,
+        s p2, 2 s p2, 2 s p3] for the paper and augmented bases (the paper's example:
+        [4, 6, -8, 5, 2, 1, 2, 2]), [K11, 2 K12, K22, s p1, s p2, s p3] for the structured basis.
 
     Raises
     ------
@@ -103,6 +193,8 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             "(controller.basis = 'augmented' represents it for any qd)"
         )
     p = config.model.resolve(config.plant)
+    if config.controller.basis == "structured":
+        return np.array([K[0, 0], 2.0 * K[0, 1], K[1, 1], p["p1"], p["p2"], p["p3"]])
     return np.array(
         [
             K[0, 0],
@@ -134,23 +226,23 @@ def value_scale(config: Config, *, rtol: float = 1e-9) -> float | None:
 def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
     """The state weight Q for which V* = e1^T K e1 + s e2^T M(q) e2 is the exact HJB solution.
 
-    Use it with ``cost.R = R`` and ``control.alpha1 = alpha1`` to make an instance whose W* is
-    known.
+    For an n-joint arm (n = 2 for the two-link arm). Use it with ``cost.R = R`` and
+    ``control.alpha1 = alpha1`` to make an instance whose W* is known.
 
     Parameters
     ----------
-    K : array_like, shape (2, 2)
+    K : array_like, shape (n, n)
         Symmetric positive definite: the e1 block of V*.
-    alpha1 : array_like, shape (2, 2)
+    alpha1 : array_like, shape (n, n)
         The gain in e2 = de1 + alpha1 e1.
-    R : array_like, shape (2, 2)
+    R : array_like, shape (n, n)
         The input weight.
     s : float, optional
         The scale of the e2 block (s = 1: the paper's corrected example).
 
     Returns
     -------
-    ndarray, shape (4, 4)
+    ndarray, shape (2n, 2n)
         Q with Q11 = K alpha1 + alpha1^T K, Q12 = Q21 = -K, Q22 = s^2 R^-1.
 
     Raises
@@ -164,9 +256,13 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
     if not (np.isfinite(s) and s > 0.0):
         raise ValueError(f"s: expected a finite number > 0, got {s!r}")
     K, alpha1, R = (np.asarray(v, dtype=float) for v in (K, alpha1, R))
+    n = K.shape[0] if K.ndim == 2 else 0
     for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
-        if value.shape != (2, 2) or not np.all(np.isfinite(value)):
-            raise ValueError(f"{name}: expected a finite 2 x 2 matrix, got {value.tolist()}")
+        if n < 1 or value.shape != (n, n) or not np.all(np.isfinite(value)):
+            raise ValueError(
+                f"{name}: expected a finite n x n matrix (n = {n or 'the size of K'}), "
+                f"got {value.tolist()}"
+            )
     if not np.allclose(K, K.T) or np.linalg.eigvalsh(K).min() <= 0.0:
         raise ValueError(f"K: must be symmetric positive definite, got {K.tolist()}")
     Q = np.block([[K @ alpha1 + alpha1.T @ K, -K], [-K, s**2 * np.linalg.inv(R)]])
@@ -179,13 +275,13 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
     return Q
 
 
-def _weights(value: Any, name: str) -> np.ndarray:
+def _weights(value: Any, name: str, size: int = 8) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
-        raise TypeError(f"{name}: expected an array of 8 numbers, got {value!r}") from error
-    if array.shape != (8,):
-        raise ValueError(f"{name}: expected shape (8,), got {array.shape}")
+        raise TypeError(f"{name}: expected an array of {size} numbers, got {value!r}") from error
+    if array.shape != (size,):
+        raise ValueError(f"{name}: expected shape ({size},), got {array.shape}")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name}: must be finite")
     return array
@@ -230,11 +326,12 @@ def hjb_residual(
         raise ValueError(f"x: expected shape (..., 4), got {states.shape}")
     if not np.all(np.isfinite(states)):
         raise ValueError("x: must be finite")
+    size = len(basis_names(config))
     residual = _core.hjb_residual(
         residual_settings(config),
         np.ascontiguousarray(states.reshape(-1, 4)),
-        _weights(critic_weights, "critic_weights"),
-        _weights(actor_weights, "actor_weights"),
+        _weights(critic_weights, "critic_weights", size),
+        _weights(actor_weights, "actor_weights", size),
         float(t),
     )
     if states.ndim == 1:
@@ -284,5 +381,6 @@ def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
     if states.shape != (4,) or not np.all(np.isfinite(states)):
         raise ValueError(f"x: expected 4 finite numbers, got {x!r}")
     qd = desired_state(config, t)[0]
-    phi, _, _ = _core.basis(_core.BasisKind.augmented, states, qd, np.zeros(2))
+    kind = "structured" if config.controller.basis == "structured" else "augmented"
+    phi, _, _ = _core.basis(getattr(_core.BasisKind, kind), states, qd, np.zeros(2))
     return float(weights @ np.asarray(phi))

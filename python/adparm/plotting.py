@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .optimal import BASIS_NAMES, optimal_weights
+from .optimal import basis_names, optimal_weights
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -122,6 +122,9 @@ def _known_optimum(result: SimulationResult) -> np.ndarray | None:
 
 
 def _tex(name: str) -> str:
+    if name.startswith("e2^T M"):  # structured basis: e2^T M_k(q) e2
+        k = name[len("e2^T M")]
+        return rf"e_2^T M_{k}{'(q)' if '(q)' in name else ''}\, e_2"
     return name.replace("cos x2", r"\cos x_2").replace("x", "x_").replace("x__", "x_")
 
 
@@ -182,13 +185,13 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
         t = result.t
         every = max(1, t.size // 12)
         # stagger the markers of lines that end together (equal W*) so that each one shows
-        values = target if target is not None else np.arange(len(BASIS_NAMES), dtype=float)
+        values = target if target is not None else np.arange(weights.shape[1], dtype=float)
         offsets = []
         for i, value in enumerate(values):
             equal = np.flatnonzero(values == value)
             rank = int(np.flatnonzero(equal == i)[0])
             offsets.append(min(rank * every // len(equal), max(t.size - 1, 0)))
-        for i, name in enumerate(BASIS_NAMES):
+        for i, name in enumerate(basis_names(result.config)):
             label = f"${_tex(name)}$"
             if target is not None:
                 label += f"  (W* = {target[i]:g})"

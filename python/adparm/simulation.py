@@ -90,26 +90,26 @@ def core_settings(config: Config) -> _core.Settings:
     controller = _core.ControllerSettings()
     controller.kind = getattr(_core.ControllerKind, config.controller.kind)
     controller.rise = config.controller.rise
-    controller.kp = config.controller.gain_matrix("kp")
-    controller.kd = config.controller.gain_matrix("kd")
+    controller.kp = config.controller.gain_matrix("kp", config.dof)
+    controller.kd = config.controller.gain_matrix("kd", config.dof)
     settings.controller = controller
     settings.basis = getattr(_core.BasisKind, config.controller.basis)
     extrapolation = _core.ExtrapolationSettings()
     extrapolation.points = config.extrapolation.points
-    extrapolation.box = config.extrapolation.box_vector()
+    extrapolation.box = config.extrapolation.box_vector(config.dof)
     extrapolation.mode = getattr(_core.ExtrapolationMode, config.extrapolation.mode)
     extrapolation.seed = config.extrapolation.seed
     settings.extrapolation = extrapolation
 
-    settings.critic_weights = np.array(config.init.critic_weights)
-    settings.actor_weights = np.array(config.init.actor_weights)
+    settings.critic_weights = config.initial_weights("critic_weights")
+    settings.actor_weights = config.initial_weights("actor_weights")
 
     probe = _core.ProbeSettings()
-    probe.amplitude = config.probe.amplitude_matrix()
+    probe.amplitude = config.probe.amplitude_matrix(config.dof)
     probe.until = config.probe.until
     probe.ramp = config.probe.ramp
     probe.frequencies = np.array(config.probe.frequencies)
-    probe.phases = config.probe.phase_matrix()
+    probe.phases = config.probe.phase_matrix(config.dof)
     settings.probe = probe
 
     sim = _core.SimSettings()
@@ -195,8 +195,9 @@ class SimulationResult:
         The RISE term (eq. 27).
     probe : ndarray, shape (n, 2)
         The probing signal.
-    critic_weights, actor_weights : ndarray, shape (n, 8)
-        Wc and Wa, in the order of ``adparm.BASIS_NAMES``.
+    critic_weights, actor_weights : ndarray, shape (n, K)
+        Wc and Wa, in the order of ``adparm.basis_names(config)`` (K = 8, or 6 for the
+        structured basis).
     hjb_error : ndarray, shape (n,)
         The HJB error of eq. (21).
     cost : ndarray, shape (n,)
@@ -238,7 +239,8 @@ class SimulationResult:
             raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
         shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
         shapes.update({name: (n, 2) for name in _ARRAYS_2})
-        shapes.update({name: (n, 8) for name in _ARRAYS_N})
+        size = len(self.config.initial_weights()) if isinstance(self.config, Config) else 8
+        shapes.update({name: (n, size) for name in _ARRAYS_N})
         for name, shape in shapes.items():
             array = _read_only_float(getattr(self, name))
             if array.shape != shape:
@@ -315,7 +317,7 @@ class SimulationResult:
             raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
         from .storage import columns, table
 
-        return pandas.DataFrame(table(self), columns=columns())
+        return pandas.DataFrame(table(self), columns=columns(self.critic_weights.shape[1]))
 
     @functools.cached_property
     def diagnostics(self) -> dict[str, Any]:
@@ -487,7 +489,7 @@ def _recording_bytes(config: Config) -> int:
     """Bytes of one copy of the recording of ``config`` (all its rows)."""
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
-    width = _ROW_VALUES + len(config.init.critic_weights) + len(config.init.actor_weights)
+    width = _ROW_VALUES + 2 * len(config.initial_weights())
     return 8 * rows * width
 
 

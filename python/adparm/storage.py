@@ -20,7 +20,7 @@ __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
 
 FORMAT_VERSION = 2
 
-# (result attribute, column names); weights in the order of adparm.BASIS_NAMES.
+# (result attribute, column names); weights in the order of adparm.basis_names(config).
 _COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("t", ("t",)),
     ("q", ("q1", "q2")),
@@ -33,23 +33,34 @@ _COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("u_hat", ("u_hat1", "u_hat2")),
     ("mu", ("mu1", "mu2")),
     ("probe", ("probe1", "probe2")),
-    ("critic_weights", tuple(f"Wc{i}" for i in range(1, 9))),
-    ("actor_weights", tuple(f"Wa{i}" for i in range(1, 9))),
+    ("critic_weights", ("Wc",)),  # Wc1 ... WcK, K the basis size
+    ("actor_weights", ("Wa",)),
     ("hjb_error", ("hjb_error",)),
     ("cost", ("cost",)),
 )
 
 
-def columns() -> list[str]:
-    """Column names of :func:`table`, the CSV file and ``to_dataframe()``."""
-    return [name for _, names in _COLUMNS for name in names]
+def _columns(basis_size: int) -> list[tuple[str, tuple[str, ...]]]:
+    return [
+        (attr, tuple(f"{names[0]}{i}" for i in range(1, basis_size + 1)))
+        if attr in ("critic_weights", "actor_weights")
+        else (attr, names)
+        for attr, names in _COLUMNS
+    ]
+
+
+def columns(basis_size: int = 8) -> list[str]:
+    """Column names of :func:`table`, the CSV file and ``to_dataframe()`` for a basis of
+    ``basis_size`` functions (8; 6 for the structured basis)."""
+    return [name for _, names in _columns(basis_size) for name in names]
 
 
 def table(result: SimulationResult) -> np.ndarray:
-    """The recorded time series as one (rows, len(columns())) array."""
+    """The recorded time series as one (rows, len(columns(K))) array."""
     n = result.t.size
+    size = result.critic_weights.shape[1]
     return np.hstack(
-        [np.asarray(getattr(result, attr)).reshape(n, len(names)) for attr, names in _COLUMNS]
+        [np.asarray(getattr(result, attr)).reshape(n, len(names)) for attr, names in _columns(size)]
     )
 
 
@@ -74,14 +85,15 @@ def _metadata(result: SimulationResult) -> dict[str, Any]:
 def _write_csv(result: SimulationResult, path: Path) -> None:
     with open(path, "w", encoding="utf-8", newline="\n") as stream:
         stream.write(CSV_PREFIX + json.dumps(_metadata(result)) + "\n")
-        stream.write(",".join(columns()) + "\n")
+        size = result.critic_weights.shape[1]
+        stream.write(",".join(columns(size)) + "\n")
         n = result.t.size
         for start in range(0, n, _CSV_ROWS):
             stop = min(n, start + _CSV_ROWS)
             block = np.hstack(
                 [
                     np.asarray(getattr(result, attr))[start:stop].reshape(stop - start, len(names))
-                    for attr, names in _COLUMNS
+                    for attr, names in _columns(size)
                 ]
             )
             np.savetxt(stream, block, delimiter=",", fmt="%.18e")
@@ -135,7 +147,8 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
                 raise _corrupt(path, f"the first line does not start with {CSV_PREFIX.strip()!r}")
             meta = json.loads(first[len(CSV_PREFIX) :])
             header = stream.readline().strip().split(",")
-            if header != columns():
+            size = sum(1 for name in header if name.startswith("Wc"))  # the basis size
+            if header != columns(size):
                 raise _corrupt(path, "the header line does not name adparm's columns")
             lines = stream.read().splitlines()
             if not lines or lines[-1] != f"{CSV_END}{len(lines) - 1} rows":
@@ -149,13 +162,14 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         raise _corrupt(path, str(error)) from None
     if not isinstance(meta, dict):
         raise _corrupt(path, "the first line holds no JSON object")
+    width = len(columns(size))
     if data.size == 0:
-        data = np.zeros((0, len(columns())))
-    if data.shape[1] != len(columns()):
-        raise _corrupt(path, f"expected {len(columns())} columns, got {data.shape[1]}")
+        data = np.zeros((0, width))
+    if data.shape[1] != width:
+        raise _corrupt(path, f"expected {width} columns, got {data.shape[1]}")
     fields: dict[str, Any] = {}
     start = 0
-    for attr, names in _COLUMNS:
+    for attr, names in _columns(size):
         block = data[:, start : start + len(names)]
         fields[attr] = block[:, 0] if attr in ("t", "hjb_error", "cost") else block
         start += len(names)

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .optimal import BASIS_NAMES, optimal_weights
+from .optimal import basis_names, optimal_weights
 
 if TYPE_CHECKING:  # pragma: no cover
     from .config import Config
@@ -78,7 +78,8 @@ _REASONS: dict[str, str] = {
     "control.beta1": "Not printed; beta1 = 0.5 > zeta1 + zeta2 / alpha2 = 0.2 (condition 29).",
     "init": (
         "Not printed; all ones. Zero weights are inadmissible: the critic diverges "
-        "within milliseconds."
+        "within milliseconds. The structured basis starts from K = I and the believed model's "
+        "inertia."
     ),
     "task.dq0": "Not printed; the arm starts at rest.",
     "actor.weight_bound": "Not printed; the projection keeps ||Wa|| <= 100 (about 8 ||W*||).",
@@ -102,10 +103,15 @@ _REASONS: dict[str, str] = {
 def _flatten(config: Config) -> dict[str, Any]:
     flat = {}
     for section, values in config.to_dict().items():
+        if section == "init":  # the basis' default when left out
+            values = {key: config.initial_weights(key).tolist() for key in values or _INIT_KEYS}
         for key, value in values.items():
             flat[f"{section}.{key}"] = value
     flat["critic.epsilon_T"] = config.resolved_epsilon_T
     return flat
+
+
+_INIT_KEYS = ("critic_weights", "actor_weights")
 
 
 def _same(printed: Any, value: Any) -> bool:
@@ -207,7 +213,7 @@ def summarize(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str,
     out: dict[str, Any] = {
         "status": result.status,
         "t_end": _number(t[-1]) if t.size else None,
-        "basis": list(BASIS_NAMES),
+        "basis": list(basis_names(result.config)),
         "critic_weights": result.critic_weights[-1].tolist() if t.size else None,
         "actor_weights": result.actor_weights[-1].tolist() if t.size else None,
         "optimal_weights": None if target is None else target.tolist(),

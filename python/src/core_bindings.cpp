@@ -49,7 +49,8 @@ void bind_settings(py::module_& m) {
       .def_readwrite("positive_e2", &ActorSettings::positive_e2)
       .def_readwrite("e2_margin", &ActorSettings::e2_margin);
   py::class_<ProbeSettings>(m, "ProbeSettings",
-                            "amplitude (2, n), until, ramp, frequencies (n,), phases (2, n).")
+                            "amplitude (n, k), until, ramp, frequencies (k,), phases (n, k) for n "
+                            "joints and k sinusoids.")
       .def(py::init<>())
       .def_readwrite("amplitude", &ProbeSettings::amplitude)
       .def_readwrite("until", &ProbeSettings::until)
@@ -61,8 +62,8 @@ void bind_settings(py::module_& m) {
       .value("sinusoid", TrajectoryKind::sinusoid)
       .value("spline", TrajectoryKind::spline);
   py::class_<TrajectorySettings>(m, "TrajectorySettings",
-                                 "kind, offset (2,); sinusoid: amplitude, frequency, phase (2, n); "
-                                 "spline: breaks (n + 1,), coefficients (n, 8).")
+                                 "kind, offset (n,); sinusoid: amplitude, frequency, phase (n, k); "
+                                 "spline: breaks (m + 1,), coefficients (m, 4 n).")
       .def(py::init<>())
       .def_readwrite("kind", &TrajectorySettings::kind)
       .def_readwrite("offset", &TrajectorySettings::offset)
@@ -71,12 +72,12 @@ void bind_settings(py::module_& m) {
       .def_readwrite("phase", &TrajectorySettings::phase)
       .def_readwrite("breaks", &TrajectorySettings::breaks)
       .def_readwrite("coefficients", &TrajectorySettings::coefficients);
-  py::class_<TaskSettings>(m, "TaskSettings", "q0 (2,), dq0 (2,), qd (TrajectorySettings).")
+  py::class_<TaskSettings>(m, "TaskSettings", "q0 (n,), dq0 (n,), qd (TrajectorySettings).")
       .def(py::init<>())
       .def_readwrite("q0", &TaskSettings::q0)
       .def_readwrite("dq0", &TaskSettings::dq0)
       .def_readwrite("qd", &TaskSettings::qd);
-  py::class_<ControlSettings>(m, "ControlSettings", "alpha1 (2, 2) and the RISE gains.")
+  py::class_<ControlSettings>(m, "ControlSettings", "alpha1 (n, n) and the RISE gains.")
       .def(py::init<>())
       .def_readwrite("alpha1", &ControlSettings::alpha1)
       .def_readwrite("rise", &ControlSettings::rise);
@@ -85,7 +86,7 @@ void bind_settings(py::module_& m) {
       .value("rise", ControllerKind::rise)
       .value("pd", ControllerKind::pd)
       .value("optimal", ControllerKind::optimal);
-  py::class_<ControllerSettings>(m, "ControllerSettings", "kind, rise, kp (2, 2), kd (2, 2).")
+  py::class_<ControllerSettings>(m, "ControllerSettings", "kind, rise, kp (n, n), kd (n, n).")
       .def(py::init<>())
       .def_readwrite("kind", &ControllerSettings::kind)
       .def_readwrite("rise", &ControllerSettings::rise)
@@ -93,12 +94,13 @@ void bind_settings(py::module_& m) {
       .def_readwrite("kd", &ControllerSettings::kd);
   py::enum_<BasisKind>(m, "BasisKind")
       .value("paper", BasisKind::paper)
-      .value("augmented", BasisKind::augmented);
+      .value("augmented", BasisKind::augmented)
+      .value("structured", BasisKind::structured);
   py::enum_<ExtrapolationMode>(m, "ExtrapolationMode")
       .value("fixed", ExtrapolationMode::fixed)
       .value("grid", ExtrapolationMode::grid)
       .value("local", ExtrapolationMode::local);
-  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings", "points, box (4,), mode, seed.")
+  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings", "points, box (2 n,), mode, seed.")
       .def(py::init<>())
       .def_readwrite("points", &ExtrapolationSettings::points)
       .def_readwrite("box", &ExtrapolationSettings::box)
@@ -112,8 +114,10 @@ void bind_settings(py::module_& m) {
       .def_readwrite("divergence_bound", &SimSettings::divergence_bound);
   py::class_<Settings>(m, "Settings",
                        "All settings of one run. Eigen members are copied on access: assign them "
-                       "whole. Q (4, 4), R (2, 2), disturbance (2,), critic_weights and "
-                       "actor_weights (8,).")
+                       "whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and "
+                       "actor_weights (K,); n = 2 joints for the two-link arm, K the basis size. "
+                       "dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) "
+                       "loop.")
       .def(py::init<>())
       .def_readwrite("plant", &Settings::plant)
       .def_readwrite("model", &Settings::model)
@@ -126,6 +130,7 @@ void bind_settings(py::module_& m) {
       .def_readwrite("actor", &Settings::actor)
       .def_readwrite("controller", &Settings::controller)
       .def_readwrite("basis", &Settings::basis)
+      .def_readwrite("dynamic_sizes", &Settings::dynamic_sizes)
       .def_readwrite("extrapolation", &Settings::extrapolation)
       .def_readwrite("critic_weights", &Settings::critic_weights)
       .def_readwrite("actor_weights", &Settings::actor_weights)
@@ -169,16 +174,19 @@ void bind_trajectory(py::module_& m) {
       "desired_state",
       [](const TrajectorySettings& settings, const Eigen::VectorXd& times) {
         check_finite(times, "t");
-        const Trajectory trajectory(settings);
-        Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> out(times.size(), 6);
+        const TrajectoryT<Dynamic> trajectory(settings, settings.offset.size());
+        const Eigen::Index n = trajectory.dof();
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(times.size(),
+                                                                                   3 * n);
         for (Eigen::Index i = 0; i < times.size(); ++i) {
-          const DesiredState d = trajectory(times[i]);
+          const auto d = trajectory(times[i]);
           out.row(i) << d.q.transpose(), d.dq.transpose(), d.ddq.transpose();
         }
         return out;
       },
       py::arg("trajectory"), py::arg("t"),
-      "The desired state at times t (n,): rows [qd1, qd2, dqd1, dqd2, ddqd1, ddqd2] (n, 6).");
+      "The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)] "
+      "(m, 3 n).");
 }
 
 void bind_basis(py::module_& m) {
@@ -198,8 +206,8 @@ void bind_basis(py::module_& m) {
         });
       },
       py::arg("kind"), py::arg("x"), py::arg("qd"), py::arg("dqd"),
-      "A basis at x (4,) and desired qd, dqd (2,): phi (8,), d phi / dx (8, 4) and "
-      "(d phi / d qd) dqd (8,).");
+      "A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4) and "
+      "(d phi / d qd) dqd (K,).");
 }
 
 void bind_hjb(py::module_& m) {
@@ -207,29 +215,29 @@ void bind_hjb(py::module_& m) {
       "hjb_residual",
       [](const Settings& settings, const RowsX4& states, const Eigen::VectorXd& critic_weights,
          const Eigen::VectorXd& actor_weights, double t) {
-        check_size(critic_weights, 8, 1, "critic_weights");
-        check_size(actor_weights, 8, 1, "actor_weights");
         check_finite(critic_weights, "critic_weights");
         check_finite(actor_weights, "actor_weights");
         check_finite(states, "x");
         check_finite(t, "t");
         return with_basis(settings.basis, [&](auto basis) {
           using Basis = decltype(basis);
+          check_size(critic_weights, Basis::kSize, 1, "critic_weights");
+          check_size(actor_weights, Basis::kSize, 1, "actor_weights");
           const ClosedLoop<TwoLinkArm, Basis> loop(settings);
           const typename Basis::Vector wc = critic_weights, wa = actor_weights;
           const DesiredState desired = loop.trajectory()(t);
           Eigen::VectorXd residual(states.rows());
           py::gil_scoped_release release;
           for (Eigen::Index i = 0; i < states.rows(); ++i)
-            residual[i] = hjb_error<Basis>(loop.error_system(), loop.cost(),
-                                           states.row(i).transpose(), desired, wc, wa);
+            residual[i] = hjb_error(loop.basis(), loop.error_system(), loop.cost(),
+                                    Vec4(states.row(i).transpose()), desired, wc, wa);
           return residual;
         });
       },
       py::arg("settings"), py::arg("x"), py::arg("critic_weights"), py::arg("actor_weights"),
       py::arg("t"),
-      "HJB error of eq. (21) at each row of x (n, 4) for weights (8,), with the desired state at "
-      "time t; returns (n,).");
+      "HJB error of eq. (21) at each row of x (n, 4) for weights (K,) of settings.basis, with the "
+      "desired state at time t; returns (n,).");
 }
 
 void bind_closed_loop(py::module_& m) {
@@ -237,12 +245,12 @@ void bind_closed_loop(py::module_& m) {
   m.def(
       "closed_loop_derivative",
       [](const Settings& settings, double t, const Eigen::VectorXd& state) {
-        check_size(state, PaperClosedLoop::kStateSize, 1, "state");
         check_finite(state, "state");
         check_finite(t, "t");
         return with_basis(settings.basis, [&](auto basis) {
           using Loop = ClosedLoop<TwoLinkArm, decltype(basis)>;
           Loop loop(settings);
+          check_size(state, Loop::kStateSize, 1, "state");
           typename Loop::TimeSignals signals;
           typename Loop::State x = state, rate;
           typename Loop::Outputs outputs;
@@ -263,9 +271,10 @@ void bind_closed_loop(py::module_& m) {
         });
       },
       py::arg("settings"), py::arg("t"), py::arg("state"),
-      "Right-hand side at t of state (87,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major), "
-      "nu (2), J]; local extrapolation points are drawn around this state first. Returns "
-      "(rate (87,), outputs dict).");
+      "Right-hand side at t of state (S,) = [q, dq, Wc (K), Wa (K), Gamma (K^2, column-major), "
+      "nu (2), J] (S = 87 for the 8-function bases, 55 for the structured basis); local "
+      "extrapolation points are drawn around this state first. Returns (rate (S,), outputs "
+      "dict).");
   m.def(
       "initial_state",
       [](const Settings& settings) {
@@ -273,7 +282,7 @@ void bind_closed_loop(py::module_& m) {
           return Eigen::VectorXd(ClosedLoop<TwoLinkArm, decltype(basis)>(settings).initial_state());
         });
       },
-      py::arg("settings"), "The closed loop's initial state (87,).");
+      py::arg("settings"), "The closed loop's initial state (S,).");
   m.def(
       "extrapolation_points",
       [](const Settings& settings) {

@@ -26,9 +26,9 @@ template <class Basis, int Inputs>
 class Actor {
  public:
   using Vector = typename Basis::Vector;
-  using InputGradient = Eigen::Matrix<double, Basis::kSize, Inputs>;
-  using Input = Eigen::Matrix<double, Inputs, 1>;
-  using InputWeight = Eigen::Matrix<double, Inputs, Inputs>;
+  using InputGradient = BasisMatrix<Basis::kSize, Inputs>;  // K x n
+  using Input = JointVector<Inputs>;
+  using InputWeight = JointMatrix<Inputs>;
 
   Actor() = default;
   explicit Actor(const ActorSettings& settings) : settings_(settings) {

@@ -5,7 +5,34 @@
 //   G = [g1 cos q1 + g2 cos(q1 + q2), g2 cos(q1 + q2)]
 //   F = coulomb sign(dq) + viscous dq
 // The paper's instance is p = (5, 1, 1), g1 = 9.8 * 1.2, g2 = 9.8, coulomb = -0.1, viscous = 0.
-// Any other arm model offers the same members (kDof, compute, ...) and the loop takes it unchanged.
+//
+// THE ARM CONCEPT. The loop (closed_loop.hpp) takes any arm type that offers exactly these members:
+//
+//   static constexpr int kDof;       // the joint count n, or Eigen::Dynamic (adparm::Dynamic)
+//   int dof() const;                 // n at run time (== kDof when it is fixed)
+//   struct/using Terms {             // the model terms at one (q, dq):
+//     JointMatrix<kDof> mass;          //   M(q)            n x n, symmetric positive definite
+//     JointMatrix<kDof> mass_inverse;  //   M(q)^-1         n x n
+//     JointMatrix<kDof> coriolis;      //   C(q, dq)        n x n, with dM/dt - 2C skew-symmetric
+//     JointVector<kDof> gravity;       //   G(q)            n
+//     JointVector<kDof> friction;      //   F(dq)           n
+//   };
+//   void init_terms(Terms&) const;   // sizes every member to n (called once per run, may allocate)
+//   void compute(const JointVector<kDof>& q, const JointVector<kDof>& dq, Terms&) const;
+//                                    // fills the terms; called 4 times per RK4 step and per
+//                                    // extrapolation point: it must not allocate
+//   JointVector<kDof> acceleration(const Terms&, const JointVector<kDof>& dq,
+//                                  const JointVector<kDof>& tau,
+//                                  const JointVector<kDof>& tau_d) const;
+//                                    // ddq of eq. (1): M^-1 (tau - C dq - G - F - tau_d)
+//
+// JointVector / JointMatrix come from types.hpp: for kDof = Dynamic they are bounded dynamic types
+// (inline storage for up to kMaxDof joints), so that Terms, and every expression the loop builds
+// from them, never touch the heap. An arm with its own buffers (e.g. a PinocchioArm keeping a
+// pinocchio::Model and a mutable pinocchio::Data behind a pimpl, compute() in a .cpp) copies its
+// results into the Terms members. Two arms of one type are the plant and the model the controller
+// believes; each Arm is constructed once per run, outside the step. Extra members of Terms (like
+// the two-link arm's cos q2) are for bases written for that arm.
 #pragma once
 
 #include <cmath>
@@ -65,6 +92,8 @@ class TwoLinkArm {
   }
 
   const Parameters& parameters() const { return parameters_; }
+  static constexpr int dof() { return kDof; }
+  static void init_terms(Terms&) {}
 
   void compute(const Vec2& q, const Vec2& dq, Terms& terms) const {
     const Parameters& p = parameters_;
@@ -97,12 +126,19 @@ class TwoLinkArm {
   Parameters parameters_{};
 };
 
-// tau_d(t) = [a1 sin t, a2 cos t] (Section 4, with a = (0.1, 0.1)).
-struct SinusoidalDisturbance {
-  Vec2 amplitude = Vec2(0.1, 0.1);
-  Vec2 operator()(double t) const {
-    return Vec2(amplitude[0] * std::sin(t), amplitude[1] * std::cos(t));
+// tau_d(t) = [a1 sin t, a2 cos t] (Section 4, with a = (0.1, 0.1)); for n joints, joint j
+// (from 1) has a_j sin t for odd j and a_j cos t for even j.
+template <int N = 2>
+struct SinusoidalDisturbanceT {
+  JointVector<N> amplitude;
+  JointVector<N> operator()(double t) const {
+    const double s = std::sin(t), c = std::cos(t);
+    JointVector<N> value(amplitude.size());
+    for (Eigen::Index j = 0; j < amplitude.size(); ++j)
+      value[j] = amplitude[j] * (j % 2 == 0 ? s : c);
+    return value;
   }
 };
+using SinusoidalDisturbance = SinusoidalDisturbanceT<2>;
 
 }  // namespace adparm

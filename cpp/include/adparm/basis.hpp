@@ -1,7 +1,8 @@
 // The critic/actor bases phi and their Jacobians (eq. 19). A basis may depend on the desired joint
 // position qd as well as on x = [e1; e2] (an augmented state [x; qd]); it then reports the part of
 // d phi / dt that comes from qd moving, (d phi / d qd) dqd, which the HJB regressor omega needs.
-// A basis offers kSize, kStateDim, Vector, Jacobian and
+// A basis offers kSize (K or Dynamic), kStateDim (2n or Dynamic), int size() const, Vector
+// (BasisVector<kSize>), Jacobian (BasisMatrix<kSize, kStateDim>) and
 //   evaluate(x, desired, phi, jacobian, desired_rate)
 //   evaluate(x, desired, terms, phi, jacobian, desired_rate)
 // and the loop takes it unchanged. The second form also receives the arm model's terms at the
@@ -30,6 +31,7 @@ namespace adparm {
 struct QuadraticArmBasis {
   static constexpr int kSize = 8;
   static constexpr int kStateDim = 4;
+  static constexpr int size() { return kSize; }
   using Vector = Eigen::Matrix<double, kSize, 1>;
   using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;  // d phi / d x
 
@@ -85,7 +87,51 @@ struct AugmentedBasis : QuadraticArmBasis {
   }
 };
 
-enum class BasisKind { paper, augmented };
+// StructuredBasis (two-link arm): the e1 block of V* as monomials and the e2 block as the inertia
+// parameters of M(q) = p1 M1 + p2 M2 + p3 M3 (M1 = [[1, 0], [0, 0]], M2 = [[0, 1], [1, 1]],
+// M3 = [[2 c2, c2], [c2, 0]], c2 = cos q2, q = qd - e1):
+//   phi(x, qd) = [x1^2, x1 x2, x2^2, e2^T M1 e2, e2^T M2 e2, e2^T M3(q) e2]
+//              = [x1^2, x1 x2, x2^2, x3^2, 2 x3 x4 + x4^2, 2 c2 (x3^2 + x3 x4)],
+// so V* = e1^T K e1 + e2^T M(q) e2 has W* = [K11, 2 K12, K22, p1, p2, p3] for any qd(t): the
+// critic learns the arm's inertia parameters. d c2 / d x2 = sin q2 (q2 = qd2 - x2), and
+// d phi / d qd2 = -d phi / d x2 for the last function.
+struct StructuredBasis {
+  static constexpr int kSize = 6;
+  static constexpr int kStateDim = 4;
+  static constexpr int size() { return kSize; }
+  using Vector = Eigen::Matrix<double, kSize, 1>;
+  using Jacobian = Eigen::Matrix<double, kSize, kStateDim>;
+
+  static void evaluate(const Vec4& x, const DesiredState& desired, Vector& phi, Jacobian& jacobian,
+                       Vector& desired_rate) {
+    const double q2 = desired.q[1] - x[1];
+    evaluate(x, desired, std::cos(q2), std::sin(q2), phi, jacobian, desired_rate);
+  }
+  // With the two-link arm's terms at q = qd - e1: their cos q2 and sin q2.
+  template <class Terms>
+  static void evaluate(const Vec4& x, const DesiredState& desired, const Terms& terms, Vector& phi,
+                       Jacobian& jacobian, Vector& desired_rate) {
+    evaluate(x, desired, terms.cos_q2, terms.sin_q2, phi, jacobian, desired_rate);
+  }
+
+ private:
+  static void evaluate(const Vec4& x, const DesiredState& desired, double c, double s, Vector& phi,
+                       Jacobian& jacobian, Vector& desired_rate) {
+    const double x1 = x[0], x2 = x[1], x3 = x[2], x4 = x[3];
+    const double quadratic = x3 * x3 + x3 * x4;  // e2^T M3 e2 / (2 c2)
+    phi << x1 * x1, x1 * x2, x2 * x2, x3 * x3, 2.0 * x3 * x4 + x4 * x4, 2.0 * c * quadratic;
+    jacobian << 2.0 * x1, 0.0, 0.0, 0.0,          //
+        x2, x1, 0.0, 0.0,                         //
+        0.0, 2.0 * x2, 0.0, 0.0,                  //
+        0.0, 0.0, 2.0 * x3, 0.0,                  //
+        0.0, 0.0, 2.0 * x4, 2.0 * x3 + 2.0 * x4,  //
+        0.0, 2.0 * s * quadratic, 2.0 * c * (2.0 * x3 + x4), 2.0 * c * x3;
+    desired_rate.setZero();
+    desired_rate[5] = -2.0 * s * quadratic * desired.dq[1];
+  }
+};
+
+enum class BasisKind { paper, augmented, structured };
 
 // Calls f(Basis{}) with the basis type of `kind` (the binding and the bench pick a basis at run
 // time; each basis is its own compiled loop).
@@ -94,6 +140,8 @@ decltype(auto) with_basis(BasisKind kind, F&& f) {
   switch (kind) {
     case BasisKind::paper:
       return f(PaperBasis{});
+    case BasisKind::structured:
+      return f(StructuredBasis{});
     case BasisKind::augmented:
     default:
       return f(AugmentedBasis{});

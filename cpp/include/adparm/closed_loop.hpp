@@ -1,6 +1,6 @@
 // The closed loop of Figure 1 as one ODE system for RK4 (fixed parameters here, evolving state
 // apart):
-//   state = [q (2), dq (2), Wc (N), Wa (N), Gamma (N x N, column-major), nu (2), J (1)]
+//   state = [q (n), dq (n), Wc (K), Wa (K), Gamma (K x K, column-major), nu (n), J (1)]
 // At each evaluation, with the desired state (qd, dqd, ddqd) of trajectory.hpp and
 // x = [e1; e2] (error_system.hpp):
 //   u_hat  = -1/2 R^-1 g^T (dphi/dx)^T Wa                         (eq. 20)
@@ -14,7 +14,12 @@
 //   ddq    from the plant (eq. 1) with tau and the disturbance tau_d(t)
 //   dJ     = x^T Q x + u^T R u  (the accumulated cost of eq. 10, integrated with the state).
 // The basis and the arm model are template parameters: a new one is a new type, not a new loop.
+// Sizes: n = Arm::kDof joints and K = Basis::kSize functions, each fixed (the two-link fast path,
+// n = 2, K = 8) or Eigen::Dynamic; then the loop's per-step vectors are bounded types (types.hpp),
+// the arm's terms live in buffers sized once (Arm::init_terms), and a step allocates nothing.
 #pragma once
+
+#include <Eigen/Eigenvalues>
 
 #include "adparm/basis.hpp"
 #include "adparm/controller.hpp"
@@ -28,102 +33,149 @@
 
 namespace adparm {
 
+// de1 = -alpha1 e1 + e2 is stable only if every eigenvalue of alpha1 has a positive real part.
+// 2 x 2: trace > 0 and det > 0, judged on alpha1 / max|entry| (no overflow), as in Python; n x n:
+// the eigenvalues of alpha1 / max|entry|.
+inline void check_hurwitz(const Eigen::MatrixXd& alpha1) {
+  const double scale = alpha1.cwiseAbs().maxCoeff();
+  bool hurwitz = scale > 0.0;
+  if (hurwitz) {
+    const Eigen::MatrixXd a = alpha1 / scale;
+    if (a.rows() == 2)
+      hurwitz = a(0, 0) + a(1, 1) > 0.0 && a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0) > 0.0;
+    else
+      hurwitz =
+          (Eigen::EigenSolver<Eigen::MatrixXd>(a, false).eigenvalues().real().array() > 0.0).all();
+  }
+  if (!hurwitz)
+    throw std::invalid_argument(
+        "control.alpha1: every eigenvalue must have a positive real part (-alpha1 Hurwitz)");
+}
+
 template <class Arm, class Basis>
 class ClosedLoop {
  public:
   static constexpr int kDof = Arm::kDof;
   static constexpr int kBasisSize = Basis::kSize;
-  static_assert(Basis::kStateDim == 2 * kDof, "the basis must act on x = [e1; e2]");
-  // Offsets into the state vector.
+  static constexpr bool kFixed = kDof != Dynamic && kBasisSize != Dynamic;
+  static_assert(Basis::kStateDim == twice(kDof), "the basis must act on x = [e1; e2]");
+  // Offsets into the state vector (fixed sizes; the *_offset() functions hold them for any size).
   static constexpr int kQ = 0;
-  static constexpr int kDq = kQ + kDof;
-  static constexpr int kCriticWeights = kDq + kDof;
-  static constexpr int kActorWeights = kCriticWeights + kBasisSize;
-  static constexpr int kGamma = kActorWeights + kBasisSize;
-  static constexpr int kNu = kGamma + kBasisSize * kBasisSize;
-  static constexpr int kCost = kNu + kDof;
-  static constexpr int kStateSize = kCost + 1;
+  static constexpr int kDq = kFixed ? kQ + kDof : Dynamic;
+  static constexpr int kCriticWeights = kFixed ? kDq + kDof : Dynamic;
+  static constexpr int kActorWeights = kFixed ? kCriticWeights + kBasisSize : Dynamic;
+  static constexpr int kGamma = kFixed ? kActorWeights + kBasisSize : Dynamic;
+  static constexpr int kNu = kFixed ? kGamma + kBasisSize * kBasisSize : Dynamic;
+  static constexpr int kCost = kFixed ? kNu + kDof : Dynamic;
+  static constexpr int kStateSize = kFixed ? kCost + 1 : Dynamic;
 
-  using State = Eigen::Matrix<double, kStateSize, 1>;
+  using State = Eigen::Matrix<double, kStateSize, 1>;  // VectorXd for dynamic sizes
+  using Joint = JointVector<kDof>;
+  using Error = ErrorVector<kDof>;
+  using Desired = DesiredStateT<kDof>;
+  using Errors = TrackingErrorsT<kDof>;
   using Weights = typename Basis::Vector;
+  using Terms = typename Arm::Terms;
   using Covariance = typename Critic<Basis>::Covariance;
   using CovarianceMap = Eigen::Map<Covariance>;
   using ConstCovarianceMap = Eigen::Map<const Covariance>;
+  using Point = HjbPoint<Basis, kDof>;
+  using Evaluation = HjbEvaluation<Basis, kDof>;
 
   struct TimeSignals {
-    Vec2 disturbance;      // tau_d(t)
-    Vec2 probe;            // probing signal (zero unless the controller learns)
-    DesiredState desired;  // qd(t), dqd(t), ddqd(t)
+    Joint disturbance;  // tau_d(t)
+    Joint probe;        // probing signal (zero unless the controller learns)
+    Desired desired;    // qd(t), dqd(t), ddqd(t)
   };
 
   struct Outputs {
-    TrackingErrors errors;
-    Vec2 qd;                 // desired position
-    Vec2 tau;                // applied joint torque
-    Vec2 u;                  // applied input of the controller
-    Vec2 u_hat;              // actor's input, eq. (20)
-    Vec2 mu;                 // RISE feedback, eq. (27)
-    Vec2 probe;              // probing signal
+    Errors errors;
+    Joint qd;                // desired position
+    Joint tau;               // applied joint torque
+    Joint u;                 // applied input of the controller
+    Joint u_hat;             // actor's input, eq. (20)
+    Joint mu;                // RISE feedback, eq. (27)
+    Joint probe;             // probing signal
     double hjb_error = 0.0;  // eq. (21)
   };
 
-  explicit ClosedLoop(const Settings& settings)
-      : plant_(settings.plant, "plant"),
-        model_is_plant_(settings.plant == settings.model),
-        error_system_(Arm(settings.model, "model"), settings.control.alpha1),
-        cost_(settings.Q, settings.R),
-        critic_(settings.critic),
+  // The two-link arm (or an arm built from TwoLinkArmParameters) of settings.plant and
+  // settings.model.
+  explicit ClosedLoop(const Settings& settings, const Basis& basis = Basis())
+      : ClosedLoop(settings, Arm(settings.plant, "plant"), Arm(settings.model, "model"),
+                   settings.plant == settings.model, basis) {}
+
+  // Any arm: the plant, the model the controller believes (`model_is_plant`: the same arm, whose
+  // terms are then computed once per evaluation) and the basis.
+  ClosedLoop(const Settings& settings, const Arm& plant, const Arm& model, bool model_is_plant,
+             const Basis& basis = Basis())
+      : plant_(plant),
+        model_is_plant_(model_is_plant),
+        basis_(basis),
+        dof_(checked_dof(plant, model, basis)),
+        basis_size_(basis.size()),
+        error_system_(model, checked_alpha1(settings, dof_)),
+        cost_(settings.Q, settings.R, dof_),
+        critic_(settings.critic, basis_size_),
         actor_(settings.actor),
-        controller_(settings.controller),
-        trajectory_(settings.task.qd),
-        extrapolation_(settings.extrapolation, trajectory_.is_constant()),
-        disturbance_{settings.disturbance},
-        probe_(settings.probe) {
+        controller_(settings.controller, dof_),
+        trajectory_(settings.task.qd, dof_),
+        extrapolation_(settings.extrapolation, trajectory_.is_constant(), model),
+        probe_(settings.probe, dof_) {
+    const Eigen::Index n = dof_, k = basis_size_;
+    check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
-    check_finite(settings.control.alpha1, "control.alpha1");
-    check_hurwitz(settings.control.alpha1);
+    disturbance_.amplitude = settings.disturbance;
+    check_size(settings.task.q0, n, 1, "task.q0");
+    check_size(settings.task.dq0, n, 1, "task.dq0");
     check_finite(settings.task.q0, "task.q0");
     check_finite(settings.task.dq0, "task.dq0");
-    check_size(settings.critic_weights, kBasisSize, 1, "init.critic_weights");
-    check_size(settings.actor_weights, kBasisSize, 1, "init.actor_weights");
+    check_size(settings.critic_weights, k, 1, "init.critic_weights");
+    check_size(settings.actor_weights, k, 1, "init.actor_weights");
     check_finite(settings.critic_weights, "init.critic_weights");
     check_finite(settings.actor_weights, "init.actor_weights");
-    const TrackingErrors initial = tracking_errors(settings.task.q0, settings.task.dq0,
-                                                   trajectory_(0.0), settings.control.alpha1);
-    rise_ = Rise(settings.control.rise, initial.e2);
-    initial_state_.setZero();
-    initial_state_.template segment<kDof>(kQ) = settings.task.q0;
-    initial_state_.template segment<kDof>(kDq) = settings.task.dq0;
-    initial_state_.template segment<kBasisSize>(kCriticWeights) = settings.critic_weights;
-    initial_state_.template segment<kBasisSize>(kActorWeights) = settings.actor_weights;
-    covariance(initial_state_) = critic_.initial_covariance();
+    plant_.init_terms(plant_terms_);
+    error_system_.model().init_terms(believed_terms_);
+    const Joint q0 = settings.task.q0, dq0 = settings.task.dq0;
+    const Errors initial = tracking_errors<kDof>(q0, dq0, trajectory_(0.0), error_system_.alpha1());
+    rise_ = RiseT<kDof>(settings.control.rise, initial.e2);
+    initial_state_.setZero(state_size());
+    initial_state_.template segment<kDof>(kQ, n) = q0;
+    initial_state_.template segment<kDof>(dq_offset(), n) = dq0;
+    initial_state_.template segment<kBasisSize>(critic_offset(), k) = settings.critic_weights;
+    initial_state_.template segment<kBasisSize>(actor_offset(), k) = settings.actor_weights;
+    critic_.reset(covariance(initial_state_));
   }
+
+  Eigen::Index dof() const { return size_of(kDof, dof_); }
+  Eigen::Index basis_size() const { return size_of(kBasisSize, basis_size_); }
+  Eigen::Index dq_offset() const { return dof(); }
+  Eigen::Index critic_offset() const { return 2 * dof(); }
+  Eigen::Index actor_offset() const { return critic_offset() + basis_size(); }
+  Eigen::Index gamma_offset() const { return actor_offset() + basis_size(); }
+  Eigen::Index nu_offset() const { return gamma_offset() + basis_size() * basis_size(); }
+  Eigen::Index cost_offset() const { return nu_offset() + dof(); }
+  Eigen::Index state_size() const { return cost_offset() + 1; }
 
   const State& initial_state() const { return initial_state_; }
+  const Arm& plant() const { return plant_; }
+  const Basis& basis() const { return basis_; }
   const ErrorSystem<Arm>& error_system() const { return error_system_; }
-  const QuadraticCost& cost() const { return cost_; }
+  const QuadraticCostT<kDof>& cost() const { return cost_; }
   const Critic<Basis>& critic() const { return critic_; }
-  const Trajectory& trajectory() const { return trajectory_; }
+  const TrajectoryT<kDof>& trajectory() const { return trajectory_; }
   const Extrapolation<Arm, Basis>& extrapolation() const { return extrapolation_; }
 
-  // de1 = -alpha1 e1 + e2 is stable only if every eigenvalue of alpha1 has a positive real part:
-  // trace > 0 and det > 0 (2 x 2), judged on alpha1 / max|entry| (no overflow), as in Python.
-  static void check_hurwitz(const Mat2& alpha1) {
-    const double scale = alpha1.cwiseAbs().maxCoeff();
-    const Mat2 a = alpha1 / scale;
-    if (!(scale > 0.0) || !(a(0, 0) + a(1, 1) > 0.0 && a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0) > 0.0))
-      throw std::invalid_argument(
-          "control.alpha1: every eigenvalue must have a positive real part (-alpha1 Hurwitz)");
+  CovarianceMap covariance(State& x) const {
+    return CovarianceMap(x.data() + gamma_offset(), basis_size(), basis_size());
   }
-
-  static CovarianceMap covariance(State& x) { return CovarianceMap(x.data() + kGamma); }
-  static ConstCovarianceMap covariance(const State& x) {
-    return ConstCovarianceMap(x.data() + kGamma);
+  ConstCovarianceMap covariance(const State& x) const {
+    return ConstCovarianceMap(x.data() + gamma_offset(), basis_size(), basis_size());
   }
 
   void time_signals(double t, TimeSignals& signals) const {
     signals.disturbance = disturbance_(t);
-    signals.probe = controller_.learns() ? probe_(t) : Vec2::Zero();
+    signals.probe = controller_.learns() ? probe_(t) : Joint::Zero(dof());
     signals.desired = trajectory_(t);
   }
 
@@ -131,74 +183,80 @@ class ClosedLoop {
   // extrapolation points around the current error state, or prepares fixed ones once.
   void begin_step(double t, const State& state) {
     if (!extrapolation_.needs_begin_step()) return;
-    const DesiredState desired = trajectory_(t);
-    const TrackingErrors errors =
-        tracking_errors(state.template segment<kDof>(kQ), state.template segment<kDof>(kDq),
-                        desired, error_system_.alpha1());
-    extrapolation_.begin_step(error_system_, cost_, errors.x(), desired);
+    const Eigen::Index n = dof();
+    const Desired desired = trajectory_(t);
+    const Errors errors = tracking_errors<kDof>(state.template segment<kDof>(kQ, n),
+                                                state.template segment<kDof>(dq_offset(), n),
+                                                desired, error_system_.alpha1());
+    extrapolation_.begin_step(basis_, error_system_, cost_, errors.x(), desired);
   }
 
   void derivative(const TimeSignals& signals, const State& state, State& rate,
                   Outputs* outputs) const {
-    const Vec2 q = state.template segment<kDof>(kQ);
-    const Vec2 dq = state.template segment<kDof>(kDq);
-    const Weights critic_weights = state.template segment<kBasisSize>(kCriticWeights);
-    const Weights actor_weights = state.template segment<kBasisSize>(kActorWeights);
-    const Vec2 nu = state.template segment<kDof>(kNu);
-    const DesiredState& desired = signals.desired;
+    const Eigen::Index n = dof(), k = basis_size();
+    const Joint q = state.template segment<kDof>(kQ, n);
+    const Joint dq = state.template segment<kDof>(dq_offset(), n);
+    const Weights critic_weights = state.template segment<kBasisSize>(critic_offset(), k);
+    const Weights actor_weights = state.template segment<kBasisSize>(actor_offset(), k);
+    const Joint nu = state.template segment<kDof>(nu_offset(), n);
+    const Desired& desired = signals.desired;
 
-    const TrackingErrors errors = tracking_errors(q, dq, desired, error_system_.alpha1());
-    const Vec4 x = errors.x();
+    const Errors errors = tracking_errors<kDof>(q, dq, desired, error_system_.alpha1());
+    const Error x = errors.x();
 
-    typename Arm::Terms plant_terms, believed_terms;
+    // fixed sizes: the terms on the stack; dynamic: in the buffers sized once
+    Terms local_plant_terms, local_believed_terms;
+    Terms& plant_terms = kFixed ? local_plant_terms : plant_terms_;
+    Terms& believed_terms = kFixed ? local_believed_terms : believed_terms_;
     plant_.compute(q, dq, plant_terms);
     if (!model_is_plant_) error_system_.model().compute(q, dq, believed_terms);
-    const typename Arm::Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
+    const Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
 
-    HjbPoint<Basis, kDof> point;
-    prepare_hjb_point<Basis, kDof>(x, desired, error_system_.drift(x, model_terms), model_terms,
-                                   cost_, point);
-    HjbEvaluation<Basis, kDof> hjb;
+    Point point;
+    prepare_hjb_point<Basis, kDof>(basis_, x, desired, error_system_.drift(x, model_terms),
+                                   model_terms, cost_, point);
+    Evaluation hjb;
     evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
 
-    Weights critic_rate = Weights::Zero();
-    CovarianceMap gamma_rate(rate.data() + kGamma);
+    Weights critic_rate = Weights::Zero(k);
+    CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
     gamma_rate.setZero();
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
       const Weights difference = actor_weights - critic_weights;
-      Weights actor_gradient = Weights::Zero();
-      const auto learn = [&](const HjbPoint<Basis, kDof>& p, const HjbEvaluation<Basis, kDof>& e,
-                             double weight) {
+      Weights actor_gradient = Weights::Zero(k);
+      const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
         critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);  // (23)-(24)
         actor_.add_gradient(p.input_gradient, cost_.R_inverse(), e.omega, e.error, difference,
                             weight, actor_gradient);  // (26)
       };
       learn(point, hjb, 1.0);
-      extrapolation_.for_each(error_system_, cost_, desired, critic_weights, actor_weights, learn);
+      extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
+                              learn);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
         critic_rate = keep_e2_block_positive<Basis>(critic_weights, critic_rate,
                                                     actor_.settings().e2_margin, gamma);
-      rate.template segment<kBasisSize>(kActorWeights) =
+      rate.template segment<kBasisSize>(actor_offset(), k) =
           actor_.weight_rate(actor_gradient, difference, actor_weights);  // eq. (26)
     } else {
-      rate.template segment<kBasisSize>(kActorWeights).setZero();
+      rate.template segment<kBasisSize>(actor_offset(), k).setZero();
     }
-    rate.template segment<kBasisSize>(kCriticWeights) = critic_rate;
+    rate.template segment<kBasisSize>(critic_offset(), k) = critic_rate;
 
-    Vec2 mu = Vec2::Zero();
-    rate.template segment<kDof>(kNu).setZero();
+    Joint mu = Joint::Zero(n);
+    rate.template segment<kDof>(nu_offset(), n).setZero();
     if (controller_.uses_rise()) {
-      mu = rise_.feedback(errors.e2, nu);                                 // eq. (27)
-      rate.template segment<kDof>(kNu) = rise_.integral_rate(errors.e2);  // eq. (28)
+      mu = rise_.feedback(errors.e2, nu);                                            // eq. (27)
+      rate.template segment<kDof>(nu_offset(), n) = rise_.integral_rate(errors.e2);  // eq. (28)
     }
-    const Vec2 u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(), hjb.u_hat,
-                                     signals.probe);
-    const Vec2 tau = error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
+    const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(), hjb.u_hat,
+                                      signals.probe);
+    const Joint tau = error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
 
-    rate.template segment<kDof>(kQ) = dq;
-    rate.template segment<kDof>(kDq) = Arm::acceleration(plant_terms, dq, tau, signals.disturbance);
-    rate[kCost] = point.state_cost + cost_.input_cost(u);  // eq. (10): x^T Q x + u^T R u
+    rate.template segment<kDof>(kQ, n) = dq;
+    rate.template segment<kDof>(dq_offset(), n) =
+        plant_.acceleration(plant_terms, dq, tau, signals.disturbance);
+    rate[cost_offset()] = point.state_cost + cost_.input_cost(u);  // eq. (10): x^T Q x + u^T R u
 
     if (outputs != nullptr) {
       outputs->errors = errors;
@@ -215,24 +273,44 @@ class ClosedLoop {
   // Resets Gamma to gamma0 I when lambda_min(Gamma) < epsilon_T; returns whether it did.
   bool reset_covariance_if_needed(State& state) const {
     if (!critic_.needs_reset(covariance(state))) return false;
-    covariance(state) = critic_.initial_covariance();
+    critic_.reset(covariance(state));
     return true;
   }
 
  private:
+  static Eigen::Index checked_dof(const Arm& plant, const Arm& model, const Basis& basis) {
+    const Eigen::Index n = plant.dof();
+    if (model.dof() != n)
+      throw std::invalid_argument("model: the believed arm has " + std::to_string(model.dof()) +
+                                  " joints, the plant " + std::to_string(n));
+    check_dimensions(n, basis.size());
+    return n;
+  }
+
+  static JointMatrix<kDof> checked_alpha1(const Settings& settings, Eigen::Index n) {
+    check_size(settings.control.alpha1, n, n, "control.alpha1");
+    check_finite(settings.control.alpha1, "control.alpha1");
+    check_hurwitz(settings.control.alpha1);
+    return settings.control.alpha1;
+  }
+
   Arm plant_;
   bool model_is_plant_;
+  Basis basis_;
+  Eigen::Index dof_;
+  Eigen::Index basis_size_;
   ErrorSystem<Arm> error_system_;
-  QuadraticCost cost_;
+  QuadraticCostT<kDof> cost_;
   Critic<Basis> critic_;
-  Actor<Basis, Arm::kDof> actor_;
-  Controller controller_;
-  Trajectory trajectory_;
+  Actor<Basis, kDof> actor_;
+  ControllerT<kDof> controller_;
+  TrajectoryT<kDof> trajectory_;
   Extrapolation<Arm, Basis> extrapolation_;
-  Rise rise_;
-  SinusoidalDisturbance disturbance_;
-  ProbingSignal probe_;
+  RiseT<kDof> rise_;
+  SinusoidalDisturbanceT<kDof> disturbance_;
+  ProbingSignalT<kDof> probe_;
   State initial_state_;
+  mutable Terms plant_terms_, believed_terms_;  // dynamic sizes: the terms' buffers
 };
 
 using PaperClosedLoop = ClosedLoop<TwoLinkArm, PaperBasis>;

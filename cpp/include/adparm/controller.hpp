@@ -16,46 +16,57 @@ enum class ControllerKind { adp, rise, pd, optimal };
 
 struct ControllerSettings {
   ControllerKind kind = ControllerKind::adp;
-  bool rise = true;                   // add the RISE feedback mu of eq. (27) to the torque
-  Mat2 kp = 50.0 * Mat2::Identity();  // pd only, N m / rad
-  Mat2 kd = 10.0 * Mat2::Identity();  // pd only, N m s / rad
+  bool rise = true;  // add the RISE feedback mu of eq. (27) to the torque
+  Eigen::MatrixXd kp = 50.0 * Mat2::Identity();  // pd only, N m / rad, n x n
+  Eigen::MatrixXd kd = 10.0 * Mat2::Identity();  // pd only, N m s / rad, n x n
 };
 
-class Controller {
+template <int N = 2>
+class ControllerT {
  public:
-  Controller() = default;
-  explicit Controller(const ControllerSettings& settings) : settings_(settings) {
+  using Joint = JointVector<N>;
+  using Matrix = JointMatrix<N>;
+  ControllerT() = default;
+  ControllerT(const ControllerSettings& settings, Eigen::Index n)
+      : kind_(settings.kind), rise_(settings.rise) {
+    check_size(settings.kp, n, n, "controller.kp");
+    check_size(settings.kd, n, n, "controller.kd");
     check_finite(settings.kp, "controller.kp");
     check_finite(settings.kd, "controller.kd");
+    kp_ = settings.kp;
+    kd_ = settings.kd;
     if (settings.kind == ControllerKind::rise && !settings.rise)
       throw std::invalid_argument(
           "controller.rise: the rise controller is the RISE feedback alone, so rise must be true");
   }
 
-  const ControllerSettings& settings() const { return settings_; }
-  bool learns() const { return settings_.kind == ControllerKind::adp; }
-  bool uses_rise() const { return settings_.rise; }
+  ControllerKind kind() const { return kind_; }
+  bool learns() const { return kind_ == ControllerKind::adp; }
+  bool uses_rise() const { return rise_; }
 
   // The input u for the current errors; u_hat is the actor's eq. (20), probe the probing signal.
-  Vec2 input(const TrackingErrors& errors, const Mat2& alpha1, const Mat2& R_inverse,
-             const Vec2& u_hat, const Vec2& probe) const {
-    switch (settings_.kind) {
+  Joint input(const TrackingErrorsT<N>& errors, const Matrix& alpha1, const Matrix& R_inverse,
+              const Joint& u_hat, const Joint& probe) const {
+    switch (kind_) {
       case ControllerKind::adp:
         return u_hat + probe;
       case ControllerKind::rise:
-        return Vec2::Zero();
+        return Joint::Zero(errors.e1.size());
       case ControllerKind::pd: {
-        const Vec2 de1 = errors.e2 - alpha1 * errors.e1;
-        return -(settings_.kp * errors.e1 + settings_.kd * de1);
+        const Joint de1 = errors.e2 - alpha1 * errors.e1;
+        return -(kp_ * errors.e1 + kd_ * de1);
       }
       case ControllerKind::optimal:
         return -(R_inverse * errors.e2);
     }
-    return Vec2::Zero();
+    return Joint::Zero(errors.e1.size());
   }
 
  private:
-  ControllerSettings settings_{};
+  ControllerKind kind_ = ControllerKind::adp;
+  bool rise_ = true;
+  Matrix kp_, kd_;
 };
+using Controller = ControllerT<2>;
 
 }  // namespace adparm

@@ -25,11 +25,15 @@ struct CriticSettings {
 template <class Basis>
 class Critic {
  public:
+  static constexpr int kSize = Basis::kSize;
   using Vector = typename Basis::Vector;
-  using Covariance = Eigen::Matrix<double, Basis::kSize, Basis::kSize>;
+  // Gamma lives in the loop's state vector (a Map of this type); plain, not bounded.
+  using Covariance = Eigen::Matrix<double, kSize, kSize>;
 
   Critic() = default;
-  explicit Critic(const CriticSettings& settings) : settings_(settings) {
+  // `size`: the basis size K (== kSize when it is fixed).
+  Critic(const CriticSettings& settings, Eigen::Index size)
+      : settings_(settings), factor_(size, size) {
     check_non_negative(settings.eta_c, "critic.eta_c");
     check_non_negative(settings.nu, "critic.nu");
     check_positive(settings.gamma0, "critic.gamma0");
@@ -60,28 +64,35 @@ class Critic {
   // eigen-decomposition. A NaN or infinity reaches a pivot and fails the test.
   template <class CovarianceIn>
   bool needs_reset(const CovarianceIn& gamma) const {
-    constexpr int n = Basis::kSize;
-    Covariance factor = gamma;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
-    for (int j = 0; j < n; ++j) {
+    const Eigen::Index n = factor_.rows();
+    Covariance& factor = factor_;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
+    factor = gamma;                // (a buffer sized once: no allocation)
+    for (Eigen::Index j = 0; j < n; ++j) {
       double pivot = factor(j, j) - settings_.epsilon_T;
-      for (int k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
+      for (Eigen::Index k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
       if (!(pivot > 0.0)) return true;  // also catches NaN
       const double diagonal = std::sqrt(pivot);
       const double inverse = 1.0 / diagonal;  // one division per column
       factor(j, j) = diagonal;
-      for (int i = j + 1; i < n; ++i) {
+      for (Eigen::Index i = j + 1; i < n; ++i) {
         double value = factor(i, j);
-        for (int k = 0; k < j; ++k) value -= factor(i, k) * factor(j, k);
+        for (Eigen::Index k = 0; k < j; ++k) value -= factor(i, k) * factor(j, k);
         factor(i, j) = value * inverse;
       }
     }
     return false;
   }
 
-  Covariance initial_covariance() const { return settings_.gamma0 * Covariance::Identity(); }
+  // Gamma(0) = gamma0 I (also the reset value), written into `gamma` (a Map into the state).
+  template <class CovarianceOut>
+  void reset(CovarianceOut&& gamma) const {
+    gamma.setIdentity();
+    gamma *= settings_.gamma0;
+  }
 
  private:
   CriticSettings settings_{};
+  mutable Covariance factor_;  // needs_reset's work buffer
 };
 
 }  // namespace adparm

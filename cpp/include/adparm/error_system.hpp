@@ -16,62 +16,75 @@
 namespace adparm {
 
 // Tracking errors (eqs. 6-7) for a desired position qd with velocity dqd.
-struct TrackingErrors {
-  Vec2 e1;
-  Vec2 e2;
-  Vec4 x() const { return (Vec4() << e1, e2).finished(); }
+template <int N = 2>
+struct TrackingErrorsT {
+  JointVector<N> e1;
+  JointVector<N> e2;
+  ErrorVector<N> x() const { return (ErrorVector<N>(2 * e1.size()) << e1, e2).finished(); }
 };
+using TrackingErrors = TrackingErrorsT<2>;
 
-inline TrackingErrors tracking_errors(const Vec2& q, const Vec2& dq, const Vec2& qd,
-                                      const Vec2& dqd, const Mat2& alpha1) {
-  TrackingErrors errors;
+template <int N>
+TrackingErrorsT<N> tracking_errors(const JointVector<N>& q, const JointVector<N>& dq,
+                                   const JointVector<N>& qd, const JointVector<N>& dqd,
+                                   const JointMatrix<N>& alpha1) {
+  TrackingErrorsT<N> errors;
   errors.e1 = qd - q;
   errors.e2 = (dqd - dq) + alpha1 * errors.e1;
   return errors;
 }
 
-inline TrackingErrors tracking_errors(const Vec2& q, const Vec2& dq, const DesiredState& desired,
-                                      const Mat2& alpha1) {
-  return tracking_errors(q, dq, desired.q, desired.dq, alpha1);
+template <int N>
+TrackingErrorsT<N> tracking_errors(const JointVector<N>& q, const JointVector<N>& dq,
+                                   const DesiredStateT<N>& desired, const JointMatrix<N>& alpha1) {
+  return tracking_errors<N>(q, dq, desired.q, desired.dq, alpha1);
 }
 
 // The error system on the arm model the controller believes.
 template <class Arm>
 class ErrorSystem {
  public:
+  static constexpr int kDof = Arm::kDof;
   using Terms = typename Arm::Terms;
+  using Joint = JointVector<kDof>;
+  using Error = ErrorVector<kDof>;
+  using Desired = DesiredStateT<kDof>;
 
-  ErrorSystem(const Arm& model, const Mat2& alpha1) : model_(model), alpha1_(alpha1) {}
+  ErrorSystem(const Arm& model, const JointMatrix<kDof>& alpha1) : model_(model), alpha1_(alpha1) {}
 
   const Arm& model() const { return model_; }
-  const Mat2& alpha1() const { return alpha1_; }
+  const JointMatrix<kDof>& alpha1() const { return alpha1_; }
+  Eigen::Index dof() const { return alpha1_.rows(); }
 
   // q = qd - e1, dq = dqd - e2 + alpha1 e1.
-  void joint_state(const Vec4& x, const DesiredState& desired, Vec2& q, Vec2& dq) const {
-    q = desired.q - x.head<2>();
-    dq = desired.dq + alpha1_ * x.head<2>() - x.tail<2>();
+  void joint_state(const Error& x, const Desired& desired, Joint& q, Joint& dq) const {
+    const Eigen::Index n = dof();
+    q = desired.q - x.template head<kDof>(n);
+    dq = desired.dq + alpha1_ * x.template head<kDof>(n) - x.template segment<kDof>(n, n);
   }
 
   // f(x) = [-alpha1 e1 + e2; -M^-1 C e2] (eq. 9) from model terms at the matching joint state.
-  Vec4 drift(const Vec4& x, const Terms& terms) const {
-    Vec4 f;
-    f.head<2>() = -alpha1_ * x.head<2>() + x.tail<2>();
-    f.tail<2>() = -terms.mass_inverse * (terms.coriolis * x.tail<2>());
+  Error drift(const Error& x, const Terms& terms) const {
+    const Eigen::Index n = dof();
+    Error f(2 * n);
+    f.template head<kDof>(n) = -alpha1_ * x.template head<kDof>(n) + x.template segment<kDof>(n, n);
+    f.template segment<kDof>(n, n) =
+        -terms.mass_inverse * (terms.coriolis * x.template segment<kDof>(n, n));
     return f;
   }
 
   // Exact-linearization feedforward (eq. 5 in full, ERRATA):
   //   h = M (ddqd + alpha1 de1) + C (dqd + alpha1 e1) + G + F,  de1 = dqd - dq.
-  Vec2 feedforward(const Terms& terms, const Vec2& dq, const TrackingErrors& errors,
-                   const DesiredState& desired) const {
-    const Vec2 de1 = desired.dq - dq;
+  Joint feedforward(const Terms& terms, const Joint& dq, const TrackingErrorsT<kDof>& errors,
+                    const Desired& desired) const {
+    const Joint de1 = desired.dq - dq;
     return terms.mass * (desired.ddq + alpha1_ * de1) +
            terms.coriolis * (desired.dq + alpha1_ * errors.e1) + terms.gravity + terms.friction;
   }
 
  private:
   Arm model_;
-  Mat2 alpha1_;
+  JointMatrix<kDof> alpha1_;
 };
 
 }  // namespace adparm

@@ -11,8 +11,9 @@
 //   grid   a regular grid of m points per axis over the box (N = m^4)
 //   local  N points drawn at the start of every step, uniform in x(t_k) + [-box, box]
 // and each is evaluated with the current desired state (qd, dqd). Draws use MT19937 seeded with
-// `seed`, in the order of NumPy's legacy RandomState(seed).random_sample((N, 4)), each mapped to
-// box * (2 u - 1); so the points are reproducible, also from Python.
+// `seed`, in the order of NumPy's legacy RandomState(seed).random_sample((N, 2n)), each mapped to
+// box * (2 u - 1); so the points are reproducible, also from Python. (n joints: x has 2n entries,
+// the grid has m^(2n) points.)
 // For a constant desired state the weight-free part of each point (HjbPoint) is computed when the
 // points are drawn, not at every evaluation.
 #pragma once
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "adparm/hjb.hpp"
@@ -29,8 +31,8 @@ namespace adparm {
 enum class ExtrapolationMode { fixed, grid, local };
 
 struct ExtrapolationSettings {
-  long points = 0;          // N; 0 turns extrapolation off
-  Vec4 box = Vec4::Ones();  // half-widths in x = [e1; e2]
+  long points = 0;                                 // N; 0 turns extrapolation off
+  Eigen::VectorXd box = Eigen::VectorXd::Ones(4);  // half-widths in x = [e1; e2], 2n
   ExtrapolationMode mode = ExtrapolationMode::fixed;
   std::uint32_t seed = 0;
 };
@@ -52,38 +54,52 @@ class UniformDraws {
 template <class Arm, class Basis>
 class Extrapolation {
  public:
-  using Point = HjbPoint<Basis, Arm::kDof>;
-  using Evaluation = HjbEvaluation<Basis, Arm::kDof>;
-  using Points = std::vector<Vec4, Eigen::aligned_allocator<Vec4>>;
+  static constexpr int kDof = Arm::kDof;
+  using Point = HjbPoint<Basis, kDof>;
+  using Evaluation = HjbEvaluation<Basis, kDof>;
+  using Error = ErrorVector<kDof>;
+  using Desired = DesiredStateT<kDof>;
+  using Points = std::vector<Error, Eigen::aligned_allocator<Error>>;
 
   Extrapolation() = default;
-  // `constant_desired`: the desired state never changes, so points can be prepared once.
-  Extrapolation(const ExtrapolationSettings& settings, bool constant_desired)
+  // `constant_desired`: the desired state never changes, so points can be prepared once. `model`
+  // sizes the terms buffer of points evaluated afresh.
+  Extrapolation(const ExtrapolationSettings& settings, bool constant_desired, const Arm& model)
       : settings_(settings), draws_(settings.seed), constant_desired_(constant_desired) {
+    const Eigen::Index dim = 2 * Eigen::Index(model.dof());
     if (settings.points < 0) throw std::invalid_argument("extrapolation.points: must be >= 0");
     if (settings.points > 1000000)  // Python's MAX_POINTS
       throw std::invalid_argument("extrapolation.points: must be <= 1000000");
+    check_size(settings.box, dim, 1, "extrapolation.box");
     check_finite(settings.box, "extrapolation.box");
     if (!(settings.box.array() > 0.0).all())
       throw std::invalid_argument("extrapolation.box: half-widths must be > 0");
+    box_ = settings.box;
+    model.init_terms(terms_);
     const long n = settings.points;
-    points_.assign(n, Vec4::Zero());
+    points_.assign(n, Error::Zero(dim));
     prepared_.resize(n);
     if (settings.mode == ExtrapolationMode::grid) {
-      const long m = std::lround(std::pow(static_cast<double>(n), 0.25));
-      if (m * m * m * m != n)
-        throw std::invalid_argument("extrapolation.points: grid mode needs N = m^4 points");
+      const long m = std::lround(std::pow(static_cast<double>(n), 1.0 / static_cast<double>(dim)));
+      long total = 1;
+      for (Eigen::Index axis = 0; axis < dim; ++axis) {
+        total *= m;  // m^dim, or stops above N (no overflow)
+        if (total > n) break;
+      }
+      if (total != n)
+        throw std::invalid_argument("extrapolation.points: grid mode needs N = m^" +
+                                    std::to_string(dim) + " points");
       for (long i = 0; i < n; ++i) {
         long rest = i;
-        for (int axis = 3; axis >= 0; --axis) {  // the last axis varies fastest
+        for (Eigen::Index axis = dim - 1; axis >= 0; --axis) {  // the last axis varies fastest
           const long k = rest % m;
           rest /= m;
           points_[i][axis] =
-              m == 1 ? 0.0 : settings.box[axis] * (2.0 * static_cast<double>(k) / (m - 1) - 1.0);
+              m == 1 ? 0.0 : box_[axis] * (2.0 * static_cast<double>(k) / (m - 1) - 1.0);
         }
       }
     } else if (settings.mode == ExtrapolationMode::fixed) {
-      draw(Vec4::Zero());
+      draw(Error::Zero(dim));
     }
   }
 
@@ -99,8 +115,8 @@ class Extrapolation {
 
   // Start of a step at error state x: draws new local points; prepares points that are fixed for
   // the step when the desired state is constant.
-  void begin_step(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
-                  const DesiredState& desired) {
+  void begin_step(const Basis& basis, const ErrorSystem<Arm>& system,
+                  const QuadraticCostT<kDof>& cost, const Error& x, const Desired& desired) {
     if (!needs_begin_step()) return;
     if (settings_.mode == ExtrapolationMode::local) {
       draw(x);
@@ -108,15 +124,16 @@ class Extrapolation {
     }
     if (constant_desired_ && !prepared_valid_) {
       for (long i = 0; i < size(); ++i)
-        prepare_hjb_point<Basis>(system, cost, points_[i], desired, prepared_[i]);
+        prepare_hjb_point(basis, system, cost, points_[i], desired, terms_, prepared_[i]);
       prepared_valid_ = true;
     }
   }
 
   // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state.
   template <class F>
-  void for_each(const ErrorSystem<Arm>& system, const QuadraticCost& cost,
-                const DesiredState& desired, const typename Basis::Vector& critic_weights,
+  void for_each(const Basis& basis, const ErrorSystem<Arm>& system,
+                const QuadraticCostT<kDof>& cost, const Desired& desired,
+                const typename Basis::Vector& critic_weights,
                 const typename Basis::Vector& actor_weights, F&& f) const {
     if (!enabled()) return;
     const double weight = 1.0 / static_cast<double>(size());
@@ -125,7 +142,7 @@ class Extrapolation {
     for (long i = 0; i < size(); ++i) {
       const Point* point = &prepared_[i];
       if (!prepared_valid_) {
-        prepare_hjb_point<Basis>(system, cost, points_[i], desired, fresh);
+        prepare_hjb_point(basis, system, cost, points_[i], desired, terms_, fresh);
         point = &fresh;
       }
       evaluate_hjb(*point, cost, critic_weights, actor_weights, evaluation);
@@ -134,18 +151,20 @@ class Extrapolation {
   }
 
  private:
-  void draw(const Vec4& centre) {
-    for (Vec4& point : points_)
-      for (int axis = 0; axis < 4; ++axis)
-        point[axis] = centre[axis] + settings_.box[axis] * (2.0 * draws_() - 1.0);
+  void draw(const Error& centre) {
+    for (Error& point : points_)
+      for (Eigen::Index axis = 0; axis < point.size(); ++axis)
+        point[axis] = centre[axis] + box_[axis] * (2.0 * draws_() - 1.0);
   }
 
   ExtrapolationSettings settings_{};
+  Error box_;
   UniformDraws draws_;
   bool constant_desired_ = true;
   bool prepared_valid_ = false;
   Points points_;
   std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
+  mutable typename Arm::Terms terms_;  // model terms at a point (a buffer sized once)
 };
 
 }  // namespace adparm

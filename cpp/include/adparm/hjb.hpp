@@ -34,19 +34,26 @@ struct HjbEvaluation {
 // The weight-free part at x, given the desired state, the drift f(x) and the model terms at the
 // matching joint state (their M^-1 gives g(x) = [0; M^-1]; the basis may use them too).
 template <class Basis, int Dof, class Terms>
-void prepare_hjb_point(const Vec4& x, const DesiredState& desired, const Vec4& drift,
-                       const Terms& terms, const QuadraticCost& cost, HjbPoint<Basis, Dof>& point) {
+void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
+                       const DesiredStateT<Dof>& desired, const ErrorVector<Dof>& drift,
+                       const Terms& terms, const QuadraticCostT<Dof>& cost,
+                       HjbPoint<Basis, Dof>& point) {
+  const Eigen::Index n = desired.q.size();
   typename Basis::Vector phi;
   typename Basis::Jacobian jacobian;
-  Basis::evaluate(x, desired, terms, phi, jacobian, point.drift_rate);
+  basis.evaluate(x, desired, terms, phi, jacobian, point.drift_rate);
   point.drift_rate.noalias() += jacobian * drift;
-  point.input_gradient.noalias() = jacobian.template rightCols<Dof>() * terms.mass_inverse;
+  if constexpr (Dof == Dynamic)  // coefficient-based: no GEMM (its blocking may allocate)
+    point.input_gradient.noalias() =
+        jacobian.template rightCols<Dof>(n).lazyProduct(terms.mass_inverse);
+  else
+    point.input_gradient.noalias() = jacobian.template rightCols<Dof>() * terms.mass_inverse;
   point.state_cost = cost.state_cost(x);
 }
 
 // eqs. (20)-(21) at a prepared point.
 template <class Basis, int Dof>
-void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCost& cost,
+void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& cost,
                   const typename Basis::Vector& critic_weights,
                   const typename Basis::Vector& actor_weights, HjbEvaluation<Basis, Dof>& out) {
   out.u_hat = Actor<Basis, Dof>::policy(point.input_gradient, cost.R_inverse(), actor_weights);
@@ -56,24 +63,30 @@ void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCost& cost,
 }
 
 // The weight-free part at an error state x with the desired state `desired` (q, dq recovered from
-// x), on the model the controller believes.
+// x), on the model the controller believes; `terms` is a buffer (Arm::init_terms).
 template <class Basis, class Arm>
-void prepare_hjb_point(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
-                       const DesiredState& desired, HjbPoint<Basis, Arm::kDof>& point) {
-  Vec2 q, dq;
+void prepare_hjb_point(const Basis& basis, const ErrorSystem<Arm>& system,
+                       const QuadraticCostT<Arm::kDof>& cost, const ErrorVector<Arm::kDof>& x,
+                       const DesiredStateT<Arm::kDof>& desired, typename Arm::Terms& terms,
+                       HjbPoint<Basis, Arm::kDof>& point) {
+  JointVector<Arm::kDof> q, dq;
   system.joint_state(x, desired, q, dq);
-  typename Arm::Terms terms;
   system.model().compute(q, dq, terms);
-  prepare_hjb_point<Basis, Arm::kDof>(x, desired, system.drift(x, terms), terms, cost, point);
+  prepare_hjb_point<Basis, Arm::kDof>(basis, x, desired, system.drift(x, terms), terms, cost,
+                                      point);
 }
 
 // eq. (21) at an error state x with the desired state `desired`.
 template <class Basis, class Arm>
-double hjb_error(const ErrorSystem<Arm>& system, const QuadraticCost& cost, const Vec4& x,
-                 const DesiredState& desired, const typename Basis::Vector& critic_weights,
+double hjb_error(const Basis& basis, const ErrorSystem<Arm>& system,
+                 const QuadraticCostT<Arm::kDof>& cost, const ErrorVector<Arm::kDof>& x,
+                 const DesiredStateT<Arm::kDof>& desired,
+                 const typename Basis::Vector& critic_weights,
                  const typename Basis::Vector& actor_weights) {
+  typename Arm::Terms terms;
+  system.model().init_terms(terms);
   HjbPoint<Basis, Arm::kDof> point;
-  prepare_hjb_point<Basis>(system, cost, x, desired, point);
+  prepare_hjb_point(basis, system, cost, x, desired, terms, point);
   HjbEvaluation<Basis, Arm::kDof> evaluation;
   evaluate_hjb(point, cost, critic_weights, actor_weights, evaluation);
   return evaluation.error;

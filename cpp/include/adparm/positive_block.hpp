@@ -17,8 +17,24 @@
 #include <type_traits>
 
 #include "adparm/basis.hpp"
+#include "adparm/dynamic_size.hpp"
 
 namespace adparm {
+
+// Whether a basis has the paper's layout (W4..W8 on the e2 block): the paper and augmented bases,
+// with fixed sizes or seen through dynamic sizes (dynamic_size.hpp).
+template <class Basis>
+struct HasPaperE2Block : std::is_base_of<QuadraticArmBasis, Basis> {};
+template <class FixedBasis>
+struct HasPaperE2Block<DynamicBasis<FixedBasis>> : HasPaperE2Block<FixedBasis> {};
+
+// The Euclidean metric of the actor's gradient law: metric * v = v, with nothing to allocate.
+struct IdentityMetric {
+  template <class V>
+  const V& operator*(const V& v) const {
+    return v;
+  }
+};
 
 // lambda_min of P(c) and its gradient with respect to the weights (zero outside W4..W8).
 template <class Vector>
@@ -40,7 +56,7 @@ double e2_block_lambda_min(const Vector& W, double c, Vector& gradient) {
     v1 /= norm;
     v2 /= norm;
   }
-  gradient.setZero();
+  gradient.setZero(W.size());
   gradient[3] = v1 * v1;
   gradient[4] = c * v1 * v1;
   gradient[5] = v2 * v2;
@@ -59,7 +75,7 @@ bool e2_block_above(const Vector& W, double c, double margin) {
 // The smallest eigenvalue of P(c) over c in [-1, 1] (at c = +-1).
 template <class Vector>
 double e2_block_lambda_min(const Vector& W) {
-  Vector gradient;
+  Vector gradient(W.size());
   return std::min(e2_block_lambda_min(W, 1.0, gradient), e2_block_lambda_min(W, -1.0, gradient));
 }
 
@@ -74,7 +90,7 @@ constexpr double kE2Recovery = 100.0;
 template <class Basis, class Vector, class Metric>
 Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin,
                               const Metric& metric) {
-  if constexpr (!std::is_base_of_v<QuadraticArmBasis, Basis>) {
+  if constexpr (!HasPaperE2Block<Basis>::value) {
     return rate;
   } else {
     // the common case, inside at both ends: a few multiplications, no square root
@@ -111,9 +127,7 @@ Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin
 
 template <class Basis, class Vector>
 Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin) {
-  return keep_e2_block_positive<Basis>(
-      W, rate, margin,
-      Eigen::Matrix<double, Vector::RowsAtCompileTime, Vector::RowsAtCompileTime>::Identity());
+  return keep_e2_block_positive<Basis>(W, rate, margin, IdentityMetric{});
 }
 
 }  // namespace adparm

@@ -12,31 +12,33 @@
 namespace adparm {
 
 struct ProbeSettings {
-  Eigen::Matrix<double, 2, Eigen::Dynamic> amplitude;  // N m, 2 x frequencies.size()
+  Eigen::MatrixXd amplitude;  // N m, n x frequencies.size()
   double until = 0.0;
-  double ramp = 0.0;                                // s
-  Eigen::VectorXd frequencies;                      // rad/s, one entry per sinusoid
-  Eigen::Matrix<double, 2, Eigen::Dynamic> phases;  // rad, 2 x frequencies.size()
+  double ramp = 0.0;            // s
+  Eigen::VectorXd frequencies;  // rad/s, one entry per sinusoid
+  Eigen::MatrixXd phases;       // rad, n x frequencies.size()
 };
 
-class ProbingSignal {
+template <int N = 2>
+class ProbingSignalT {
  public:
-  ProbingSignal() = default;
-  explicit ProbingSignal(const ProbeSettings& settings) : settings_(settings) {
+  using Joint = JointVector<N>;
+  ProbingSignalT() = default;
+  ProbingSignalT(const ProbeSettings& settings, Eigen::Index n) : settings_(settings), dof_(n) {
     check_finite(settings.until, "probe.until");
     check_non_negative(settings.ramp, "probe.ramp");
     check_finite(settings.frequencies, "probe.frequencies");
-    check_size(settings.amplitude, 2, settings.frequencies.size(), "probe.amplitude");
+    check_size(settings.amplitude, n, settings.frequencies.size(), "probe.amplitude");
     check_finite(settings.amplitude, "probe.amplitude");
-    check_size(settings.phases, 2, settings.frequencies.size(), "probe.phases");
+    check_size(settings.phases, n, settings.frequencies.size(), "probe.phases");
     check_finite(settings.phases, "probe.phases");
     // sin(w t + p) = sin(w t) cos p + cos(w t) sin p: one sin/cos pair per frequency and time.
     sin_weight_ = settings.amplitude.cwiseProduct(settings.phases.array().cos().matrix());
     cos_weight_ = settings.amplitude.cwiseProduct(settings.phases.array().sin().matrix());
   }
 
-  Vec2 operator()(double t) const {
-    Vec2 value = Vec2::Zero();
+  Joint operator()(double t) const {
+    Joint value = Joint::Zero(dof_);
     if (t >= settings_.until) return value;
     for (Eigen::Index k = 0; k < settings_.frequencies.size(); ++k) {
       const double angle = settings_.frequencies[k] * t;
@@ -49,7 +51,9 @@ class ProbingSignal {
 
  private:
   ProbeSettings settings_{};
-  Eigen::Matrix<double, 2, Eigen::Dynamic> sin_weight_, cos_weight_;  // 2 x frequencies.size()
+  Eigen::Index dof_ = 2;
+  Eigen::Matrix<double, N, Eigen::Dynamic> sin_weight_, cos_weight_;  // n x frequencies.size()
 };
+using ProbingSignal = ProbingSignalT<2>;
 
 }  // namespace adparm

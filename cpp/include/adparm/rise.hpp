@@ -14,10 +14,12 @@ struct RiseGains {
   double beta1 = 0.5;
 };
 
-class Rise {
+template <int N = 2>
+class RiseT {
  public:
-  Rise() = default;
-  Rise(const RiseGains& gains, const Vec2& e2_initial) : gains_(gains), e2_initial_(e2_initial) {
+  using Joint = JointVector<N>;
+  RiseT() = default;
+  RiseT(const RiseGains& gains, const Joint& e2_initial) : gains_(gains), e2_initial_(e2_initial) {
     check_non_negative(gains.ks, "control.ks");
     check_non_negative(gains.alpha2, "control.alpha2");
     check_non_negative(gains.beta1, "control.beta1");
@@ -26,18 +28,19 @@ class Rise {
   const RiseGains& gains() const { return gains_; }
 
   // eq. (27)
-  Vec2 feedback(const Vec2& e2, const Vec2& nu) const {
+  Joint feedback(const Joint& e2, const Joint& nu) const {
     return (gains_.ks + 1.0) * (e2 - e2_initial_) + nu;
   }
 
   // eq. (28)
-  Vec2 integral_rate(const Vec2& e2) const {
+  Joint integral_rate(const Joint& e2) const {
     return (gains_.ks + 1.0) * gains_.alpha2 * e2 + gains_.beta1 * sign(e2);
   }
 
  private:
   RiseGains gains_{};
-  Vec2 e2_initial_ = Vec2::Zero();
+  Joint e2_initial_ = Joint::Zero(size_of(N, 0));
 };
+using Rise = RiseT<2>;
 
 }  // namespace adparm

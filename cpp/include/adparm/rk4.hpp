@@ -6,7 +6,9 @@
 // two midpoint stages share them, and a step's end signals are the next step's start signals.
 #pragma once
 
+#include <Eigen/Core>
 #include <limits>
+#include <utility>
 
 namespace adparm {
 
@@ -15,6 +17,14 @@ struct Rk4Workspace {
   typename System::State k1, k2, k3, k4, stage;
   typename System::TimeSignals begin, middle, end;
   double begin_time = std::numeric_limits<double>::quiet_NaN();
+  // Sizes the stage buffers once (dynamic-size states); a step then allocates nothing.
+  void resize(Eigen::Index size) {
+    k1.resize(size);
+    k2.resize(size);
+    k3.resize(size);
+    k4.resize(size);
+    stage.resize(size);
+  }
 };
 
 // Advances x from t_begin to t_end (h = t_end - t_begin) into x_next, which may be x itself. If

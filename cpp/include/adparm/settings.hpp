@@ -1,5 +1,8 @@
 // The one settings struct of a closed-loop run, passed whole from Python (or built in C++ by
 // paper_settings()). Python's adparm.paper_config() holds the same values; a test keeps them equal.
+// Every sized member follows the arm's joint count n (the defaults are for n = 2) and the basis
+// size K; the loop checks each against n and K and names the member when a size is wrong. The arm
+// itself is given to the loop (closed_loop.hpp); `plant` and `model` are the two-link arm's.
 #pragma once
 
 #include <cmath>
@@ -17,13 +20,13 @@
 namespace adparm {
 
 struct TaskSettings {
-  Vec2 q0 = Vec2(0.1598, 0.2257);
-  Vec2 dq0 = Vec2::Zero();
-  TrajectorySettings qd{};  // desired trajectory; default the set-point qd = 0
+  Eigen::VectorXd q0 = Vec2(0.1598, 0.2257);  // n
+  Eigen::VectorXd dq0 = Vec2::Zero();         // n
+  TrajectorySettings qd{};                    // desired trajectory; default the set-point qd = 0
 };
 
 struct ControlSettings {
-  Mat2 alpha1 = (Mat2() << 15.6, 10.6, 10.6, 10.4).finished();
+  Eigen::MatrixXd alpha1 = (Mat2() << 15.6, 10.6, 10.6, 10.4).finished();  // n x n
   RiseGains rise{};
 };
 
@@ -37,15 +40,16 @@ struct SimSettings {
 struct Settings {
   TwoLinkArmParameters plant{};
   TwoLinkArmParameters model{};  // the arm the controller believes (feedforward h, f, g)
-  Vec2 disturbance = Vec2(0.1, 0.1);
+  Eigen::VectorXd disturbance = Vec2(0.1, 0.1);  // n amplitudes (arm_model.hpp)
   TaskSettings task{};
-  Mat4 Q = Mat4::Identity();
-  Mat2 R = Mat2::Identity();
+  Eigen::MatrixXd Q = Mat4::Identity();  // 2n x 2n
+  Eigen::MatrixXd R = Mat2::Identity();  // n x n
   ControlSettings control{};
   CriticSettings critic{};
   ActorSettings actor{};
   ControllerSettings controller{};
   BasisKind basis = BasisKind::augmented;  // equals the paper's basis while qd2 = 0
+  bool dynamic_sizes = false;  // run the two-link arm through the dynamic-size loop (a check)
   ExtrapolationSettings extrapolation{};
   Eigen::VectorXd critic_weights;  // Wc(0), one entry per basis function
   Eigen::VectorXd actor_weights;   // Wa(0)
@@ -56,6 +60,7 @@ struct Settings {
 // The paper's instance (Section 4) with this project's documented choices for what it leaves open.
 inline Settings paper_settings() {
   Settings s;
+  s.Q.resize(4, 4);
   s.Q << 40, 2, -4, 4,  //
       2, 40, 4, -6,     //
       -4, 4, 4, 0,      //

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "adparm/closed_loop.hpp"
+#include "adparm/dynamic_size.hpp"
 #include "adparm/rk4.hpp"
 
 namespace adparm {
@@ -75,7 +76,14 @@ class Simulation {
   using System = ClosedLoop<Arm, Basis>;
   using State = typename System::State;
 
-  explicit Simulation(const Settings& settings) : system_(settings), sim_(settings.sim) {
+  // The two-link arm of settings.plant and settings.model.
+  explicit Simulation(const Settings& settings) : Simulation(System(settings), settings.sim) {}
+  // Any arm (closed_loop.hpp).
+  Simulation(const Settings& settings, const Arm& plant, const Arm& model, bool model_is_plant,
+             const Basis& basis = Basis())
+      : Simulation(System(settings, plant, model, model_is_plant, basis), settings.sim) {}
+
+  Simulation(System&& system, const SimSettings& sim) : system_(std::move(system)), sim_(sim) {
     check_positive(sim_.T, "sim.T");
     check_positive(sim_.dt, "sim.dt");
     check_positive(sim_.divergence_bound, "sim.divergence_bound");
@@ -89,9 +97,13 @@ class Simulation {
       throw std::invalid_argument("task.qd: the samples end before sim.T");
     steps_ = static_cast<long>(steps);
     states_[0] = system_.initial_state();
+    states_[1] = states_[0];  // sizes every state buffer once
+    record_rate_ = states_[0];
+    workspace_.resize(states_[0].size());
     system_.begin_step(0.0, states_[0]);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
-    recording_.allocate(steps_ / sim_.record_every + 2, System::kDof, System::kBasisSize);
+    recording_.allocate(steps_ / sim_.record_every + 2, static_cast<int>(system_.dof()),
+                        static_cast<int>(system_.basis_size()));
     if (!record(0.0, states_[0])) stop_diverged(0.0);
   }
 
@@ -152,6 +164,7 @@ class Simulation {
   double divergence_time() const { return divergence_time_; }
   const std::vector<double>& reset_times() const { return reset_times_; }
   const State& state() const { return states_[current_]; }
+  const System& system() const { return system_; }
 
   // The recording so far, trimmed to the rows written.
   Recording recording() const { return recording_.written(); }
@@ -160,7 +173,7 @@ class Simulation {
   // Non-finite anywhere (a NaN or an infinity makes the sum non-finite; a finite state's sum
   // overflows only far beyond any bound), or |q|, |dq|, |Wc|, |Wa| above the bound.
   bool diverged(const State& state) const {
-    const auto watched = state.template head<System::kGamma>();
+    const auto watched = state.template head<System::kGamma>(system_.gamma_offset());
     return !std::isfinite(state.sum()) || !(watched.cwiseAbs().maxCoeff() <= sim_.divergence_bound);
   }
 
@@ -176,10 +189,8 @@ class Simulation {
   }
 
   bool record(double t, const State& state) {
-    typename System::State rate;
-    typename System::TimeSignals signals;
-    system_.time_signals(t, signals);
-    system_.derivative(signals, state, rate, &row_outputs_);
+    system_.time_signals(t, record_signals_);
+    system_.derivative(record_signals_, state, record_rate_, &row_outputs_);
     return record(t, state, row_outputs_);
   }
 
@@ -190,8 +201,9 @@ class Simulation {
     Recording& r = recording_;
     const Eigen::Index i = r.rows++;
     r.t[i] = t;
-    r.q.row(i) = state.template segment<System::kDof>(System::kQ).transpose();
-    r.dq.row(i) = state.template segment<System::kDof>(System::kDq).transpose();
+    const Eigen::Index n = system_.dof(), k = system_.basis_size();
+    r.q.row(i) = state.template segment<System::kDof>(0, n).transpose();
+    r.dq.row(i) = state.template segment<System::kDof>(system_.dq_offset(), n).transpose();
     r.qd.row(i) = outputs.qd.transpose();
     r.e1.row(i) = outputs.errors.e1.transpose();
     r.e2.row(i) = outputs.errors.e2.transpose();
@@ -201,11 +213,11 @@ class Simulation {
     r.mu.row(i) = outputs.mu.transpose();
     r.probe.row(i) = outputs.probe.transpose();
     r.critic_weights.row(i) =
-        state.template segment<System::kBasisSize>(System::kCriticWeights).transpose();
+        state.template segment<System::kBasisSize>(system_.critic_offset(), k).transpose();
     r.actor_weights.row(i) =
-        state.template segment<System::kBasisSize>(System::kActorWeights).transpose();
+        state.template segment<System::kBasisSize>(system_.actor_offset(), k).transpose();
     r.hjb_error[i] = outputs.hjb_error;
-    r.cost[i] = state[System::kCost];
+    r.cost[i] = state[system_.cost_offset()];
     return true;
   }
 
@@ -218,6 +230,8 @@ class Simulation {
   Rk4Workspace<System> workspace_;
   bool row_due_ = false;  // a row is due at the current state (written by the next step)
   typename System::Outputs row_outputs_;
+  State record_rate_;  // record()'s buffers (sized once)
+  typename System::TimeSignals record_signals_;
   RunStatus status_ = RunStatus::running;
   double divergence_time_ = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> reset_times_;
@@ -259,10 +273,18 @@ class AnySimulation {
 
  private:
   using Variant =
-      std::variant<Simulation<TwoLinkArm, PaperBasis>, Simulation<TwoLinkArm, AugmentedBasis>>;
+      std::variant<Simulation<TwoLinkArm, PaperBasis>, Simulation<TwoLinkArm, AugmentedBasis>,
+                   Simulation<TwoLinkArm, StructuredBasis>,
+                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
+                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
+                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>>;
   static Variant make(const Settings& settings) {
     return with_basis(settings.basis, [&](auto basis) {
-      return Variant(std::in_place_type<Simulation<TwoLinkArm, decltype(basis)>>, settings);
+      using Basis = decltype(basis);
+      if (settings.dynamic_sizes)
+        return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<Basis>>>,
+                       settings);
+      return Variant(std::in_place_type<Simulation<TwoLinkArm, Basis>>, settings);
     });
   }
   Variant impl_;

@@ -5,8 +5,9 @@
 //   spline:    a piecewise cubic in t (Python fits it to samples with scipy's CubicSpline);
 //              interval i covers [breaks_i, breaks_{i+1}] and holds, per joint j, the coefficients
 //              c_0..c_3 of qd_j = c_0 s^3 + c_1 s^2 + c_2 s + c_3, s = t - breaks_i, in columns
-//              4 j .. 4 j + 3 of `coefficients`. Outside [breaks_0, breaks_n] the trajectory is
-//              evaluated at the nearest end (a simulation refuses sim.T beyond the last break).
+//              4 j .. 4 j + 3 of `coefficients` (n joints: 4 n columns). Outside [breaks_0,
+//              breaks_n] the trajectory is evaluated at the nearest end (a simulation refuses sim.T
+//              beyond the last break).
 #pragma once
 
 #include <algorithm>
@@ -18,31 +19,39 @@ namespace adparm {
 
 enum class TrajectoryKind { constant, sinusoid, spline };
 
+// Sizes for n joints; sinusoid: k sinusoids per joint; spline: m intervals.
 struct TrajectorySettings {
   TrajectoryKind kind = TrajectoryKind::constant;
-  Vec2 offset = Vec2::Zero();                             // rad
-  Eigen::Matrix<double, 2, Eigen::Dynamic> amplitude;     // rad, 2 x n (sinusoid)
-  Eigen::Matrix<double, 2, Eigen::Dynamic> frequency;     // rad/s, 2 x n (sinusoid)
-  Eigen::Matrix<double, 2, Eigen::Dynamic> phase;         // rad, 2 x n (sinusoid)
-  Eigen::VectorXd breaks;                                 // s, increasing, n + 1 (spline)
-  Eigen::Matrix<double, Eigen::Dynamic, 8> coefficients;  // n x 8 (spline)
+  Eigen::VectorXd offset = Eigen::VectorXd::Zero(2);  // rad, n
+  Eigen::MatrixXd amplitude;                          // rad, n x k (sinusoid)
+  Eigen::MatrixXd frequency;                          // rad/s, n x k (sinusoid)
+  Eigen::MatrixXd phase;                              // rad, n x k (sinusoid)
+  Eigen::VectorXd breaks;                             // s, increasing, m + 1 (spline)
+  Eigen::MatrixXd coefficients;                       // m x 4n (spline)
 };
 
-class Trajectory {
+template <int N = 2>
+class TrajectoryT {
  public:
-  Trajectory() = default;
-  explicit Trajectory(const TrajectorySettings& settings) : settings_(settings) {
+  using Desired = DesiredStateT<N>;
+  TrajectoryT() = default;
+  TrajectoryT(const TrajectorySettings& settings, Eigen::Index dof)
+      : settings_(settings), dof_(dof) {
+    check_size(settings.offset, dof, 1, "task.qd");
     check_finite(settings.offset, "task.qd");
+    offset_ = settings.offset;
     if (settings.kind == TrajectoryKind::sinusoid) {
       const Eigen::Index n = settings.amplitude.cols();
+      check_size(settings.amplitude, dof, n, "task.qd.amplitude");
       check_finite(settings.amplitude, "task.qd.amplitude");
-      check_size(settings.frequency, 2, n, "task.qd.frequency");
+      check_size(settings.frequency, dof, n, "task.qd.frequency");
       check_finite(settings.frequency, "task.qd.frequency");
-      check_size(settings.phase, 2, n, "task.qd.phase");
+      check_size(settings.phase, dof, n, "task.qd.phase");
       check_finite(settings.phase, "task.qd.phase");
     } else if (settings.kind == TrajectoryKind::spline) {
       const Eigen::Index n = settings.coefficients.rows();
       if (n < 1) throw std::invalid_argument("task.qd: a spline needs at least one interval");
+      check_size(settings.coefficients, n, 4 * dof, "task.qd.coefficients");
       check_size(settings.breaks, n + 1, 1, "task.qd.t");
       check_finite(settings.breaks, "task.qd.t");
       check_finite(settings.coefficients, "task.qd.coefficients");
@@ -61,12 +70,14 @@ class Trajectory {
                                                     : std::numeric_limits<double>::infinity();
   }
 
-  DesiredState operator()(double t) const {
-    DesiredState d;
-    d.q = settings_.offset;
+  Eigen::Index dof() const { return dof_; }
+
+  Desired operator()(double t) const {
+    Desired d(dof_);
+    d.q = offset_;
     if (settings_.kind == TrajectoryKind::sinusoid) {
       for (Eigen::Index k = 0; k < settings_.amplitude.cols(); ++k) {
-        for (int j = 0; j < 2; ++j) {
+        for (Eigen::Index j = 0; j < dof_; ++j) {
           const double a = settings_.amplitude(j, k), w = settings_.frequency(j, k);
           const double angle = w * t + settings_.phase(j, k);
           const double s = std::sin(angle), c = std::cos(angle);
@@ -84,8 +95,8 @@ class Trajectory {
           n - 1, std::max<Eigen::Index>(
                      0, std::upper_bound(b.data(), b.data() + n + 1, clamped) - b.data() - 1));
       const double s = clamped - b[i];
-      for (int j = 0; j < 2; ++j) {
-        const auto c = settings_.coefficients.row(i).segment<4>(4 * j);
+      for (Eigen::Index j = 0; j < dof_; ++j) {
+        const auto c = settings_.coefficients.row(i).template segment<4>(4 * j);
         d.q[j] = ((c[0] * s + c[1]) * s + c[2]) * s + c[3];
         d.dq[j] = (3.0 * c[0] * s + 2.0 * c[1]) * s + c[2];
         d.ddq[j] = 6.0 * c[0] * s + 2.0 * c[1];
@@ -96,6 +107,9 @@ class Trajectory {
 
  private:
   TrajectorySettings settings_{};
+  Eigen::Index dof_ = size_of(N, 2);
+  JointVector<N> offset_ = JointVector<N>::Zero(size_of(N, 2));
 };
+using Trajectory = TrajectoryT<2>;
 
 }  // namespace adparm

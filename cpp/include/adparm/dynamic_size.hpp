@@ -1,0 +1,111 @@
+// The two-link arm and its bases seen through dynamic sizes: DynamicArm<TwoLinkArm> has
+// kDof = Eigen::Dynamic and DynamicBasis<AugmentedBasis> kSize = Eigen::Dynamic, so that
+// ClosedLoop<DynamicArm<TwoLinkArm>, DynamicBasis<...>> runs the n-joint loop of any arm (bounded
+// types, buffers sized once) on the paper's instance. The two paths compute the same laws; a test
+// compares their recordings (tests/test_dynamic_sizes.py, bench --checks). Settings::dynamic_sizes
+// selects this path (simulation.hpp).
+#pragma once
+
+#include "adparm/arm_model.hpp"
+#include "adparm/basis.hpp"
+
+namespace adparm {
+
+// A fixed-size arm behind the dynamic-size Arm concept (arm_model.hpp).
+template <class FixedArm>
+class DynamicArm {
+ public:
+  static constexpr int kDof = Dynamic;
+  static constexpr int kFixedDof = FixedArm::kDof;
+  using Parameters = typename FixedArm::Parameters;
+  using Joint = JointVector<Dynamic>;
+
+  struct Terms {
+    JointMatrix<Dynamic> mass, mass_inverse, coriolis;
+    JointVector<Dynamic> gravity, friction;
+    typename FixedArm::Terms fixed;  // the wrapped arm's own terms (cos q2, sin q2 for its bases)
+  };
+
+  DynamicArm() = default;
+  DynamicArm(const Parameters& parameters, const char* name) : arm_(parameters, name) {}
+  explicit DynamicArm(const FixedArm& arm) : arm_(arm) {}
+
+  const FixedArm& fixed() const { return arm_; }
+  int dof() const { return kFixedDof; }
+
+  void init_terms(Terms& terms) const {
+    const int n = kFixedDof;
+    terms.mass.setZero(n, n);
+    terms.mass_inverse.setZero(n, n);
+    terms.coriolis.setZero(n, n);
+    terms.gravity.setZero(n);
+    terms.friction.setZero(n);
+  }
+
+  void compute(const Joint& q, const Joint& dq, Terms& terms) const {
+    using Fixed = JointVector<kFixedDof>;
+    arm_.compute(Fixed(q), Fixed(dq), terms.fixed);
+    terms.mass = terms.fixed.mass;
+    terms.mass_inverse = terms.fixed.mass_inverse;
+    terms.coriolis = terms.fixed.coriolis;
+    terms.gravity = terms.fixed.gravity;
+    terms.friction = terms.fixed.friction;
+  }
+
+  // eq. (1), with the dynamic terms
+  Joint acceleration(const Terms& terms, const Joint& dq, const Joint& tau,
+                     const Joint& tau_d) const {
+    return terms.mass_inverse *
+           (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+  }
+
+ private:
+  FixedArm arm_{};
+};
+
+// A fixed-size basis of the two-link arm behind dynamic sizes. The terms must be DynamicArm's
+// (the wrapped basis reads the fixed terms, e.g. cos q2).
+template <class FixedBasis>
+struct DynamicBasis {
+  static constexpr int kSize = Dynamic;
+  static constexpr int kStateDim = Dynamic;
+  using Vector = BasisVector<Dynamic>;
+  using Jacobian = BasisMatrix<Dynamic, Dynamic>;
+  static constexpr int kFixedDof = FixedBasis::kStateDim / 2;
+
+  int size() const { return FixedBasis::kSize; }
+
+  template <class Terms>
+  void evaluate(const ErrorVector<Dynamic>& x, const DesiredStateT<Dynamic>& desired,
+                const Terms& terms, Vector& phi, Jacobian& jacobian, Vector& desired_rate) const {
+    typename FixedBasis::Vector fixed_phi, fixed_rate;
+    typename FixedBasis::Jacobian fixed_jacobian;
+    FixedBasis::evaluate(ErrorVector<kFixedDof>(x), fixed_desired(desired), terms.fixed, fixed_phi,
+                         fixed_jacobian, fixed_rate);
+    phi = fixed_phi;
+    jacobian = fixed_jacobian;
+    desired_rate = fixed_rate;
+  }
+
+  void evaluate(const ErrorVector<Dynamic>& x, const DesiredStateT<Dynamic>& desired, Vector& phi,
+                Jacobian& jacobian, Vector& desired_rate) const {
+    typename FixedBasis::Vector fixed_phi, fixed_rate;
+    typename FixedBasis::Jacobian fixed_jacobian;
+    FixedBasis::evaluate(ErrorVector<kFixedDof>(x), fixed_desired(desired), fixed_phi,
+                         fixed_jacobian, fixed_rate);
+    phi = fixed_phi;
+    jacobian = fixed_jacobian;
+    desired_rate = fixed_rate;
+  }
+
+ private:
+  static DesiredStateT<kFixedDof> fixed_desired(const DesiredStateT<Dynamic>& desired) {
+    DesiredStateT<kFixedDof> d;
+    d.q = desired.q;
+    d.dq = desired.dq;
+    d.ddq = desired.ddq;
+    return d;
+  }
+};
+
+}  // namespace adparm
