@@ -4,6 +4,7 @@ A C++ core (adparm._core) integrates the closed loop of the paper; this package 
 runs it and returns NumPy arrays.
 """
 
+from .bases import ExpressionBasis, basis_terms
 from .comparison import Comparison, compare
 from .config import (
     ActorConfig,
@@ -53,6 +54,7 @@ __all__ = [
     "ActorConfig",
     "Comparison",
     "Config",
+    "ExpressionBasis",
     "ControlConfig",
     "ControllerConfig",
     "CostConfig",
@@ -70,6 +72,7 @@ __all__ = [
     "SinusoidTrajectory",
     "SweepResult",
     "TaskConfig",
+    "basis_terms",
     "compare",
     "desired_state",
     "extrapolation_points",
