@@ -319,3 +319,21 @@ def test_core_checks_sizes() -> None:
         basis.evaluate_rows(np.zeros((5, 4)), np.zeros((4, 2)), np.zeros((5, 2)))
     with pytest.raises(ValueError, match=r"expected shape \(\.\.\., 4\)"):
         ExpressionBasis(["x1^2"]).evaluate(np.zeros((2, 3)))
+
+
+def test_quadratic_form_weights() -> None:
+    rng = np.random.default_rng(6)
+    A = rng.normal(size=(4, 4))
+    P = A @ A.T
+    weights = ExpressionBasis("quadratic").quadratic_form_weights(P)
+    expected = [P[i, j] * (1 if i == j else 2) for i in range(4) for j in range(i, 4)]
+    np.testing.assert_allclose(weights, expected, rtol=1e-10, atol=1e-12)
+    # the paper's basis holds blockdiag(diag, [[a, b], [b, c]]) forms, in its own order
+    D = np.diag([1.0, 2.0, 3.0, 4.0])
+    D[2, 3] = D[3, 2] = 0.25
+    paper = ExpressionBasis("paper").quadratic_form_weights(D)
+    np.testing.assert_allclose(paper, [1, 2, 0, 3, 0, 4, 0.5, 0], atol=1e-12)
+    with pytest.raises(ValueError, match=r"lacks x1\*x3, x1\*x4, x2\*x3, x2\*x4;"):
+        ExpressionBasis("paper").quadratic_form_weights(P)
+    with pytest.raises(ValueError, match=r"P: expected a finite \(4, 4\)"):
+        ExpressionBasis("paper").quadratic_form_weights(np.eye(3))

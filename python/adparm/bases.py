@@ -66,7 +66,7 @@ _ATTRIBUTE = re.compile(r"\.\s*[A-Za-z_]")
 
 
 def variable_names(joints: int) -> list[str]:
-    """The variable names of a term for n joints: ``x1 .. x2n``, ``q1 .. qn``, ``qd1 .. qdn``."""
+    """The variable names of a term for n joints: x1 to x2n, q1 to qn, qd1 to qdn."""
     _check_joints(joints)
     return (
         [f"x{i}" for i in range(1, 2 * joints + 1)]
@@ -144,8 +144,11 @@ def basis_terms(
 
 
 def parse_term(term: str, joints: int = 2) -> sympy.Expr:
-    """One term as a sympy expression in the symbols x1.., q1.., qd1..; ValueError naming the
-    term for anything else (an unknown variable or function, bad syntax, a constant)."""
+    """One term as a sympy expression in the symbols of :func:`variable_names`.
+
+    A ValueError names the term for anything else: an unknown variable or function (with the
+    closest known name), bad syntax, a constant.
+    """
     import sympy
     from sympy.core.function import AppliedUndef
     from sympy.parsing.sympy_parser import (
@@ -210,7 +213,8 @@ def compile_terms(
 ) -> tuple[NDArray[np.int32], NDArray[np.float64]]:
     """The postfix program of the C++ ``ExpressionBasis``: (opcodes, arguments).
 
-    Variables are numbered over z = [x1 .. x2n, qd1 .. qdn]; q_i is replaced by qd_i - x_i.
+    Variables are numbered over z = [x; qd] (x1 to x2n, then qd1 to qdn); q_i is replaced by
+    qd_i - x_i.
     """
     import sympy
 
@@ -296,6 +300,43 @@ class ExpressionBasis:
             rate.reshape(lead + (self.size,)),
         )
 
+    def quadratic_form_weights(self, P: ArrayLike, *, seed: int = 0) -> NDArray[np.float64]:
+        """Weights W with W^T phi(x, qd) = x^T P x for every x and qd, e.g. initial weights from
+        a quadratic V (a Riccati solution, or blockdiag(K, M) of the believed model).
+
+        Solved by least squares at 4 N + 20 random states (x in [-1, 1]^2n, qd in [-pi, pi]^n)
+        and verified there; a ValueError says when the basis cannot represent x^T P x (which
+        quadratic monomials it lacks).
+        """
+        n_x = 2 * self.joints
+        P = np.asarray(P, dtype=np.float64)
+        if P.shape != (n_x, n_x) or not np.all(np.isfinite(P)):
+            raise ValueError(f"P: expected a finite ({n_x}, {n_x}) matrix, got shape {P.shape}")
+        P = 0.5 * (P + P.T)
+        rng = np.random.default_rng(seed)
+        count = 4 * self.size + 20
+        x = rng.uniform(-1.0, 1.0, (count, n_x))
+        qd = rng.uniform(-np.pi, np.pi, (count, self.joints))
+        phi, _, _ = self.evaluate(x, qd)
+        V = np.einsum("ni,ij,nj->n", x, P, x)
+        weights, *_ = np.linalg.lstsq(phi, V, rcond=None)
+        scale = max(float(np.linalg.norm(V)), 1e-300)
+        if np.linalg.norm(phi @ weights - V) > 1e-9 * scale:
+            present = {_expanded(e, self.joints) for e in self.expressions}
+            xs = [_symbol(f"x{i}") for i in range(1, n_x + 1)]
+            missing = [
+                f"x{i + 1}^2" if i == j else f"x{i + 1}*x{j + 1}"
+                for i in range(n_x)
+                for j in range(i, n_x)
+                if P[i, j] != 0.0 and xs[i] * xs[j] not in present
+            ]
+            raise ValueError(
+                "P: this basis cannot represent x^T P x"
+                + (f" (it lacks {', '.join(missing)}; add them or 'quadratic')" if missing else "")
+            )
+        weights[np.abs(weights) < 1e-12 * max(np.abs(weights).max(), 1.0)] = 0.0
+        return weights
+
     def desired_jacobian(self, x: ArrayLike, qd: ArrayLike | None = None) -> NDArray[np.float64]:
         """d phi / d qd (N, n) at one point x (2n,), qd (n,)."""
         n = self.joints
@@ -318,6 +359,12 @@ def _range_text(joints: int) -> str:
 def _did_you_mean(name: str, choices: Sequence[str]) -> str:
     close = difflib.get_close_matches(name, list(choices), n=1, cutoff=0.5)
     return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _symbol(name: str) -> Any:
+    import sympy
+
+    return sympy.Symbol(name)
 
 
 def _expanded(expression: sympy.Expr, joints: int) -> Any:
