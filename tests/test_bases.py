@@ -130,6 +130,17 @@ def test_engine_matches_sympy_derivatives_of_random_expressions(data, joints, se
         ["tan(x1)", "log(x2)", "exp(x1*x2)", "tanh(q1)", "sin(qd1)*x3"],
         ["3*x1 - 2*x2*x3 + x4/5", "-x1*x2", "pi*x1^2 - cos(q1 + q2)*x2"],
         ["x5*x6*cos(q2 + q3)", "x4^2*sin(q1)^2", "qd3*x1^2"],
+        # repeated functions of the same argument are computed once per evaluation
+        [
+            "x3^2*cos(q2)",
+            "x3*x4*cos(q2)",
+            "x1*cos(q2)",
+            "x1*cos(q1)",
+            "x2*sin(q2)",
+            "x4*cos(2*q2)",
+            "x4*cos(q2)^2 + cos(q2)",
+            "x5*cos(x2 - qd2)",
+        ],
     ],
 )
 def test_engine_matches_sympy_on_every_operation(terms) -> None:
@@ -337,3 +348,23 @@ def test_quadratic_form_weights() -> None:
         ExpressionBasis("paper").quadratic_form_weights(P)
     with pytest.raises(ValueError, match=r"P: expected a finite \(4, 4\)"):
         ExpressionBasis("paper").quadratic_form_weights(np.eye(3))
+
+
+def test_monomials_with_coefficients_and_desired_variables_match_sympy() -> None:
+    # monomials take the engine's stackless path; these check it against sympy too
+    terms = bases.polynomial_terms(2, 4) + ["3*x1*x2^2*qd2", "-2.5*x3^3*x4", "-x1*qd1^2", "qd2*x4"]
+    rng = np.random.default_rng(7)
+    check_against_reference(terms, 2, random_points(rng, 2, count=10))
+    # and give the same numbers as the stack path: the same program with "+ 0" appended (which
+    # makes it no monomial) runs on the stack
+    opcodes, arguments = bases.compile_terms(["3*x1*x2^2*qd2"], 2)
+    plain = _core.ExpressionBasis(2, opcodes.tolist(), arguments.tolist())
+    op = _core.ExpressionOp
+    stacked = _core.ExpressionBasis(
+        2,
+        [*opcodes[:-1].tolist(), int(op.constant), int(op.add), int(op.store)],
+        [*arguments[:-1].tolist(), 0.0, 0.0, 0.0],
+    )
+    for x, qd, dqd in random_points(rng, 2, count=10):
+        for a, b in zip(plain.evaluate(x, qd, dqd), stacked.evaluate(x, qd, dqd), strict=True):
+            np.testing.assert_array_equal(a, b)
