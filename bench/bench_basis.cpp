@@ -12,9 +12,10 @@
 // or under AddressSanitizer). Then the quadratic family (all x_i x_j, i <= j) for n = 2, 3, 6.
 //
 // Before timing, the expression bases must reproduce PaperBasis and AugmentedBasis bit for bit
-// (phi, d phi / dx, desired rate) at every point, and evaluate without a heap allocation; else
-// exit 1. --checks (bench/sanitize.sh) then also feeds invalid programs and sizes, each expected
-// to throw std::invalid_argument:
+// (phi, d phi / dx, desired rate) at every point, through both forms of the seam (with and without
+// the arm's terms), and evaluate without a heap allocation; else exit 1. --checks
+// (bench/sanitize.sh) then also feeds invalid programs and sizes, each expected to throw
+// std::invalid_argument:
 //   bench=basis_checks invalid=k refused=k failed=f
 #include <algorithm>
 #include <chrono>
@@ -169,6 +170,13 @@ int compare(ExpressionBasis& expression, const Points& points) {
         !(out.jacobian.array() == jacobian.array()).all() ||
         !(out.rate.array() == rate.array()).all())
       ++differing;
+    // the seam's second form (with the arm's terms, unused) into fixed-size outputs
+    struct NoTerms {
+    } terms;
+    typename Basis::Vector phi2, rate2;
+    typename Basis::Jacobian jacobian2;
+    expression.evaluate(points.x[i], desired, terms, phi2, jacobian2, rate2);
+    if (phi2 != phi || jacobian2 != jacobian || rate2 != rate) ++differing;
   }
   return differing;
 }

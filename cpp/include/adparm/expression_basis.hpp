@@ -158,13 +158,8 @@ class ExpressionBasis {
     }
   }
 
-  // The seam of basis.hpp: desired.q and desired.dq are qd and dqd (n each).
-  template <class Desired>
-  void evaluate(const Eigen::Ref<const Eigen::VectorXd>& x, const Desired& desired,
-                Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> jacobian,
-                Eigen::Ref<Eigen::VectorXd> desired_rate, Workspace& workspace) const {
-    evaluate(x, desired.q, desired.dq, phi, jacobian, desired_rate, nullptr, workspace);
-  }
+  // The seam of basis.hpp: desired.q and desired.dq are qd and dqd (n each); these use the basis'
+  // own workspace (one thread at a time), the form above takes one explicitly.
   template <class Desired>
   void evaluate(const Eigen::Ref<const Eigen::VectorXd>& x, const Desired& desired,
                 Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> jacobian,
