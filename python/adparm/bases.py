@@ -203,6 +203,11 @@ def parse_term(term: str, joints: int = 2) -> sympy.Expr:
             f"basis term {term!r}: is the constant {expression}; a basis function must depend on "
             f"the state (only its gradient enters the HJB error)"
         )
+    if not any(not symbol.name.startswith("qd") for symbol in expression.free_symbols):
+        raise ValueError(
+            f"basis term {term!r}: depends on the desired state only; a basis function must "
+            f"depend on x or q (its gradient in x enters the HJB error)"
+        )
     if expression.has(sympy.zoo, sympy.oo, -sympy.oo, sympy.nan, sympy.I):
         raise ValueError(f"basis term {term!r}: is not finite and real")
     return expression
