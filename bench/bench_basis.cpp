@@ -8,8 +8,9 @@
 //   bench=basis basis=B engine=hand_written|expression functions=N joints=n ns_per_evaluation=x
 //     heap_allocations=a [ratio=r]
 // ratio = ns of the expression basis / ns of the hand-written one, from the same invocation;
-// heap_allocations counts malloc calls during the timed expression loop (glibc only; -1 elsewhere
-// or under AddressSanitizer). Then the quadratic family (all x_i x_j, i <= j) for n = 2, 3, 6.
+// heap_allocations counts malloc calls during the timed expression loop (glibc's malloc
+// interposed, or AddressSanitizer's allocation hook; -1 elsewhere). Then the quadratic family (all
+// x_i x_j, i <= j) for n = 2, 3, 6.
 //
 // Before timing, the expression bases must reproduce PaperBasis and AugmentedBasis bit for bit
 // (phi, d phi / dx, desired rate) at every point, through both forms of the seam (with and without
@@ -32,7 +33,22 @@
 #include "adparm/basis.hpp"
 #include "adparm/expression_basis.hpp"
 
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__)
+// Under AddressSanitizer (bench/sanitize.sh), which owns malloc, its allocation hook counts.
+#define ADPARM_COUNT_MALLOC 1
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*,
+                                                                             std::size_t),
+                                                         void (*free_hook)(const volatile void*));
+namespace {
+bool counting = false;
+long allocations = 0;
+void count_malloc(const volatile void*, std::size_t) {
+  if (counting) ++allocations;
+}
+void ignore_free(const volatile void*) {}
+const int hooks_installed = __sanitizer_install_malloc_and_free_hooks(count_malloc, ignore_free);
+}  // namespace
+#elif defined(__GLIBC__)
 #define ADPARM_COUNT_MALLOC 1
 extern "C" void* __libc_malloc(std::size_t size);
 namespace {
@@ -289,6 +305,16 @@ void run_checks() {
 int run(long evaluations, bool checks) {
   const int kPoints = 1024;  // a power of two (the timed loops cycle with a mask)
   const Points points = random_points(2, kPoints, 7);
+#ifdef ADPARM_COUNT_MALLOC
+  {  // the counter sees a known allocation (else a 0 below would prove nothing)
+    start_counting();
+    std::vector<double>* probe = new std::vector<double>(16);
+    const long seen = stop_counting();
+    delete probe;
+    std::printf("bench=basis_malloc_counter allocations_seen=%ld\n", seen);
+    if (seen < 1) ++failures;
+  }
+#endif
   ExpressionBasis paper(2, paper_program(false)), augmented(2, paper_program(true));
   const int paper_differing = compare<adparm::PaperBasis>(paper, points);
   const int augmented_differing = compare<adparm::AugmentedBasis>(augmented, points);

@@ -4,7 +4,8 @@
 # CMakeLists.txt) and runs it briefly with --checks: the paper loop, fixed extrapolation points, the
 # 16-run batch on 1 and 2 threads, then local/grid points, tracking, the other controllers, a
 # diverging run, chunked and threaded runs, and invalid settings that must throw; then the
-# expression basis bench (adparm_bench_basis --checks: exactness, invalid programs and sizes).
+# expression basis bench (adparm_bench_basis --checks: exactness, no heap allocation per evaluation,
+# invalid programs and sizes).
 # Any finding stops the bench and makes this script exit non-zero.
 #
 # Usage: bench/sanitize.sh [simulated_seconds [points ...]]   (default: 1 s, N = 0 and 10)
@@ -32,7 +33,8 @@ if [ $# -eq 0 ]; then
 fi
 status=0
 "$build/adparm_bench" --checks "$@" || status=$?
-# The expression basis: bit for bit against the hand-written bases, then invalid programs and sizes.
+# The expression basis: bit for bit against the hand-written bases, no allocation (ASan's hook
+# counts), then invalid programs and sizes.
 "$build/adparm_bench_basis" --checks 20000 || status=$?
 
 echo "sanitize: build $((built - start)) s, run $((SECONDS - built)) s, exit status $status" >&2
