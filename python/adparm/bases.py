@@ -108,6 +108,13 @@ def basis_terms(
     ``"paper"`` and ``"augmented"`` need two joints, ``"polynomial"`` a ``degree``. Terms equal
     after expansion to an earlier one are dropped (so families combine without duplicates).
     """
+    return [term for term, _ in _unique_terms(basis, joints, degree)]
+
+
+def _unique_terms(
+    basis: str | Sequence[str], joints: int, degree: int | None
+) -> list[tuple[str, sympy.Expr]]:
+    """basis_terms, with each term's parsed expression."""
     _check_joints(joints)
     items = [basis] if isinstance(basis, str) else list(basis)
     if not items:
@@ -139,7 +146,7 @@ def basis_terms(
         key = _expanded(expression, joints)
         if key not in seen:
             seen.add(key)
-            unique.append(term)
+            unique.append((term, expression))
     return unique
 
 
@@ -265,8 +272,9 @@ class ExpressionBasis:
         self, basis: str | Sequence[str], joints: int = 2, *, degree: int | None = None
     ) -> None:
         self.joints = joints
-        self.terms: tuple[str, ...] = tuple(basis_terms(basis, joints, degree=degree))
-        self.expressions = tuple(parse_term(term, joints) for term in self.terms)
+        unique = _unique_terms(basis, joints, degree)
+        self.terms: tuple[str, ...] = tuple(term for term, _ in unique)
+        self.expressions = tuple(expression for _, expression in unique)
         self.opcodes, self.arguments = compile_terms(self.expressions, joints)
         self.core = _core.ExpressionBasis(joints, self.opcodes.tolist(), self.arguments.tolist())
 
@@ -391,11 +399,7 @@ def _factor_key(factor: sympy.Expr, index: dict[str, int]) -> tuple:
     base = factor.base if factor.is_Pow and factor.exp.is_number else factor
     if base.is_Symbol:
         return (0, index[base.name], "")
-    return (1, 0, sympy_key(factor))
-
-
-def sympy_key(expression: sympy.Expr) -> str:
-    return str(expression.sort_key())
+    return (1, 0, str(factor.sort_key()))
 
 
 def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: str) -> None:
