@@ -4,7 +4,8 @@
 # CMakeLists.txt) and runs it briefly with --checks: the paper loop, fixed extrapolation points, the
 # 16-run batch on 1 and 2 threads, then local/grid points, tracking, the other controllers, a
 # diverging run, chunked and threaded runs, a streamed batch (window 2) stopped part-way and resumed,
-# and invalid settings that must throw.
+# and invalid settings that must throw; then the expression basis bench (adparm_bench_basis
+# --checks: exactness, no heap allocation per evaluation, invalid programs and sizes).
 # Any finding stops the bench and makes this script exit non-zero.
 #
 # Usage: bench/sanitize.sh [simulated_seconds [points ...]]   (default: 1 s, N = 0 and 10)
@@ -20,7 +21,7 @@ if [ ! -f "$build/CMakeCache.txt" ] && command -v ninja >/dev/null; then
   generator=(-G Ninja)
 fi
 cmake -S "$root" -B "$build" ${generator[@]+"${generator[@]}"} -DADPARM_SANITIZE=ON -DADPARM_BUILD_BENCH=ON
-cmake --build "$build" --target adparm_bench
+cmake --build "$build" --target adparm_bench adparm_bench_basis
 built=$SECONDS
 
 # LeakSanitizer works in this container (it needs to stop the threads with ptrace; where it cannot,
@@ -32,6 +33,9 @@ if [ $# -eq 0 ]; then
 fi
 status=0
 "$build/adparm_bench" --checks "$@" || status=$?
+# The expression basis: bit for bit against the hand-written bases, no allocation (ASan's hook
+# counts), then invalid programs and sizes.
+"$build/adparm_bench_basis" --checks 20000 || status=$?
 
 echo "sanitize: build $((built - start)) s, run $((SECONDS - built)) s, exit status $status" >&2
 exit "$status"

@@ -80,7 +80,8 @@ def test_python_blocks_run(path: Path, tmp_path: Path, monkeypatch: pytest.Monke
 
 @_SHORT_RUNS_WARN
 @pytest.mark.parametrize(
-    "module", ["adparm.config", "adparm.optimal", "adparm.physical", "adparm.simulation"]
+    "module",
+    ["adparm.bases", "adparm.config", "adparm.optimal", "adparm.physical", "adparm.simulation"],
 )
 def test_docstring_examples_run(module: str) -> None:
     import doctest

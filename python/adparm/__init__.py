@@ -4,6 +4,7 @@ A C++ core (adparm._core) integrates the closed loop of the paper; this package 
 runs it and returns NumPy arrays.
 """
 
+from .bases import ExpressionBasis, basis_terms
 from .comparison import Comparison, compare
 from .config import (
     ActorConfig,
@@ -59,6 +60,7 @@ __all__ = [
     "ApproximationWarning",
     "Comparison",
     "Config",
+    "ExpressionBasis",
     "ControlConfig",
     "ControllerConfig",
     "CostConfig",
@@ -79,6 +81,7 @@ __all__ = [
     "arm_terms",
     "basis",
     "basis_names",
+    "basis_terms",
     "check_step_size",
     "compare",
     "desired_state",

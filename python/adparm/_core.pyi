@@ -238,6 +238,51 @@ def basis(
     """A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4)
     and (d phi / d qd) dqd (K,)."""
 
+class ExpressionOp:
+    """Opcodes of an ExpressionBasis program (cpp/include/adparm/expression_basis.hpp)."""
+
+    constant: ExpressionOp
+    variable: ExpressionOp
+    add: ExpressionOp
+    subtract: ExpressionOp
+    multiply: ExpressionOp
+    negate: ExpressionOp
+    power: ExpressionOp
+    sin: ExpressionOp
+    cos: ExpressionOp
+    tan: ExpressionOp
+    exp: ExpressionOp
+    log: ExpressionOp
+    sqrt: ExpressionOp
+    tanh: ExpressionOp
+    store: ExpressionOp
+    def __int__(self) -> int: ...
+
+class ExpressionBasis:
+    """A basis compiled from a postfix program over z = [x (2n); qd (n)]
+    (cpp/include/adparm/expression_basis.hpp)."""
+
+    def __init__(self, joints: int, opcodes: list[int], arguments: list[float]) -> None: ...
+    def __len__(self) -> int: ...
+    @property
+    def size(self) -> int: ...
+    @property
+    def joints(self) -> int: ...
+    @property
+    def state_dim(self) -> int: ...
+    @property
+    def stack_depth(self) -> int: ...
+    def evaluate(
+        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
+    ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray]:
+        """At x (2n,), qd (n,), dqd (n,): phi (N,), d phi / dx (N, 2n), (d phi / d qd) dqd (N,)
+        and d phi / d qd (N, n)."""
+    def evaluate_rows(
+        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
+    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
+        """Row by row, x (m, 2n), qd and dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and
+        (d phi / d qd) dqd (m, N)."""
+
 def hjb_residual(
     settings: Settings,
     x: ArrayLike,

@@ -7,6 +7,7 @@
 
 #include "adparm/basis.hpp"
 #include "adparm/batch.hpp"
+#include "adparm/expression_basis.hpp"
 #include "adparm/hjb.hpp"
 #include "adparm/open_loop.hpp"
 #include "adparm/simulation.hpp"
@@ -210,6 +211,94 @@ void bind_basis(py::module_& m) {
       "(d phi / d qd) dqd (K,).");
 }
 
+void bind_expression_basis(py::module_& m) {
+  using RowsX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  py::enum_<ExpressionOp>(m, "ExpressionOp")
+      .value("constant", ExpressionOp::constant)
+      .value("variable", ExpressionOp::variable)
+      .value("add", ExpressionOp::add)
+      .value("subtract", ExpressionOp::subtract)
+      .value("multiply", ExpressionOp::multiply)
+      .value("negate", ExpressionOp::negate)
+      .value("power", ExpressionOp::power)
+      .value("sin", ExpressionOp::sin)
+      .value("cos", ExpressionOp::cos)
+      .value("tan", ExpressionOp::tan)
+      .value("exp", ExpressionOp::exp)
+      .value("log", ExpressionOp::log)
+      .value("sqrt", ExpressionOp::sqrt)
+      .value("tanh", ExpressionOp::tanh)
+      .value("store", ExpressionOp::store);
+  py::class_<ExpressionBasis>(m, "ExpressionBasis",
+                              "A basis compiled from a postfix program over z = [x (2n); qd (n)] "
+                              "(cpp/include/adparm/expression_basis.hpp).")
+      .def(py::init([](int joints, const std::vector<int>& opcodes,
+                       const std::vector<double>& arguments) {
+             if (opcodes.size() != arguments.size())
+               throw std::invalid_argument("arguments: expected one per opcode (" +
+                                           std::to_string(opcodes.size()) + "), got " +
+                                           std::to_string(arguments.size()));
+             std::vector<ExpressionInstruction> program(opcodes.size());
+             for (std::size_t i = 0; i < opcodes.size(); ++i)
+               program[i] = {static_cast<ExpressionOp>(opcodes[i]), arguments[i]};
+             return ExpressionBasis(joints, program);
+           }),
+           py::arg("joints"), py::arg("opcodes"), py::arg("arguments"))
+      .def("__len__", &ExpressionBasis::size)
+      .def_property_readonly("size", &ExpressionBasis::size)
+      .def_property_readonly("joints", &ExpressionBasis::joints)
+      .def_property_readonly("state_dim", &ExpressionBasis::state_dim)
+      .def_property_readonly("stack_depth", &ExpressionBasis::stack_depth)
+      .def(
+          "evaluate",
+          [](const ExpressionBasis& basis, const Eigen::VectorXd& x, const Eigen::VectorXd& qd,
+             const Eigen::VectorXd& dqd) {
+            const Eigen::Index N = basis.size();
+            Eigen::VectorXd phi(N), rate(N);
+            Eigen::MatrixXd jacobian(N, basis.state_dim()), desired_jacobian(N, basis.joints());
+            ExpressionBasis::Workspace workspace = basis.workspace();
+            {
+              py::gil_scoped_release release;
+              basis.evaluate(x, qd, dqd, phi, jacobian, rate, &desired_jacobian, workspace);
+            }
+            return py::make_tuple(phi, jacobian, rate, desired_jacobian);
+          },
+          py::arg("x"), py::arg("qd"), py::arg("dqd"),
+          "At x (2n,), qd (n,), dqd (n,): phi (N,), d phi / dx (N, 2n), (d phi / d qd) dqd (N,) "
+          "and d phi / d qd (N, n).")
+      .def(
+          "evaluate_rows",
+          [](const ExpressionBasis& basis, const RowsX& x, const RowsX& qd, const RowsX& dqd) {
+            const Eigen::Index rows = x.rows(), N = basis.size(), n_x = basis.state_dim();
+            check_size(qd, rows, basis.joints(), "qd");
+            check_size(dqd, rows, basis.joints(), "dqd");
+            if (x.cols() != n_x) check_size(x, rows, n_x, "x");
+            py::array_t<double> phi({rows, N}), jacobian({rows, N, n_x}), rate({rows, N});
+            double* phi_out = phi.mutable_data();
+            double* jacobian_out = jacobian.mutable_data();
+            double* rate_out = rate.mutable_data();
+            {
+              py::gil_scoped_release release;
+              ExpressionBasis::Workspace workspace = basis.workspace();
+              Eigen::VectorXd p(N), r(N), row_x(n_x), row_qd(qd.cols()), row_dqd(dqd.cols());
+              Eigen::MatrixXd j(N, n_x);
+              for (Eigen::Index i = 0; i < rows; ++i) {
+                row_x = x.row(i).transpose();
+                row_qd = qd.row(i).transpose();
+                row_dqd = dqd.row(i).transpose();
+                basis.evaluate(row_x, row_qd, row_dqd, p, j, r, nullptr, workspace);
+                Eigen::Map<Eigen::VectorXd>(phi_out + i * N, N) = p;
+                Eigen::Map<Eigen::VectorXd>(rate_out + i * N, N) = r;
+                Eigen::Map<RowsX>(jacobian_out + i * N * n_x, N, n_x) = j;
+              }
+            }
+            return py::make_tuple(phi, jacobian, rate);
+          },
+          py::arg("x"), py::arg("qd"), py::arg("dqd"),
+          "Row by row, x (m, 2n), qd and dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and "
+          "(d phi / d qd) dqd (m, N).");
+}
+
 void bind_hjb(py::module_& m) {
   m.def(
       "hjb_residual",
@@ -385,6 +474,7 @@ PYBIND11_MODULE(_core, m) {
   bind_arm(m);
   bind_trajectory(m);
   bind_basis(m);
+  bind_expression_basis(m);
   bind_hjb(m);
   bind_closed_loop(m);
   bind_simulation(m);
