@@ -44,11 +44,13 @@ from .simulation import (
 )
 from .storage import load_result
 from .sweep import SweepResult, grid_points, sweep
+from .urdf import EXAMPLE_ROBOTS, UrdfArm, example_robot_urdf
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BASIS_NAMES",
+    "EXAMPLE_ROBOTS",
     "ActorConfig",
     "Comparison",
     "Config",
@@ -69,8 +71,10 @@ __all__ = [
     "SinusoidTrajectory",
     "SweepResult",
     "TaskConfig",
+    "UrdfArm",
     "compare",
     "desired_state",
+    "example_robot_urdf",
     "extrapolation_points",
     "grid_points",
     "hjb_residual",
