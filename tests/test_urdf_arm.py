@@ -350,3 +350,24 @@ def test_example_robot_urdf() -> None:
     assert adparm.example_robot_urdf("ur_description/urdf/ur3_robot.urdf").is_file()
     with pytest.raises(ValueError, match="no robot 'r2d2' .known names: "):
         adparm.example_robot_urdf("r2d2")
+
+
+# --- the guide's examples ------------------------------------------------------------------------
+
+GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide" / "urdf-arms.md"
+
+
+def python_blocks(path: Path) -> list[str]:
+    return re.findall(r"^```python\n(.*?)^```", path.read_text(), flags=re.S | re.M)
+
+
+def test_guide_has_examples() -> None:
+    assert len(python_blocks(GUIDE)) >= 4
+
+
+@pytest.mark.parametrize("index", range(len(python_blocks(GUIDE))))
+def test_guide_example_runs(index: int, tmp_path, monkeypatch, capsys) -> None:
+    (tmp_path / "examples").symlink_to(ARMS.parent, target_is_directory=True)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(python_blocks(GUIDE)[index], f"{GUIDE.name}[{index}]", "exec"), {})
+    assert capsys.readouterr().out  # every example prints what it shows
