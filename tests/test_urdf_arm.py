@@ -13,8 +13,6 @@ import pytest
 import adparm
 from adparm import _core
 
-pinocchio = pytest.importorskip("pinocchio")
-
 ARMS = Path(__file__).resolve().parents[1] / "examples" / "arms"
 PAPER = {"p1": 5.0, "p2": 1.0, "p3": 1.0, "g1": 9.8 * 1.2, "g2": 9.8}
 
@@ -125,6 +123,9 @@ def test_planar_3link_matches_numpy(rng) -> None:
 
 
 def pinocchio_terms(path: Path, gravity, q: np.ndarray, dq: np.ndarray) -> dict:
+    # Pinocchio's Python bindings (the pin package, in the test extra): an independent caller
+    import pinocchio
+
     model = pinocchio.buildModelFromUrdf(str(path))
     model.gravity.linear = np.asarray(gravity, dtype=float)
     data = model.createData()
@@ -235,6 +236,35 @@ def test_mass_matrix_is_linear_in_the_inertial_parameters(name: str, rng) -> Non
         changed = pi.copy()
         changed[0] += 1.0
         assert np.abs(np.einsum("k,kij->ij", changed, Mk) - M - Mk[0]).max() < 1e-10
+
+
+@pytest.mark.parametrize(
+    "name, count",
+    # 7 and 13 as in issue 14's NumPy prototype; the two-link arm has p1, p2, p3 and the
+    # coefficient of sin q2 (the first moment of link 2 across the link), which is 0 here
+    [("two_link", 4), ("planar_3link", 7), ("spatial_3dof", 13), ("ur5", None)],
+)
+def test_base_parameters(name: str, count: int | None, rng) -> None:
+    if name not in ARM_PATHS:
+        pytest.fail("example-robot-data is missing")
+    arm = adparm.UrdfArm(ARM_PATHS[name])
+    values, columns, combination = arm.base_parameters()
+    if count is not None:
+        assert len(values) == count
+    np.testing.assert_allclose(combination @ arm.inertial_parameters, values, rtol=0, atol=0)
+    for q, dq in random_states(rng, arm.dof, 5):  # poses other than the sampled ones
+        Mk = arm.mass_regressor(q)
+        M = np.einsum("i,ijk->jk", values, Mk[columns])
+        np.testing.assert_allclose(M, arm.terms(q, dq)["M"], rtol=0, atol=1e-10)
+    # minimal: no M_k of the chosen columns is a combination of the others
+    stacked = np.stack(
+        [
+            arm.mass_regressor(q)[columns].reshape(len(columns), -1)
+            for q, _ in random_states(rng, arm.dof, 10)
+        ],
+        axis=1,
+    )
+    assert np.linalg.matrix_rank(stacked.reshape(len(columns), -1)) == len(columns)
 
 
 def test_two_link_mass_regressor_gives_p1_p2_p3(rng) -> None:

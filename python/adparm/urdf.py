@@ -135,6 +135,41 @@ class UrdfArm:
         side_by_side = self._arm.mass_regressor(_vector(q, n, "q"))
         return side_by_side.reshape(n, 10 * n, n).transpose(1, 0, 2)
 
+    def base_parameters(
+        self, samples: int = 100, seed: int = 0, tolerance: float = 1e-9
+    ) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64]]:
+        """A minimal set of inertial parameters of the kinetic energy (base parameters).
+
+        Returns (values, columns, combination): values (r,) = combination (r, 10 n) @
+        inertial_parameters, and M(q) = sum_i values[i] * mass_regressor(q)[columns[i]] for every
+        q. The M_k(q) of `samples` random poses (seeded) are stacked and reduced by a QR
+        decomposition with column pivoting: r is the rank, the pivot columns are independent
+        and every other column is a fixed combination of them, folded into `values`.
+        """
+        from scipy.linalg import qr, solve_triangular
+
+        n, p = self.dof, 10 * self.dof
+        rng = np.random.default_rng(seed)
+        lower = np.maximum(self.limits["lower"], -np.pi)
+        upper = np.minimum(self.limits["upper"], np.pi)
+        rows = np.triu_indices(n)
+        W = np.concatenate(
+            [
+                self.mass_regressor(rng.uniform(lower, upper))[:, rows[0], rows[1]].T
+                for _ in range(samples)
+            ]
+        )
+        _, R, pivots = qr(W, mode="economic", pivoting=True)
+        diagonal = np.abs(np.diag(R))
+        rank = int(np.sum(diagonal > tolerance * diagonal[0]))
+        independent, dependent = pivots[:rank], pivots[rank:]
+        K = solve_triangular(R[:rank, :rank], R[:rank, rank:])
+        combination = np.zeros((rank, p))
+        combination[:, independent] = np.eye(rank)
+        combination[:, dependent] = K
+        columns = np.asarray(independent, dtype=np.intp)
+        return combination @ self.inertial_parameters, columns, combination
+
 
 def _example_robot_data_root() -> Path | None:
     candidates: list[Path] = []
