@@ -60,21 +60,31 @@ Eigen::VectorXd per_joint(const Eigen::VectorXd& values, int dof, const std::str
 
 }  // namespace
 
-struct PinocchioArm::Impl {
+// Everything but the work space, copied as is.
+struct PinocchioArmFields {
   std::string source;
   pinocchio::Model model;
   pinocchio::Model model_without_gravity;  // for mass_regressor
-  mutable pinocchio::Data data;
-  mutable Eigen::VectorXd configuration;  // Pinocchio's q (nq: cos, sin for a continuous joint)
+  mutable Eigen::VectorXd configuration;   // Pinocchio's q (nq: cos, sin for a continuous joint)
   mutable Eigen::VectorXd velocity;
   mutable Eigen::VectorXd zero_velocity;
   mutable Eigen::VectorXd unit_acceleration;
   std::vector<int> q_index;  // Pinocchio's idx_q of joint i
   std::vector<bool> continuous;
   std::vector<std::string> joint_names, joint_types;
-  Limits limits;
+  PinocchioArm::Limits limits;
   Eigen::Vector3d gravity;
   Eigen::VectorXd coulomb, viscous;
+};
+
+// The fields and Pinocchio's work space (pinocchio::Data), which a copy builds afresh from the
+// model: copying a Data would read its never-set members (UBSan finds Eigen's LLT::m_info).
+struct PinocchioArm::Impl : PinocchioArmFields {
+  std::unique_ptr<pinocchio::Data> data;
+
+  Impl() = default;
+  Impl(const Impl& other)
+      : PinocchioArmFields(other), data(std::make_unique<pinocchio::Data>(other.model)) {}
 
   // Pinocchio's configuration for joint angles/positions q.
   void set_configuration(const Eigen::Ref<const Eigen::VectorXd>& q) const {
@@ -145,7 +155,7 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
   model.gravity.linear(gravity);
   impl->model_without_gravity = model;
   impl->model_without_gravity.gravity.setZero();
-  impl->data = pinocchio::Data(model);
+  impl->data = std::make_unique<pinocchio::Data>(model);
   impl->gravity = gravity;
 
   impl->limits.lower.resize(dof);
@@ -251,7 +261,7 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   check_size(dq, dof_, 1, "dq");
   const Impl& s = *impl_;
   const pinocchio::Model& model = s.model;
-  pinocchio::Data& data = s.data;
+  pinocchio::Data& data = *s.data;
   s.set_configuration(q);
   s.velocity = dq;
   // CRBA and the articulated-body M^-1 fill the upper triangles only: mirror them.
@@ -288,7 +298,7 @@ void PinocchioArm::mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
     s.unit_acceleration[j] = 1.0;
     // Y(q, 0, e_j) pi = M(q) e_j without gravity: its column k is column j of M_k.
     const auto& regressor = pinocchio::computeJointTorqueRegressor(
-        s.model_without_gravity, s.data, s.configuration, s.zero_velocity, s.unit_acceleration);
+        s.model_without_gravity, *s.data, s.configuration, s.zero_velocity, s.unit_acceleration);
     for (Eigen::Index k = 0; k < parameter_count(); ++k) out.col(k * n + j) = regressor.col(k);
   }
 }
