@@ -156,13 +156,23 @@ bool time_pinocchio_arm(const char* name, const std::string& path) {
 #endif
     if (r == 0 || seconds < best) best = seconds;
   }
+  // A copy has its own work space and gives the same terms.
+  const adparm::PinocchioArm copy = arm;
+  adparm::PinocchioArm::Terms copy_terms = copy.make_terms();
+  arm.compute(q, dq, terms);
+  copy.compute(q, dq, copy_terms);
+  const bool same = copy_terms.mass == terms.mass && copy_terms.coriolis == terms.coriolis &&
+                    copy_terms.gravity == terms.gravity &&
+                    copy_terms.mass_inverse == terms.mass_inverse &&
+                    copy_terms.friction == terms.friction;
+  if (!same) std::fprintf(stderr, "check failed: a copy of the %s arm gives other terms\n", name);
   std::printf(
       "bench=pinocchio_arm arm=%s dof=%d computes=%ld ns_per_compute=%.1f heap_allocations=%ld "
       "finite=%d\n",
       name, arm.dof(), computes, 1e9 * best / computes, heap_allocations,
       std::isfinite(checksum) ? 1 : 0);
   std::fflush(stdout);
-  return heap_allocations <= 0 && std::isfinite(checksum);
+  return heap_allocations <= 0 && std::isfinite(checksum) && same;
 }
 
 bool time_pinocchio_arms() {
