@@ -13,6 +13,10 @@
 //   bench=dynamic_two_link points=N steps=n repeats=3 ns_per_step=x heap_allocations=0 ...
 //     the same runs through the dynamic-size loop (Settings::dynamic_sizes)
 //   bench=batch runs=16 steps=n threads=t seconds=s ns_per_step=x speedup=r identical=1
+//   bench=pinocchio_arm arm=NAME dof=n computes=c ns_per_compute=x heap_allocations=a
+//     PinocchioArm::compute (M, C, G, M^-1, F through Pinocchio) on examples/arms/planar_3link.urdf
+//     and example-robot-data's UR5 (skipped=... when that package is not found at build time);
+//     any heap allocation inside compute fails the bench.
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (glibc only; -1 elsewhere or under
 // AddressSanitizer, which owns malloc).
@@ -46,6 +50,7 @@
 #include <vector>
 
 #include "adparm/batch.hpp"
+#include "adparm/pinocchio_arm.hpp"
 
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
 #define ADPARM_COUNT_MALLOC 1
@@ -125,6 +130,68 @@ double time_batch(const std::vector<adparm::Settings>& settings, int threads,
   final_states.clear();
   for (const auto& run : runs) final_states.push_back(run->state());
   return seconds;
+}
+
+// PinocchioArm::compute at states that change every call, fastest of 3 repeats.
+bool time_pinocchio_arm(const char* name, const std::string& path) {
+  const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81),
+                                 Eigen::VectorXd::Constant(1, 0.1),
+                                 Eigen::VectorXd::Constant(1, 0.2));
+  adparm::PinocchioArm::Terms terms = arm.make_terms();
+  Eigen::VectorXd q = Eigen::VectorXd::LinSpaced(arm.dof(), -0.5, 0.7);
+  Eigen::VectorXd dq = Eigen::VectorXd::LinSpaced(arm.dof(), 0.3, -0.4);
+  Eigen::VectorXd tau = Eigen::VectorXd::Zero(arm.dof()), ddq = tau;
+  constexpr long computes = 20000;
+  double best = 0.0;
+  long heap_allocations = -1;
+  double checksum = 0.0;
+  for (int r = 0; r < 3; ++r) {
+#ifdef ADPARM_COUNT_MALLOC
+    allocations = 0;
+    counting = true;
+#endif
+    const auto start = Clock::now();
+    for (long i = 0; i < computes; ++i) {
+      q.array() += 1e-4;
+      arm.compute(q, dq, terms);
+      arm.acceleration(terms, dq, tau, tau, ddq);
+      checksum += ddq[0];
+    }
+    const double seconds = seconds_since(start);
+#ifdef ADPARM_COUNT_MALLOC
+    counting = false;
+    heap_allocations = std::max(heap_allocations, allocations);
+#endif
+    if (r == 0 || seconds < best) best = seconds;
+  }
+  // A copy has its own work space and gives the same terms.
+  const adparm::PinocchioArm copy = arm;
+  adparm::PinocchioArm::Terms copy_terms = copy.make_terms();
+  arm.compute(q, dq, terms);
+  copy.compute(q, dq, copy_terms);
+  const bool same = copy_terms.mass == terms.mass && copy_terms.coriolis == terms.coriolis &&
+                    copy_terms.gravity == terms.gravity &&
+                    copy_terms.mass_inverse == terms.mass_inverse &&
+                    copy_terms.friction == terms.friction;
+  if (!same) std::fprintf(stderr, "check failed: a copy of the %s arm gives other terms\n", name);
+  std::printf(
+      "bench=pinocchio_arm arm=%s dof=%d computes=%ld ns_per_compute=%.1f heap_allocations=%ld "
+      "finite=%d\n",
+      name, arm.dof(), computes, 1e9 * best / computes, heap_allocations,
+      std::isfinite(checksum) ? 1 : 0);
+  std::fflush(stdout);
+  return heap_allocations <= 0 && std::isfinite(checksum) && same;
+}
+
+bool time_pinocchio_arms() {
+  bool ok = time_pinocchio_arm("planar_3link", std::string(ADPARM_ARMS_DIR) + "/planar_3link.urdf");
+  const std::string robots = ADPARM_ROBOTS_DIR;
+  if (robots.empty()) {
+    std::printf("bench=pinocchio_arm arm=ur5 skipped=example-robot-data_not_found\n");
+  } else {
+    ok = time_pinocchio_arm("ur5", robots + "/ur_description/urdf/ur5_robot.urdf") && ok;
+  }
+  return ok;
 }
 
 // --checks ------------------------------------------------------------------------------------
@@ -616,10 +683,11 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
         serial / seconds, identical ? 1 : 0);
   }
   std::fflush(stdout);  // a LeakSanitizer report at exit ends the program without flushing
+  const bool arms_ok = time_pinocchio_arms();
   if (checks) {
     check_runs(horizon);
     check_invalid_settings();
     std::fflush(stdout);
   }
-  return all_finished && identical && failures == 0 ? 0 : 1;
+  return all_finished && identical && arms_ok && failures == 0 ? 0 : 1;
 }

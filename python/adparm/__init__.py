@@ -51,11 +51,13 @@ from .simulation import (
 from .storage import load_result
 from .sweep import SweepResult, grid_points, sweep
 from .truth import ApproximationWarning, check_step_size, diagnose, lqr_value, optimal_cost
+from .urdf import EXAMPLE_ROBOTS, UrdfArm, example_robot_urdf
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BASIS_NAMES",
+    "EXAMPLE_ROBOTS",
     "ActorConfig",
     "ApproximationWarning",
     "Comparison",
@@ -78,6 +80,7 @@ __all__ = [
     "SinusoidTrajectory",
     "SweepResult",
     "TaskConfig",
+    "UrdfArm",
     "arm_terms",
     "basis",
     "basis_names",
@@ -86,6 +89,7 @@ __all__ = [
     "compare",
     "desired_state",
     "diagnose",
+    "example_robot_urdf",
     "extrapolation_points",
     "grid_points",
     "hjb_residual",

@@ -228,6 +228,54 @@ def simulate_open_loop(
 ) -> _FloatArray:
     """RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4)."""
 
+class UrdfArm:
+    """A fixed-base serial arm from a URDF file, through Pinocchio (cpp/src/pinocchio_arm.cpp).
+    gravity (3,), coulomb and viscous: one number or one per joint. A URDF that cannot be read or
+    parsed, without a revolute/continuous/prismatic joint, or with a floating, planar or mimic
+    joint raises ValueError naming the file."""
+
+    def __init__(
+        self,
+        urdf_path: str,
+        gravity: ArrayLike = ...,
+        coulomb: float | ArrayLike = 0.0,
+        viscous: float | ArrayLike = 0.0,
+    ) -> None: ...
+    @staticmethod
+    def from_xml(
+        xml: str,
+        gravity: ArrayLike = ...,
+        coulomb: float | ArrayLike = 0.0,
+        viscous: float | ArrayLike = 0.0,
+        name: str = "<URDF string>",
+    ) -> UrdfArm:
+        """The same from the URDF's XML text; name stands for the file in error messages."""
+    @property
+    def dof(self) -> int: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def joint_names(self) -> list[str]: ...
+    @property
+    def joint_types(self) -> list[str]: ...
+    @property
+    def gravity(self) -> _FloatArray: ...
+    @property
+    def coulomb(self) -> _FloatArray: ...
+    @property
+    def viscous(self) -> _FloatArray: ...
+    @property
+    def limits(self) -> dict[str, _FloatArray]:
+        """lower, upper (+-inf for a continuous joint), velocity, effort (n,)."""
+    @property
+    def inertial_parameters(self) -> _FloatArray:
+        """pi (10 n,): per joint m, m c (3), I about the joint origin (xx, xy, yy, xz, yz, zz)."""
+    def terms(self, q: ArrayLike, dq: ArrayLike) -> dict[str, _FloatArray]:
+        """Model terms at q (n,), dq (n,): dict of M, M_inv, C (n, n) and G, F (n,)."""
+    def mass_regressor(self, q: ArrayLike) -> _FloatArray:
+        """M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns
+        [k n, (k + 1) n)."""
+
 def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
     """The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)]
     (m, 3 n)."""

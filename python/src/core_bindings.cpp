@@ -5,11 +5,14 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <variant>
+
 #include "adparm/basis.hpp"
 #include "adparm/batch.hpp"
 #include "adparm/expression_basis.hpp"
 #include "adparm/hjb.hpp"
 #include "adparm/open_loop.hpp"
+#include "adparm/pinocchio_arm.hpp"
 #include "adparm/simulation.hpp"
 
 namespace py = pybind11;
@@ -168,6 +171,86 @@ void bind_arm(py::module_& m) {
       py::arg("parameters"), py::arg("disturbance"), py::arg("initial_state"), py::arg("dt"),
       py::arg("steps"), py::arg("compensate_gravity"),
       "RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4).");
+}
+
+// One value for all joints or one per joint (the core checks the count against the URDF).
+Eigen::VectorXd per_joint(const std::variant<double, Eigen::VectorXd>& value) {
+  if (const double* x = std::get_if<double>(&value)) return Eigen::VectorXd::Constant(1, *x);
+  return std::get<Eigen::VectorXd>(value);
+}
+
+void bind_urdf_arm(py::module_& m) {
+  using Vector = Eigen::VectorXd;
+  py::class_<PinocchioArm>(m, "UrdfArm",
+                           "A fixed-base serial arm from a URDF file, through Pinocchio. "
+                           "gravity (3,), coulomb and viscous: one number or one per joint.")
+      .def(py::init([](const std::string& urdf_path, const Eigen::Vector3d& gravity,
+                       const std::variant<double, Vector>& coulomb,
+                       const std::variant<double, Vector>& viscous) {
+             return PinocchioArm(urdf_path, gravity, per_joint(coulomb), per_joint(viscous));
+           }),
+           py::arg("urdf_path"), py::arg("gravity") = Eigen::Vector3d(0.0, 0.0, -9.81),
+           py::arg("coulomb") = 0.0, py::arg("viscous") = 0.0)
+      .def_static(
+          "from_xml",
+          [](const std::string& xml, const Eigen::Vector3d& gravity,
+             const std::variant<double, Vector>& coulomb,
+             const std::variant<double, Vector>& viscous, const std::string& name) {
+            return PinocchioArm::from_xml(xml, gravity, per_joint(coulomb), per_joint(viscous),
+                                          name);
+          },
+          py::arg("xml"), py::arg("gravity") = Eigen::Vector3d(0.0, 0.0, -9.81),
+          py::arg("coulomb") = 0.0, py::arg("viscous") = 0.0, py::arg("name") = "<URDF string>",
+          "The same from the URDF's XML text; name stands for the file in error messages.")
+      .def_property_readonly("dof", &PinocchioArm::dof)
+      .def_property_readonly("source", &PinocchioArm::source)
+      .def_property_readonly("joint_names", &PinocchioArm::joint_names)
+      .def_property_readonly("joint_types", &PinocchioArm::joint_types)
+      .def_property_readonly("gravity", &PinocchioArm::gravity_vector)
+      .def_property_readonly("coulomb", &PinocchioArm::coulomb)
+      .def_property_readonly("viscous", &PinocchioArm::viscous)
+      .def_property_readonly("limits",
+                             [](const PinocchioArm& arm) {
+                               py::dict out;
+                               out["lower"] = arm.limits().lower;
+                               out["upper"] = arm.limits().upper;
+                               out["velocity"] = arm.limits().velocity;
+                               out["effort"] = arm.limits().effort;
+                               return out;
+                             })
+      .def_property_readonly("inertial_parameters", &PinocchioArm::inertial_parameters)
+      .def(
+          "terms",
+          [](const PinocchioArm& arm, const Vector& q, const Vector& dq) {
+            PinocchioArm::Terms terms = arm.make_terms();
+            {
+              py::gil_scoped_release release;
+              arm.compute(q, dq, terms);
+            }
+            py::dict out;
+            out["M"] = terms.mass;
+            out["M_inv"] = terms.mass_inverse;
+            out["C"] = terms.coriolis;
+            out["G"] = terms.gravity;
+            out["F"] = terms.friction;
+            return out;
+          },
+          py::arg("q"), py::arg("dq"),
+          "Model terms at q (n,), dq (n,): dict of M, M_inv, C (n, n) and G, F (n,).")
+      .def(
+          "mass_regressor",
+          [](const PinocchioArm& arm, const Vector& q) {
+            Eigen::MatrixXd out(arm.dof(),
+                                static_cast<Eigen::Index>(arm.dof()) * arm.parameter_count());
+            {
+              py::gil_scoped_release release;
+              arm.mass_regressor(q, out);
+            }
+            return out;
+          },
+          py::arg("q"),
+          "M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns "
+          "[k n, (k + 1) n).");
 }
 
 void bind_trajectory(py::module_& m) {
@@ -472,6 +555,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "adparm's C++ core (private; use the adparm package).";
   bind_settings(m);
   bind_arm(m);
+  bind_urdf_arm(m);
   bind_trajectory(m);
   bind_basis(m);
   bind_expression_basis(m);

@@ -1,0 +1,119 @@
+// Any fixed-base serial arm from a URDF, with Pinocchio as the rigid-body engine (eq. 1):
+//   M(q) ddq + C(q, dq) dq + G(q) + F(dq) + tau_d(t) = tau
+//   M      CRBA (pinocchio::crba), symmetrised
+//   C      Pinocchio's Coriolis matrix (pinocchio::computeCoriolisMatrix), so dM/dt - 2C is skew
+//   G      pinocchio::computeGeneralizedGravity for the given gravity vector
+//   M^-1   pinocchio::computeMinverse (articulated-body algorithm), symmetrised
+//   F      coulomb_i sign(dq_i) + viscous_i dq_i, per joint
+// The joints q are the URDF's revolute, continuous and prismatic joints in Pinocchio's model order
+// (depth first from the root); fixed joints merge their links into the parent body. A continuous
+// joint's q is its angle (Pinocchio stores it as cos, sin; the conversion is done here).
+//
+// Same members as TwoLinkArm (kDof, Terms, compute, acceleration) with dynamic sizes. This header
+// does not include Pinocchio (pimpl): everything that does is compiled once, in
+// cpp/src/pinocchio_arm.cpp (the static library adparm_pinocchio).
+//
+// Not thread-safe: compute() works in buffers (pinocchio::Data) that the arm owns, allocated at
+// construction, so that it never allocates; give each thread its own copy of the arm.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace adparm {
+
+class PinocchioArm {
+ public:
+  static constexpr int kDof = Eigen::Dynamic;
+
+  // Model terms at one (q, dq); sized by make_terms().
+  struct Terms {
+    Eigen::MatrixXd mass;          // M(q)
+    Eigen::MatrixXd mass_inverse;  // M(q)^-1
+    Eigen::MatrixXd coriolis;      // C(q, dq)
+    Eigen::VectorXd gravity;       // G(q)
+    Eigen::VectorXd friction;      // F(dq)
+  };
+
+  // Joint position limits (+-inf for a continuous joint), velocity and effort limits, as the URDF
+  // gives them (0 where it gives none).
+  struct Limits {
+    Eigen::VectorXd lower, upper, velocity, effort;
+  };
+
+  // Reads the URDF file at `urdf_path`. gravity: the acceleration of gravity in the URDF's root
+  // frame (m/s^2). coulomb, viscous: one value per joint, or one value for all, or empty (0).
+  // Throws std::invalid_argument, naming the file and the problem, for a file that cannot be read
+  // or parsed, an arm without any revolute, continuous or prismatic joint, or a joint that is not
+  // one of those (floating, planar, mimic, ...).
+  explicit PinocchioArm(const std::string& urdf_path,
+                        const Eigen::Vector3d& gravity = Eigen::Vector3d(0.0, 0.0, -9.81),
+                        const Eigen::VectorXd& coulomb = Eigen::VectorXd(),
+                        const Eigen::VectorXd& viscous = Eigen::VectorXd());
+  // The same from the URDF's XML text; `name` stands for the file in error messages.
+  static PinocchioArm from_xml(const std::string& xml,
+                               const Eigen::Vector3d& gravity = Eigen::Vector3d(0.0, 0.0, -9.81),
+                               const Eigen::VectorXd& coulomb = Eigen::VectorXd(),
+                               const Eigen::VectorXd& viscous = Eigen::VectorXd(),
+                               const std::string& name = "<URDF string>");
+
+  PinocchioArm(const PinocchioArm& other);
+  PinocchioArm& operator=(const PinocchioArm& other);
+  PinocchioArm(PinocchioArm&&) noexcept;
+  PinocchioArm& operator=(PinocchioArm&&) noexcept;
+  ~PinocchioArm();
+
+  int dof() const { return dof_; }
+  // Where the arm came from: the file path, or the name given to from_xml.
+  const std::string& source() const;
+  const std::vector<std::string>& joint_names() const;
+  // URDF type of each joint: "revolute", "continuous" or "prismatic".
+  const std::vector<std::string>& joint_types() const;
+  const Limits& limits() const;
+  const Eigen::Vector3d& gravity_vector() const;
+  const Eigen::VectorXd& coulomb() const;
+  const Eigen::VectorXd& viscous() const;
+
+  Terms make_terms() const;
+
+  // All terms at (q, dq), without heap allocation (terms from make_terms()). Throws
+  // std::invalid_argument for a q or dq that is not of size dof().
+  void compute(const Eigen::Ref<const Eigen::VectorXd>& q,
+               const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms) const;
+
+  // Joint acceleration of eq. (1) for a given torque and disturbance, written into ddq (size
+  // dof()); no heap allocation.
+  void acceleration(const Terms& terms, const Eigen::Ref<const Eigen::VectorXd>& dq,
+                    const Eigen::Ref<const Eigen::VectorXd>& tau,
+                    const Eigen::Ref<const Eigen::VectorXd>& tau_d,
+                    Eigen::Ref<Eigen::VectorXd> ddq) const {
+    residual_ = tau - terms.gravity - terms.friction - tau_d;
+    residual_.noalias() -= terms.coriolis * dq;
+    ddq.noalias() = terms.mass_inverse * residual_;
+  }
+
+  // The inertial parameters pi of the URDF (10 per joint, Pinocchio's order for the body that
+  // joint moves: m, m c_x, m c_y, m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz, with the first moment
+  // m c and the inertia I about the joint frame's origin, in that frame).
+  int parameter_count() const { return 10 * dof_; }
+  Eigen::VectorXd inertial_parameters() const;
+
+  // M_k(q) = dM/dpi_k for every inertial parameter k, so that M(q) = sum_k pi_k M_k(q):
+  // out (dof, dof * parameter_count()) holds M_k in columns [k dof, (k + 1) dof). Column j of M_k
+  // is column k of Pinocchio's joint torque regressor Y(q, dq = 0, ddq = e_j) without gravity.
+  void mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
+                      Eigen::Ref<Eigen::MatrixXd> out) const;
+
+  struct Impl;  // opaque: Pinocchio's model and data (pinocchio_arm.cpp)
+
+ private:
+  explicit PinocchioArm(std::unique_ptr<Impl> impl);
+
+  std::unique_ptr<Impl> impl_;
+  int dof_ = 0;
+  mutable Eigen::VectorXd residual_;  // acceleration()'s work space
+};
+
+}  // namespace adparm
