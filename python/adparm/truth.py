@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .optimal import hjb_residual, initial_error_state, optimal_weights
+from .optimal import basis, hjb_residual, initial_error_state, optimal_weights
 from .simulation import desired_state
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -319,11 +319,7 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     if target is not None:
         out["critic_relative_error"] = float(np.linalg.norm(Wc - target) / np.linalg.norm(target))
         out["value_yardstick"] = "W*"
-        from . import _core
-
-        kind = getattr(_core.BasisKind, config.controller.basis)
-        qd = desired_state(config, 0.0)[0]
-        phi = np.array([_core.basis(kind, x, qd, np.zeros(2))[0] for x in X])
+        phi = basis(config, X, desired_state(config, 0.0)[0])[0]
         exact = phi @ target
         out["value_error"] = float(np.sqrt(np.mean((phi @ Wc - exact) ** 2) / np.mean(exact**2)))
     else:
