@@ -191,3 +191,30 @@ def test_polynomial_degree_4_run_is_deterministic() -> None:
     for name in ("critic_weights", "actor_weights", "q", "tau", "hjb_error", "cost"):
         np.testing.assert_array_equal(getattr(first, name), getattr(second, name), err_msg=name)
     assert np.all(np.isfinite(first.critic_weights))
+
+
+def test_diagnostics_compare_an_expression_basis_with_the_lqr_value() -> None:
+    """No W* on the paper's (nonlinear) arm: the learned V's quadratic form at the set-point is
+    compared with the Riccati P of the linearisation (issue 15, item 2)."""
+    config = adparm.paper_config().updated(
+        {"controller": {"basis": "quadratic"}, "sim": {"T": 1.0}}
+    )
+    result = adparm.simulate(config)
+    diagnostics = result.diagnostics
+    assert diagnostics["value_yardstick"] == "LQR"
+    assert diagnostics["critic_relative_error"] is None
+    # the yardstick, by hand: the learned weights as a matrix against P
+    P = adparm.lqr_value(config)
+    names = adparm.basis_names(config)
+    W = result.critic_weights[-1]
+    learned = np.zeros((4, 4))
+    for weight, name in zip(W, names, strict=True):
+        factors = [int(f[1]) for f in name.replace("^2", "*" + name[:2]).split("*")]
+        i, j = factors
+        learned[i - 1, j - 1] += weight / (1 if i == j else 2)
+        if i != j:
+            learned[j - 1, i - 1] += weight / 2
+    assert np.abs(adparm.truth.expression_quadratic_form(config, W) - learned).max() < 1e-6
+    expected = np.linalg.norm(learned - P) / np.linalg.norm(P)
+    assert diagnostics["value_error"] == pytest.approx(expected, rel=1e-6)
+    assert diagnostics["value_error"] > 0.01  # one second of learning is not the optimum
