@@ -218,3 +218,25 @@ def test_diagnostics_compare_an_expression_basis_with_the_lqr_value() -> None:
     expected = np.linalg.norm(learned - P) / np.linalg.norm(P)
     assert diagnostics["value_error"] == pytest.approx(expected, rel=1e-6)
     assert diagnostics["value_error"] > 0.01  # one second of learning is not the optimum
+
+
+def test_core_entry_points_take_an_expression_basis() -> None:
+    """initial_state, closed_loop_derivative and extrapolation_points build the expression loop:
+    state [q, dq, Wc (K), Wa (K), Gamma (K^2), nu, J], sized by the basis."""
+    config = adparm.paper_config().updated(
+        {"controller": {"basis": "quadratic"}, "extrapolation": {"points": 3}}
+    )
+    settings = core_settings(config)
+    state = _core.initial_state(settings)
+    K = 10
+    assert state.shape == (2 + 2 + 2 * K + K * K + 2 + 1,)
+    np.testing.assert_array_equal(state[4 : 4 + K], config.initial_weights())
+    rate, outputs = _core.closed_loop_derivative(settings, 0.0, state)
+    assert rate.shape == state.shape and np.all(np.isfinite(rate))
+    # the HJB error the loop reports is the library's, at the same state and weights
+    x0 = adparm.initial_error_state(config)
+    W = config.initial_weights()
+    assert outputs["hjb_error"] == pytest.approx(adparm.hjb_residual(config, x0, W, W), rel=1e-12)
+    assert _core.extrapolation_points(settings).shape == (3, 4)
+    with pytest.raises(ValueError, match=r"state: expected shape \(127, 1\)"):
+        _core.closed_loop_derivative(settings, 0.0, state[:-1])

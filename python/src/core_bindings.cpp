@@ -363,7 +363,7 @@ void bind_closed_loop(py::module_& m) {
           Loop loop(settings);
           check_size(state, loop.state_size(), 1, "state");
           typename Loop::TimeSignals signals;
-          typename Loop::State x = state, rate;
+          typename Loop::State x = state, rate = Loop::State::Zero(loop.state_size());
           typename Loop::Outputs outputs;
           loop.begin_step(t, x);
           loop.time_signals(t, signals);
