@@ -12,6 +12,8 @@
 //     ns_per_point_step=z heap_allocations=a final_critic_error=e status=finished
 //   bench=dynamic_two_link points=N steps=n repeats=3 ns_per_step=x heap_allocations=0 ...
 //     the same runs through the dynamic-size loop (Settings::dynamic_sizes)
+//   bench=expression_quadratic functions=10 points=0 steps=n repeats=3 ns_per_step=x
+//     heap_allocations=0 ... the paper run with the quadratic expression basis (dynamic sizes)
 //   bench=batch runs=16 steps=n threads=t seconds=s ns_per_step=x speedup=r identical=1
 //   bench=pinocchio_arm arm=NAME dof=n computes=c ns_per_compute=x heap_allocations=a
 //     PinocchioArm::compute (M, C, G, M^-1, F through Pinocchio) on examples/arms/planar_3link.urdf
@@ -95,11 +97,40 @@ struct LoopTiming {
 
 // ||Wc - W*|| / ||W*|| with the paper's W* (ERRATA), at the end of the run.
 double critic_error(const adparm::AnySimulation& simulation) {
+  if (simulation.state().size() != adparm::PaperClosedLoop::kStateSize)
+    return std::numeric_limits<double>::quiet_NaN();  // another basis: no known W*
   Eigen::Matrix<double, 8, 1> optimal;
   optimal << 4, 6, -8, 5, 2, 1, 2, 2;
   const Eigen::VectorXd weights =
       simulation.state().segment(adparm::PaperClosedLoop::kCriticWeights, 8);
   return (weights - optimal).norm() / optimal.norm();
+}
+
+// The quadratic expression basis (all x_i x_j, i <= j: 10 functions for two joints), as
+// python/adparm/bases.py compiles "quadratic", with the initial weights of x^T blockdiag(I, M(0)) x
+// on the paper's arm (M(0) = [[7, 2], [2, 1]]).
+void use_quadratic_expression_basis(adparm::Settings& s) {
+  using Op = adparm::ExpressionOp;
+  s.basis = adparm::BasisKind::expression;
+  s.basis_program = {};
+  const auto add = [&](Op op, double argument) {
+    s.basis_program.opcodes.push_back(static_cast<int>(op));
+    s.basis_program.arguments.push_back(argument);
+  };
+  for (int i = 0; i < 4; ++i)
+    for (int j = i; j < 4; ++j) {
+      add(Op::variable, i);
+      if (i == j) {
+        add(Op::power, 2.0);
+      } else {
+        add(Op::variable, j);
+        add(Op::multiply, 0.0);
+      }
+      add(Op::store, 0.0);
+    }
+  s.critic_weights.resize(10);  // (0,0) (0,1) (0,2) (0,3) (1,1) (1,2) (1,3) (2,2) (2,3) (3,3)
+  s.critic_weights << 1, 0, 0, 0, 1, 0, 0, 7, 4, 1;
+  s.actor_weights = s.critic_weights;
 }
 
 LoopTiming time_loop(const adparm::Settings& settings) {
@@ -339,6 +370,12 @@ void check_runs(double horizon) {
               s.model.p1 = 4.5;
             }),
             finished);
+  check_run("expression_quadratic_points", variant([](Settings& s) {
+              use_quadratic_expression_basis(s);
+              s.extrapolation.points = 6;
+              s.task.qd = sinusoid();
+            }),
+            finished);
   for (const bool points : {false, true}) {
     Settings fixed = variant([&](Settings& s) {
       s.extrapolation.points = points ? 6 : 0;
@@ -517,6 +554,26 @@ void check_invalid_settings() {
          s.dynamic_sizes = true;
          s.actor_weights.setOnes(9);
        }},
+      {"expression: empty basis_program",
+       [](Settings& s) {
+         use_quadratic_expression_basis(s);
+         s.basis_program = {};
+       }},
+      {"expression: basis_program.arguments size",
+       [](Settings& s) {
+         use_quadratic_expression_basis(s);
+         s.basis_program.arguments.pop_back();
+       }},
+      {"expression: variable out of range",
+       [](Settings& s) {
+         use_quadratic_expression_basis(s);
+         s.basis_program.arguments[0] = 6.0;
+       }},
+      {"expression: init.critic_weights size",
+       [](Settings& s) {
+         use_quadratic_expression_basis(s);
+         s.critic_weights.setOnes(8);
+       }},
       {"dynamic: control.alpha1 not Hurwitz",
        [](Settings& s) {
          s.dynamic_sizes = true;
@@ -656,6 +713,27 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
         "heap_allocations=%ld final_critic_error=%.4g status=%s\n",
         points, best.steps, repeats, 1e9 * best.seconds / best.steps, best.heap_allocations,
         best.critic_error, status_name(best.status));
+    std::fflush(stdout);
+    all_finished = all_finished && best.status == adparm::RunStatus::finished;
+    all_finished = all_finished && best.heap_allocations <= 0;
+  }
+
+  // The expression basis in the loop (dynamic sizes): the quadratic family, 10 functions, on the
+  // paper's run without points; no allocation per step.
+  {
+    adparm::Settings settings = adparm::paper_settings();
+    settings.sim.T = horizon;
+    use_quadratic_expression_basis(settings);
+    LoopTiming best;
+    for (int r = 0; r < repeats; ++r) {
+      const LoopTiming timing = time_loop(settings);
+      if (r == 0 || timing.seconds < best.seconds) best = timing;
+    }
+    std::printf(
+        "bench=expression_quadratic functions=10 points=0 steps=%ld repeats=%d ns_per_step=%.1f "
+        "heap_allocations=%ld status=%s\n",
+        best.steps, repeats, 1e9 * best.seconds / best.steps, best.heap_allocations,
+        status_name(best.status));
     std::fflush(stdout);
     all_finished = all_finished && best.status == adparm::RunStatus::finished;
     all_finished = all_finished && best.heap_allocations <= 0;

@@ -141,6 +141,15 @@ class BasisKind:
     paper: BasisKind
     augmented: BasisKind
     structured: BasisKind
+    expression: BasisKind
+
+class ExpressionProgram:
+    """The compiled terms of an expression basis (adparm.bases.compile_terms): opcodes and one
+    argument per opcode. Copied on access: assign the lists whole."""
+
+    opcodes: list[int]
+    arguments: list[float]
+    def __init__(self) -> None: ...
 
 class ExtrapolationMode:
     fixed: ExtrapolationMode
@@ -179,6 +188,7 @@ class Settings:
     actor: ActorSettings
     controller: ControllerSettings
     basis: BasisKind
+    basis_program: ExpressionProgram  # basis = expression (run on the dynamic-size loop)
     dynamic_sizes: bool
     extrapolation: ExtrapolationSettings
     probe: ProbeSettings

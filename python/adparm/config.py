@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import numbers
+import re
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -801,8 +803,47 @@ class ProbeConfig:
 
 CONTROLLER_KINDS = ("adp", "rise", "pd", "optimal")
 BASIS_KINDS = ("augmented", "paper", "structured")
-#: The number of functions of each basis (the length of init.critic_weights and actor_weights).
+#: The number of functions of each built-in basis (the length of init.critic_weights and
+#: actor_weights); an expression basis has one per term (ControllerConfig.basis_size).
 BASIS_SIZES = {"augmented": 8, "paper": 8, "structured": 6}
+#: Families that expand to terms (adparm.bases): a basis of these runs as an expression basis.
+EXPRESSION_FAMILIES = ("quadratic", "polynomial")
+_IDENTIFIER = re.compile(r"^[A-Za-z_]+$")
+
+
+@functools.lru_cache(maxsize=64)
+def _expression_basis(basis: tuple[str, ...], degree: int | None, joints: int) -> Any:
+    """The compiled expression basis of controller.basis (parsed once per distinct basis);
+    a ValueError names the field and the term."""
+    from . import bases
+
+    names = bases.variable_names(joints)
+    known = BASIS_KINDS + EXPRESSION_FAMILIES
+    for item in basis:
+        name = item.strip()
+        if _IDENTIFIER.match(name) and name not in known and name not in names:
+            raise ValueError(
+                f"controller.basis: unknown basis {name!r} (known: {', '.join(known)}, or terms "
+                f"such as 'x1^2' in {', '.join(names)})" + _hint(name, known)
+            )
+    if name_in(basis, "structured"):
+        raise ValueError(
+            "controller.basis: 'structured' is a basis of its own; it cannot be combined with "
+            "terms or families"
+        )
+    try:
+        return bases.ExpressionBasis(list(basis), joints, degree=degree)
+    except ValueError as error:
+        text = str(error)
+        if text.startswith("degree:"):
+            raise ValueError(f"controller.{text}") from None
+        raise ValueError(f"controller.basis: {text}") from None
+
+
+def name_in(basis: tuple[str, ...], name: str) -> bool:
+    return any(item.strip() == name for item in basis)
+
+
 EXTRAPOLATION_MODES = ("fixed", "grid", "local")
 
 
@@ -820,17 +861,50 @@ class ControllerConfig:
     with the same W* for any qd(t). ``paper`` is the printed phi(x), exact only for qd2 = 0.
     ``structured`` has 6 functions, [e1_1^2, e1_1 e1_2, e1_2^2, e2^T M_k(q) e2 (k = 1..3)] with
     M(q) = p1 M1 + p2 M2 + p3 M3: exact for any qd(t) with W* = [K11, 2 K12, K22, p1, p2, p3], so
-    the critic learns the arm's inertia parameters (docs, "The structured basis")."""
+    the critic learns the arm's inertia parameters (docs, "The structured basis").
+    ``quadratic`` (every x_i x_j, i <= j: 10 functions), ``polynomial`` with ``degree`` (even,
+    >= 2: every monomial of even degree up to it) and a list of terms and families (e.g.
+    ``["quadratic", "x3^2*cos(q2)"]``) are expression bases (adparm.bases; docs, "Bases"): parsed
+    once, evaluated by the C++ core with exact Jacobians on its dynamic-size loop."""
 
     kind: str = "adp"
-    basis: str = "augmented"
+    basis: str | tuple[str, ...] = "augmented"
+    degree: int | None = None
     rise: bool = True
     kp: float | Matrix = 50.0
     kd: float | Matrix = 10.0
 
     def __post_init__(self) -> None:
         _choice(self.kind, "controller.kind", CONTROLLER_KINDS)
-        _choice(self.basis, "controller.basis", BASIS_KINDS)
+        basis = self.basis
+        if isinstance(basis, (list, tuple)):
+            if not basis:
+                raise ValueError("controller.basis: needs at least one term or family")
+            if not all(isinstance(item, str) for item in basis):
+                bad = next(item for item in basis if not isinstance(item, str))
+                raise ValueError(f"controller.basis: each entry must be a string, got {bad!r}")
+            basis = tuple(basis)
+        elif not isinstance(basis, str):
+            raise ValueError(
+                f"controller.basis: expected a basis name or a list of terms, got {basis!r}"
+            )
+        object.__setattr__(self, "basis", basis)
+        if self.degree is not None:
+            object.__setattr__(
+                self, "degree", _integer(self.degree, "controller.degree", minimum=2)
+            )
+            if self.degree % 2:
+                raise ValueError(
+                    "controller.degree: must be even (a value function has even degree), "
+                    f"got {self.degree}"
+                )
+            if not name_in(self.terms_spec, "polynomial"):
+                raise ValueError(
+                    "controller.degree: only with the 'polynomial' basis (controller.basis = "
+                    f"{_plain(self.basis)!r})"
+                )
+        if self.is_expression:
+            self.expression_basis()  # parsed and checked now (errors name the field and term)
         object.__setattr__(self, "rise", _boolean(self.rise, "controller.rise"))
         if self.kind == "rise" and not self.rise:
             raise ValueError(
@@ -838,6 +912,28 @@ class ControllerConfig:
             )
         for key in ("kp", "kd"):
             object.__setattr__(self, key, _gain(getattr(self, key), f"controller.{key}"))
+
+    @property
+    def terms_spec(self) -> tuple[str, ...]:
+        """controller.basis as a tuple of names and terms."""
+        return (self.basis,) if isinstance(self.basis, str) else self.basis
+
+    @property
+    def is_expression(self) -> bool:
+        """Whether the basis is an expression basis (anything but one built-in basis name)."""
+        return not (isinstance(self.basis, str) and self.basis in BASIS_KINDS)
+
+    def expression_basis(self, joints: int = 2) -> Any:
+        """The compiled adparm.bases.ExpressionBasis of an expression basis (cached)."""
+        if not self.is_expression:
+            raise ValueError(f"controller.basis: {self.basis!r} is not an expression basis")
+        return _expression_basis(self.terms_spec, self.degree, joints)
+
+    def basis_size(self, joints: int = 2) -> int:
+        """The number of basis functions K."""
+        if self.is_expression:
+            return self.expression_basis(joints).size
+        return BASIS_SIZES[self.basis]
 
     def gain_matrix(self, key: str, joints: int = 2) -> np.ndarray:
         """kp or kd as a (joints x joints) array."""
@@ -1013,13 +1109,13 @@ class Config:
         self._fit_to_arm()
         model = self.model.resolve(self.plant)
         _check_arm(model["p1"], model["p2"], model["p3"], "model")
-        size = BASIS_SIZES[self.controller.basis]
+        size = self.controller.basis_size(self.dof)
         for key in ("critic_weights", "actor_weights"):
             value = getattr(self.init, key)
             if value is not None and len(value) != size:
                 raise ValueError(
                     f"init.{key}: expected shape ({size},), one weight per function of "
-                    f"controller.basis = {self.controller.basis!r}, got ({len(value)},)"
+                    f"controller.basis = {_plain(self.controller.basis)!r}, got ({len(value)},)"
                 )
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
@@ -1095,10 +1191,30 @@ class Config:
         value = getattr(self.init, key)
         if value is not None:
             return np.array(value, dtype=float)
+        if self.controller.is_expression:
+            return self._expression_initial_weights(key)
         if self.controller.basis == "structured":
             p = self.model.resolve(self.plant)
             return np.array([1.0, 0.0, 1.0, p["p1"], p["p2"], p["p3"]])
         return np.ones(BASIS_SIZES[self.controller.basis])
+
+    def _expression_initial_weights(self, key: str) -> np.ndarray:
+        """The weights of x^T blockdiag(I, M(qd(0))) x (the believed model's inertia at the
+        desired position): the actor then starts at u_hat = -R^-1 e2, which stabilises."""
+        from .optimal import arm_terms, desired_state
+
+        n = self.dof
+        qd = desired_state(self, 0.0)[0]
+        M = arm_terms(self, qd, np.zeros(n), model=True)["M"]
+        P = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), M]])
+        try:
+            return self.controller.expression_basis(n).quadratic_form_weights(P)
+        except ValueError as error:
+            raise ValueError(
+                f"init.{key}: controller.basis = {_plain(self.controller.basis)!r} cannot "
+                "represent the default initial value x^T blockdiag(I, M(qd)) x "
+                f"({error}); set init.critic_weights and init.actor_weights"
+            ) from None
 
     @property
     def resolved_epsilon_T(self) -> float:

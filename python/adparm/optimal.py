@@ -56,6 +56,8 @@ def _check_config(config: Any) -> None:
 def basis_names(config: Config) -> tuple[str, ...]:
     """The names of the functions of ``config.controller.basis``, in the order of the weights."""
     _check_config(config)
+    if config.controller.is_expression:  # the terms' text, after expansion of the families
+        return config.controller.expression_basis(config.dof).terms
     return STRUCTURED_BASIS_NAMES if config.controller.basis == "structured" else BASIS_NAMES
 
 
@@ -81,6 +83,9 @@ def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarra
     states = _states(x, 2 * n)
     desired = desired_state(config, 0.0)[0] if qd is None else _states(qd, n, "qd")
     desired = np.broadcast_to(desired, states.shape[:-1] + (n,))
+    if config.controller.is_expression:
+        phi, jacobian, _ = config.controller.expression_basis(n).evaluate(states, desired)
+        return phi, jacobian
     kind = getattr(_core.BasisKind, config.controller.basis)
     rows = states.reshape(-1, 2 * n)
     desired_rows = desired.reshape(-1, n)
@@ -159,6 +164,8 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     """
     if not isinstance(config, Config):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    if config.controller.is_expression:
+        return _expression_optimal_weights(config)
     Q = np.array(config.cost.Q)
     R = np.array(config.cost.R)
     alpha1 = np.array(config.control.alpha1)
@@ -207,6 +214,27 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             2.0 * scale * p["p3"],
         ]
     )
+
+
+def _expression_optimal_weights(config: Config) -> np.ndarray:
+    """W* of an expression basis: on a linear believed arm (p3 = 0, no gravity, no friction) V* =
+    x^T P x with P of the Riccati equation (adparm.lqr_value), in the basis' weights when it can
+    represent it (e.g. "quadratic")."""
+    from .truth import lqr_value
+
+    p = config.model.resolve(config.plant)
+    nonlinear = [key for key in ("p3", "g1", "g2", "coulomb", "viscous") if p[key] != 0.0]
+    if nonlinear:
+        raise ValueError(
+            f"controller.basis: no known W* for an expression basis on a nonlinear arm (model "
+            f"{', '.join(nonlinear)} != 0); it is known on a linear arm (p3 = g1 = g2 = 0, no "
+            "friction), where V* = x^T P x (adparm.lqr_value)"
+        )
+    P = lqr_value(config)
+    try:
+        return config.controller.expression_basis(config.dof).quadratic_form_weights(P)
+    except ValueError as error:
+        raise ValueError(f"controller.basis: cannot represent V* = x^T P x ({error})") from None
 
 
 def value_scale(config: Config, *, rtol: float = 1e-9) -> float | None:
@@ -307,8 +335,8 @@ def hjb_residual(
         Cost, alpha1, basis and the arm the controller believes.
     x : array_like, shape (4,) or (..., 4)
         One state or a batch.
-    critic_weights, actor_weights : array_like, shape (8,)
-        Wc and Wa, in the order of ``BASIS_NAMES``.
+    critic_weights, actor_weights : array_like, shape (K,)
+        Wc and Wa, in the order of ``adparm.basis_names(config)``.
     t : float, optional
         Time at which the desired state (qd, dqd) is taken.
 

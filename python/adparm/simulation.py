@@ -93,7 +93,15 @@ def core_settings(config: Config) -> _core.Settings:
     controller.kp = config.controller.gain_matrix("kp", config.dof)
     controller.kd = config.controller.gain_matrix("kd", config.dof)
     settings.controller = controller
-    settings.basis = getattr(_core.BasisKind, config.controller.basis)
+    if config.controller.is_expression:  # the compiled terms, run on the dynamic-size loop
+        settings.basis = _core.BasisKind.expression
+        expression = config.controller.expression_basis(config.dof)
+        program = _core.ExpressionProgram()
+        program.opcodes = expression.opcodes.tolist()
+        program.arguments = expression.arguments.tolist()
+        settings.basis_program = program
+    else:
+        settings.basis = getattr(_core.BasisKind, config.controller.basis)
     extrapolation = _core.ExtrapolationSettings()
     extrapolation.points = config.extrapolation.points
     extrapolation.box = config.extrapolation.box_vector(config.dof)

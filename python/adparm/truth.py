@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .optimal import hjb_residual, initial_error_state, optimal_weights
+from .optimal import basis, hjb_residual, initial_error_state, optimal_weights
 from .simulation import desired_state
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -32,6 +32,7 @@ __all__ = [
     "diagnose",
     "check_step_size",
     "e2_block_min_eigenvalue",
+    "expression_quadratic_form",
     "learned_matrix",
     "lqr_value",
     "optimal_cost",
@@ -108,6 +109,24 @@ def learned_matrix(config: Config, weights: Any) -> np.ndarray:
     b = 0.5 * (W[6] + c * W[7])
     P[2:, 2:] = [[W[3] + c * W[4], b], [b, W[5]]]
     return P
+
+
+def expression_quadratic_form(config: Config, weights: Any, *, step: float = 1e-4) -> np.ndarray:
+    """The quadratic form S of V = W^T phi at the set-point qd(0) for an expression basis
+    (V(x) = x^T S x + O(|x|^3) near x = 0), from V at the states step e_i and step (e_i + e_j):
+    S_ii = V(h e_i) / h^2, S_ij = (V(h (e_i + e_j)) - V(h e_i) - V(h e_j)) / (2 h^2); terms of
+    degree 4 contribute h^2 relative. To compare with :func:`lqr_value`."""
+    W = np.asarray(weights, dtype=float)
+    n_x = 2 * config.dof
+    unit = step * np.eye(n_x)
+    pairs = [(i, j) for i in range(n_x) for j in range(i + 1, n_x)]
+    states = np.vstack([unit] + [unit[i] + unit[j] for i, j in pairs])
+    phi = basis(config, states, desired_state(config, 0.0)[0])[0]
+    V = phi @ W / step**2
+    S = np.diag(V[:n_x])
+    for k, (i, j) in enumerate(pairs):
+        S[i, j] = S[j, i] = 0.5 * (V[n_x + k] - V[i] - V[j])
+    return S
 
 
 def e2_block_min_eigenvalue(weights: Any) -> float:
@@ -319,11 +338,7 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     if target is not None:
         out["critic_relative_error"] = float(np.linalg.norm(Wc - target) / np.linalg.norm(target))
         out["value_yardstick"] = "W*"
-        from . import _core
-
-        kind = getattr(_core.BasisKind, config.controller.basis)
-        qd = desired_state(config, 0.0)[0]
-        phi = np.array([_core.basis(kind, x, qd, np.zeros(2))[0] for x in X])
+        phi = basis(config, X, desired_state(config, 0.0)[0])[0]
         exact = phi @ target
         out["value_error"] = float(np.sqrt(np.mean((phi @ Wc - exact) ** 2) / np.mean(exact**2)))
     else:
@@ -333,6 +348,12 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
             out["value_yardstick"] = "LQR"
             out["value_error"] = float(
                 np.linalg.norm(learned_matrix(config, Wc) - P) / np.linalg.norm(P)
+            )
+        elif config.task.is_set_point and config.controller.is_expression:
+            P = lqr_value(config)
+            out["value_yardstick"] = "LQR"
+            out["value_error"] = float(
+                np.linalg.norm(expression_quadratic_form(config, Wc) - P) / np.linalg.norm(P)
             )
         else:
             out["value_yardstick"], out["value_error"] = None, None

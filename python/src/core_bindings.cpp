@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <type_traits>
 #include <variant>
 
 #include "adparm/basis.hpp"
@@ -21,6 +22,17 @@ using namespace adparm;
 namespace {
 
 using RowsX4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+using ExpressionLoop = ClosedLoop<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>;
+
+// Calls f(Loop*) (a null pointer of the loop type) for the two-link loop of settings.basis: the
+// fixed-size loop of a built-in basis, the dynamic-size loop of the expression basis.
+template <class F>
+decltype(auto) with_loop(const Settings& settings, F&& f) {
+  if (settings.basis == BasisKind::expression) return f(static_cast<ExpressionLoop*>(nullptr));
+  return with_basis(settings.basis, [&](auto basis) {
+    return f(static_cast<ClosedLoop<TwoLinkArm, decltype(basis)>*>(nullptr));
+  });
+}
 
 void bind_settings(py::module_& m) {
   py::class_<TwoLinkArmParameters>(m, "ArmParameters",
@@ -99,7 +111,14 @@ void bind_settings(py::module_& m) {
   py::enum_<BasisKind>(m, "BasisKind")
       .value("paper", BasisKind::paper)
       .value("augmented", BasisKind::augmented)
-      .value("structured", BasisKind::structured);
+      .value("structured", BasisKind::structured)
+      .value("expression", BasisKind::expression);
+  py::class_<ExpressionProgram>(m, "ExpressionProgram",
+                                "The compiled terms of an expression basis: opcodes and one "
+                                "argument per opcode (adparm.bases.compile_terms).")
+      .def(py::init<>())
+      .def_readwrite("opcodes", &ExpressionProgram::opcodes)
+      .def_readwrite("arguments", &ExpressionProgram::arguments);
   py::enum_<ExtrapolationMode>(m, "ExtrapolationMode")
       .value("fixed", ExtrapolationMode::fixed)
       .value("grid", ExtrapolationMode::grid)
@@ -134,6 +153,7 @@ void bind_settings(py::module_& m) {
       .def_readwrite("actor", &Settings::actor)
       .def_readwrite("controller", &Settings::controller)
       .def_readwrite("basis", &Settings::basis)
+      .def_readwrite("basis_program", &Settings::basis_program)
       .def_readwrite("dynamic_sizes", &Settings::dynamic_sizes)
       .def_readwrite("extrapolation", &Settings::extrapolation)
       .def_readwrite("critic_weights", &Settings::critic_weights)
@@ -391,18 +411,19 @@ void bind_hjb(py::module_& m) {
         check_finite(actor_weights, "actor_weights");
         check_finite(states, "x");
         check_finite(t, "t");
-        return with_basis(settings.basis, [&](auto basis) {
-          using Basis = decltype(basis);
-          check_size(critic_weights, Basis::kSize, 1, "critic_weights");
-          check_size(actor_weights, Basis::kSize, 1, "actor_weights");
-          const ClosedLoop<TwoLinkArm, Basis> loop(settings);
-          const typename Basis::Vector wc = critic_weights, wa = actor_weights;
-          const DesiredState desired = loop.trajectory()(t);
+        return with_loop(settings, [&](auto* tag) {
+          using Loop = std::remove_pointer_t<decltype(tag)>;
+          const Loop loop(settings);
+          check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
+          check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
+          const typename Loop::Weights wc = critic_weights, wa = actor_weights;
+          const typename Loop::Desired desired = loop.trajectory()(t);
           Eigen::VectorXd residual(states.rows());
           py::gil_scoped_release release;
           for (Eigen::Index i = 0; i < states.rows(); ++i)
-            residual[i] = hjb_error(loop.basis(), loop.error_system(), loop.cost(),
-                                    Vec4(states.row(i).transpose()), desired, wc, wa);
+            residual[i] =
+                hjb_error(loop.basis(), loop.error_system(), loop.cost(),
+                          typename Loop::Error(states.row(i).transpose()), desired, wc, wa);
           return residual;
         });
       },
@@ -419,12 +440,12 @@ void bind_closed_loop(py::module_& m) {
       [](const Settings& settings, double t, const Eigen::VectorXd& state) {
         check_finite(state, "state");
         check_finite(t, "t");
-        return with_basis(settings.basis, [&](auto basis) {
-          using Loop = ClosedLoop<TwoLinkArm, decltype(basis)>;
+        return with_loop(settings, [&](auto* tag) {
+          using Loop = std::remove_pointer_t<decltype(tag)>;
           Loop loop(settings);
-          check_size(state, Loop::kStateSize, 1, "state");
+          check_size(state, loop.state_size(), 1, "state");
           typename Loop::TimeSignals signals;
-          typename Loop::State x = state, rate;
+          typename Loop::State x = state, rate = Loop::State::Zero(loop.state_size());
           typename Loop::Outputs outputs;
           loop.begin_step(t, x);
           loop.time_signals(t, signals);
@@ -444,25 +465,29 @@ void bind_closed_loop(py::module_& m) {
       },
       py::arg("settings"), py::arg("t"), py::arg("state"),
       "Right-hand side at t of state (S,) = [q, dq, Wc (K), Wa (K), Gamma (K^2, column-major), "
-      "nu (2), J] (S = 87 for the 8-function bases, 55 for the structured basis); local "
+      "nu (2), J] (S = 87 for the 8-function bases, 55 for the structured basis, 2 K + K^2 + 7 "
+      "for an expression basis of K functions); local "
       "extrapolation points are drawn around this state first. Returns (rate (S,), outputs "
       "dict).");
   m.def(
       "initial_state",
       [](const Settings& settings) {
-        return with_basis(settings.basis, [&](auto basis) {
-          return Eigen::VectorXd(ClosedLoop<TwoLinkArm, decltype(basis)>(settings).initial_state());
+        return with_loop(settings, [&](auto* tag) {
+          using Loop = std::remove_pointer_t<decltype(tag)>;
+          return Eigen::VectorXd(Loop(settings).initial_state());
         });
       },
       py::arg("settings"), "The closed loop's initial state (S,).");
   m.def(
       "extrapolation_points",
       [](const Settings& settings) {
-        const PaperClosedLoop loop(settings);
-        const auto& points = loop.extrapolation().points();
-        RowsX4 out(static_cast<Eigen::Index>(points.size()), 4);
-        for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
-        return out;
+        return with_loop(settings, [&](auto* tag) {
+          const std::remove_pointer_t<decltype(tag)> loop(settings);
+          const auto& points = loop.extrapolation().points();
+          RowsX4 out(static_cast<Eigen::Index>(points.size()), 4);
+          for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
+          return out;
+        });
       },
       py::arg("settings"),
       "The fixed or grid extrapolation points (N, 4) in x (zeros for mode local, whose points are "

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <cmath>
+#include <stdexcept>
 
 #include "adparm/types.hpp"
 
@@ -131,13 +132,18 @@ struct StructuredBasis {
   }
 };
 
-enum class BasisKind { paper, augmented, structured };
+// expression: a user-defined basis compiled from terms (expression_basis.hpp), carried in
+// Settings::basis_program; it runs on the dynamic-size loop only (simulation.hpp).
+enum class BasisKind { paper, augmented, structured, expression };
 
 // Calls f(Basis{}) with the basis type of `kind` (the binding and the bench pick a basis at run
-// time; each basis is its own compiled loop).
+// time; each basis is its own compiled loop). The expression basis is not a fixed type: callers
+// handle it before (it throws here).
 template <class F>
 decltype(auto) with_basis(BasisKind kind, F&& f) {
   switch (kind) {
+    case BasisKind::expression:
+      throw std::invalid_argument("controller.basis: the expression basis has no fixed-size loop");
     case BasisKind::paper:
       return f(PaperBasis{});
     case BasisKind::structured:

@@ -52,6 +52,18 @@ inline void check_hurwitz(const Eigen::MatrixXd& alpha1) {
         "control.alpha1: every eigenvalue must have a positive real part (-alpha1 Hurwitz)");
 }
 
+// The basis a loop builds from its settings: a fixed basis has nothing to build; the expression
+// basis compiles settings.basis_program for the arm's n joints.
+template <class Basis>
+Basis settings_basis(const Settings&, Eigen::Index) {
+  return Basis();
+}
+template <>
+inline ExpressionLoopBasis settings_basis<ExpressionLoopBasis>(const Settings& settings,
+                                                               Eigen::Index joints) {
+  return ExpressionLoopBasis(static_cast<int>(joints), settings.basis_program);
+}
+
 template <class Arm, class Basis>
 class ClosedLoop {
  public:
@@ -100,8 +112,10 @@ class ClosedLoop {
   };
 
   // The two-link arm (or an arm built from TwoLinkArmParameters) of settings.plant and
-  // settings.model.
-  explicit ClosedLoop(const Settings& settings, const Basis& basis = Basis())
+  // settings.model, with the basis of the settings (settings_basis below).
+  explicit ClosedLoop(const Settings& settings)
+      : ClosedLoop(settings, settings_basis<Basis>(settings, Arm(settings.plant, "plant").dof())) {}
+  ClosedLoop(const Settings& settings, const Basis& basis)
       : ClosedLoop(settings, Arm(settings.plant, "plant"), Arm(settings.model, "model"),
                    settings.plant == settings.model, basis) {}
 

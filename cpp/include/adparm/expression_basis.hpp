@@ -40,11 +40,14 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "adparm/types.hpp"
 
 namespace adparm {
 
@@ -72,6 +75,25 @@ struct ExpressionInstruction {
   ExpressionOp op = ExpressionOp::constant;
   double argument = 0.0;
 };
+
+// A program as the settings carry it (Settings::basis_program): one argument per opcode.
+struct ExpressionProgram {
+  std::vector<int> opcodes;
+  std::vector<double> arguments;
+};
+
+// The instructions of `program`; `name` names the settings field in the errors.
+inline std::vector<ExpressionInstruction> expression_instructions(const ExpressionProgram& program,
+                                                                  const std::string& name) {
+  if (program.opcodes.size() != program.arguments.size())
+    throw std::invalid_argument(name + ".arguments: expected one per opcode (" +
+                                std::to_string(program.opcodes.size()) + "), got " +
+                                std::to_string(program.arguments.size()));
+  std::vector<ExpressionInstruction> out(program.opcodes.size());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = {static_cast<ExpressionOp>(program.opcodes[i]), program.arguments[i]};
+  return out;
+}
 
 class ExpressionBasis {
  public:
@@ -615,6 +637,57 @@ class ExpressionBasis {
   std::vector<int> local_variables_;
   std::vector<Function> functions_;
   Workspace workspace_;
+};
+
+// The expression basis behind the loop's basis seam (basis.hpp) with dynamic sizes, for
+// ClosedLoop<Arm, ExpressionLoopBasis> with a dynamic-size arm (DynamicArm<TwoLinkArm>). The
+// compiled basis is shared (immutable); each instance has its own Workspace, sized once, so a loop
+// (one thread) evaluates it without heap allocation. The arm's terms are not used. It has no paper
+// e2 block (positive_block.hpp leaves its weights alone).
+class ExpressionLoopBasis {
+ public:
+  static constexpr int kSize = Dynamic;
+  static constexpr int kStateDim = Dynamic;
+  using Vector = BasisVector<Dynamic>;
+  using Jacobian = BasisMatrix<Dynamic, Dynamic>;
+
+  // `name` names the settings field in the errors (an empty or malformed program).
+  ExpressionLoopBasis(int joints, const ExpressionProgram& program,
+                      const std::string& name = "basis_program")
+      : basis_(std::make_shared<const ExpressionBasis>(joints, checked(program, name))),
+        workspace_(basis_->workspace()) {}
+
+  int size() const { return basis_->size(); }
+  int joints() const { return basis_->joints(); }
+  const ExpressionBasis& expression() const { return *basis_; }
+
+  template <class Desired>
+  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,
+                Jacobian& jacobian, Vector& desired_rate) const {
+    const Eigen::Index k = size(), n_x = basis_->state_dim();
+    phi.resize(k);  // bounded storage: no allocation
+    jacobian.resize(k, n_x);
+    desired_rate.resize(k);
+    basis_->evaluate(x, desired.q, desired.dq, phi, jacobian, desired_rate, nullptr, workspace_);
+  }
+  template <class Desired, class Terms>
+  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,
+                Jacobian& jacobian, Vector& desired_rate) const {
+    evaluate(x, desired, phi, jacobian, desired_rate);
+  }
+
+ private:
+  static std::vector<ExpressionInstruction> checked(const ExpressionProgram& program,
+                                                    const std::string& name) {
+    if (program.opcodes.empty())
+      throw std::invalid_argument(name +
+                                  ": empty (controller.basis = expression needs the "
+                                  "compiled program of its terms)");
+    return expression_instructions(program, name);
+  }
+
+  std::shared_ptr<const ExpressionBasis> basis_;
+  mutable ExpressionBasis::Workspace workspace_;
 };
 
 }  // namespace adparm

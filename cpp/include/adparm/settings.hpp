@@ -12,6 +12,7 @@
 #include "adparm/basis.hpp"
 #include "adparm/controller.hpp"
 #include "adparm/critic.hpp"
+#include "adparm/expression_basis.hpp"
 #include "adparm/extrapolation.hpp"
 #include "adparm/probing.hpp"
 #include "adparm/rise.hpp"
@@ -49,6 +50,7 @@ struct Settings {
   ActorSettings actor{};
   ControllerSettings controller{};
   BasisKind basis = BasisKind::augmented;  // equals the paper's basis while qd2 = 0
+  ExpressionProgram basis_program{};       // basis = expression: the compiled terms (bases.py)
   bool dynamic_sizes = false;  // run the two-link arm through the dynamic-size loop (a check)
   ExtrapolationSettings extrapolation{};
   Eigen::VectorXd critic_weights;  // Wc(0), one entry per basis function

@@ -277,8 +277,12 @@ class AnySimulation {
                    Simulation<TwoLinkArm, StructuredBasis>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>>;
+                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>,
+                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>>;
   static Variant make(const Settings& settings) {
+    if (settings.basis == BasisKind::expression)  // dynamic sizes only
+      return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>>,
+                     settings);
     return with_basis(settings.basis, [&](auto basis) {
       using Basis = decltype(basis);
       if (settings.dynamic_sizes)
