@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import selectors
+import time
+
 import numpy as np
 import pytest
 from hypothesis import settings
@@ -60,3 +64,19 @@ def assert_same_arrays(a: adparm.SimulationResult, b: adparm.SimulationResult) -
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261125)
+
+
+def read_until(stream, text: bytes, timeout: float) -> bytes:
+    """Bytes read from ``stream`` (a subprocess's pipe) until ``text`` appears (or the timeout
+    passes)."""
+    seen = b""
+    deadline = time.monotonic() + timeout
+    with selectors.DefaultSelector() as selector:
+        selector.register(stream, selectors.EVENT_READ)
+        while text not in seen and time.monotonic() < deadline:
+            if selector.select(timeout=max(0.0, deadline - time.monotonic())):
+                chunk = os.read(stream.fileno(), 4096)
+                if not chunk:
+                    break
+                seen += chunk
+    return seen

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import _thread
-import os
-import selectors
 import signal
 import subprocess
 import sys
@@ -18,7 +16,7 @@ import pytest
 
 import adparm
 
-from conftest import assert_same_arrays
+from conftest import assert_same_arrays, read_until
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -103,21 +101,6 @@ def test_compare_keeps_the_runs_so_far() -> None:
     assert comparison.rows[0]["status"] == "interrupted"
 
 
-def _read_until(stream, text: bytes, timeout: float) -> bytes:
-    """Bytes read from ``stream`` until ``text`` appears (or the timeout passes)."""
-    seen = b""
-    deadline = time.monotonic() + timeout
-    with selectors.DefaultSelector() as selector:
-        selector.register(stream, selectors.EVENT_READ)
-        while text not in seen and time.monotonic() < deadline:
-            if selector.select(timeout=max(0.0, deadline - time.monotonic())):
-                chunk = os.read(stream.fileno(), 4096)
-                if not chunk:
-                    break
-                seen += chunk
-    return seen
-
-
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
 def test_cli_ctrl_c_writes_the_partial_result_and_exits_130(tmp_path) -> None:
     out = tmp_path / "run"
@@ -129,7 +112,7 @@ def test_cli_ctrl_c_writes_the_partial_result_and_exits_130(tmp_path) -> None:
     )
     try:
         # the progress bar appears once the simulation has started
-        started = _read_until(process.stderr, b"simulating", timeout=60.0)
+        started = read_until(process.stderr, b"simulating", timeout=60.0)
         assert b"simulating" in started, started.decode(errors="replace")
         time.sleep(0.3)
         process.send_signal(signal.SIGINT)

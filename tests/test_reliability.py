@@ -27,29 +27,12 @@ import adparm
 from adparm import _files, cli, storage
 from adparm._files import MANIFEST, OutputError, OutputFolder, atomic_write
 
-from conftest import assert_same_arrays
+from conftest import assert_same_arrays, read_until
 
 # Short learning runs here have not converged and say so; that warning is not what is tested.
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 
 SHORT = ["--T", "0.2", "--no-progress"]
-
-
-def _read_until(stream, text: bytes, timeout: float) -> bytes:
-    """Bytes read from ``stream`` until ``text`` appears (or the timeout passes)."""
-    import selectors
-
-    seen = b""
-    deadline = time.monotonic() + timeout
-    with selectors.DefaultSelector() as selector:
-        selector.register(stream, selectors.EVENT_READ)
-        while text not in seen and time.monotonic() < deadline:
-            if selector.select(timeout=max(0.0, deadline - time.monotonic())):
-                chunk = os.read(stream.fileno(), 4096)
-                if not chunk:
-                    break
-                seen += chunk
-    return seen
 
 
 def run_cli(*argv: str) -> int:
@@ -235,7 +218,7 @@ def test_sigterm_writes_the_partial_result_and_exits_143(tmp_path) -> None:
         stderr=subprocess.PIPE,
     )
     try:
-        started = _read_until(process.stderr, b"simulating", timeout=60.0)
+        started = read_until(process.stderr, b"simulating", timeout=60.0)
         assert b"simulating" in started, started.decode(errors="replace")
         time.sleep(0.3)
         process.send_signal(signal.SIGTERM)
