@@ -92,7 +92,12 @@ DESCRIPTIONS = {
     ("controller", "kind"): "``adp`` (u = u_hat + probe; learns), ``rise`` (u = 0), ``pd`` "
     "(u = -(kp e1 + kd de1)) or ``optimal`` (u* = -R^-1 e2). See :doc:`/guide/baselines`.",
     ("controller", "basis"): "``augmented`` (the paper's functions with cos q2 = cos(qd2 - x2), "
-    "exact for any qd) or ``paper`` (the printed phi(x)). See :doc:`/guide/tracking`.",
+    "exact for any qd), ``paper`` (the printed phi(x)), ``structured`` (e1 monomials and "
+    "e2^T M_k(q) e2, :doc:`/guide/structured-basis`), ``quadratic``, ``polynomial`` (with "
+    "``degree``), or a list of terms and families such as ``[\"quadratic\", \"x3^2*cos(q2)\"]`` "
+    "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`.",
+    ("controller", "degree"): "The highest (even) degree of the ``polynomial`` basis; only with "
+    "``basis = \"polynomial\"``.",
     ("controller", "rise"): "Add the RISE term mu (eqs. 27-28); must be true with "
     '``kind = "rise"``.',
     ("controller", "kp"): "PD gain (a number times I, or 2 x 2), ``pd`` only.",
@@ -120,6 +125,7 @@ RESOLVED_DEFAULTS = {
     ("probe", "phases"): "k rad for sinusoid k, both joints",
     ("task.qd sinusoid", "phase"): "zeros",
     ("task.qd samples", "file"): "none",
+    ("controller", "degree"): "none (only with the polynomial basis, where it must be set)",
     ("init", "*"): "the basis' default: all ones (paper, augmented); [1, 0, 1, p1, p2, p3] "
     "(structured: K = I and the believed model's inertia)",
 }
