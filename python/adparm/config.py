@@ -1240,8 +1240,8 @@ def _joint_defaults(n: int) -> dict[tuple[str, str], Any]:
     """The defaults of the sized settings for an arm of n != 2 joints (the two-link arm keeps the
     paper's): tau_d amplitudes 0.1 and q0 = 0.1 rad on every joint, dq0 = 0, qd = 0; K = I,
     alpha1 = 2 I, R = I and Q = [[K alpha1 + alpha1^T K, -K], [-K, R^-1]] = [[4 I, -I], [-I, I]]
-    (the ERRATA conditions: V* = e1^T e1 + e2^T M(q) e2 is exact); probe amplitude 1 N m on every
-    joint and sinusoid."""
+    (the exact-solution conditions: V* = e1^T e1 + e2^T M(q) e2 is exact); probe amplitude 1 N m
+    on every joint and sinusoid."""
     eye = np.eye(n)
     Q = np.block([[4.0 * eye, -eye], [-eye, eye]])
     return {

@@ -86,7 +86,7 @@ def lqr_value(config: Config) -> np.ndarray:
     """P (4 x 4) of the algebraic Riccati equation A^T P + P A - P B R^-1 B^T P + Q = 0 of the
     error system linearised at the set-point qd(0) (believed model, A = [[-alpha1, I], [0, 0]],
     B = [0; M(qd)^-1]), solved by python-control (control.care). x^T P x is V* exactly for a
-    linear arm (p3 = 0) and the local V* near the set-point otherwise; on ERRATA's instances
+    linear arm (p3 = 0) and the local V* near the set-point otherwise; on the exact instances
     P = blockdiag(K, s M(qd))."""
     import control
 
@@ -154,7 +154,8 @@ def optimal_cost(
     set-point qd), by direct multiple shooting (CasADi, IPOPT): ``intervals`` RK4 intervals over
     ``horizon`` (default 12 / the slowest closed-loop LQR rate) with u linear within each
     interval, plus the terminal cost x(T)^T P x(T) of :func:`lqr_value`. Any cost Q, R. On
-    ERRATA's instances it equals V*(x0) = e1^T K e1 + s e2^T M e2 to about 1e-4."""
+    the exact instances (optimal_weights) it equals V*(x0) = e1^T K e1 + s e2^T M e2 to about
+    1e-4."""
     import casadi
 
     config = _check_config(config)
