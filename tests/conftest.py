@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import selectors
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -80,3 +82,24 @@ def read_until(stream, text: bytes, timeout: float) -> bytes:
                     break
                 seen += chunk
     return seen
+
+
+def signal_reproduce(out, horizon: float, signum: int) -> tuple[int, bytes]:
+    """Runs ``adparm reproduce --T horizon --no-figures --out out`` in a child process, sends it
+    ``signum`` 0.3 s after its progress bar shows that the simulation has started, and returns its
+    exit status and stderr."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "adparm", "reproduce", "--T", str(horizon), "--no-figures"]
+        + ["--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        started = read_until(process.stderr, b"simulating", timeout=60.0)
+        assert b"simulating" in started, started.decode(errors="replace")
+        time.sleep(0.3)
+        process.send_signal(signum)
+        _, stderr = process.communicate(timeout=60.0)
+    finally:
+        process.kill()
+    return process.returncode, stderr

@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import _thread
 import signal
-import subprocess
 import sys
 import threading
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -16,7 +14,7 @@ import pytest
 
 import adparm
 
-from conftest import assert_same_arrays, read_until
+from conftest import assert_same_arrays, signal_reproduce
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -104,22 +102,8 @@ def test_compare_keeps_the_runs_so_far() -> None:
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
 def test_cli_ctrl_c_writes_the_partial_result_and_exits_130(tmp_path) -> None:
     out = tmp_path / "run"
-    process = subprocess.Popen(
-        [sys.executable, "-m", "adparm", "reproduce", "--T", str(LONG_T), "--no-figures"]
-        + ["--out", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    try:
-        # the progress bar appears once the simulation has started
-        started = read_until(process.stderr, b"simulating", timeout=60.0)
-        assert b"simulating" in started, started.decode(errors="replace")
-        time.sleep(0.3)
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=60.0)
-    finally:
-        process.kill()
-    assert process.returncode == 130, stderr.decode(errors="replace")
+    returncode, stderr = signal_reproduce(out, LONG_T, signal.SIGINT)
+    assert returncode == 130, stderr.decode(errors="replace")
     assert b"stopped by SIGINT at t =" in stderr and b".result" not in stderr
     partial = adparm.load_result(out / "result.npz")
     assert partial.status == "interrupted"

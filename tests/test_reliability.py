@@ -27,7 +27,7 @@ import adparm
 from adparm import _files, cli, storage
 from adparm._files import MANIFEST, OutputError, OutputFolder, atomic_write
 
-from conftest import assert_same_arrays, read_until
+from conftest import assert_same_arrays, signal_reproduce
 
 # Short learning runs here have not converged and say so; that warning is not what is tested.
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -211,21 +211,8 @@ def test_ctrl_c_during_the_run_writes_the_partial_result_then_exits_130(tmp_path
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGTERM to a child process is POSIX")
 def test_sigterm_writes_the_partial_result_and_exits_143(tmp_path) -> None:
     out = tmp_path / "run"
-    process = subprocess.Popen(
-        [sys.executable, "-m", "adparm", "reproduce", "--T", "20000", "--no-figures"]
-        + ["--out", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    try:
-        started = read_until(process.stderr, b"simulating", timeout=60.0)
-        assert b"simulating" in started, started.decode(errors="replace")
-        time.sleep(0.3)
-        process.send_signal(signal.SIGTERM)
-        _, stderr = process.communicate(timeout=60.0)
-    finally:
-        process.kill()
-    assert process.returncode == 143, stderr.decode(errors="replace")
+    returncode, stderr = signal_reproduce(out, 20000, signal.SIGTERM)
+    assert returncode == 143, stderr.decode(errors="replace")
     assert b"stopped by SIGTERM" in stderr
     partial = adparm.load_result(out / "result.npz")
     assert partial.status == "interrupted" and 0.0 < partial.t[-1] < 20000
