@@ -83,6 +83,7 @@ def _draw(
     height: float,
     title: str,
     ratios: Sequence[float] | None = None,
+    width: float = _WIDTH,
 ) -> Figure:
     """Draw ``panels`` (functions of one Axes) into ``ax``, into new axes of ``fig``, or into a
     new figure of one column; returns the figure."""
@@ -100,7 +101,7 @@ def _draw(
             if fig is None:
                 from matplotlib.figure import Figure
 
-                fig = Figure(figsize=(_WIDTH, height), layout="constrained")
+                fig = Figure(figsize=(width, height), layout="constrained")
             figure = fig
             grid = figure.subplots(len(panels), 1, sharex=True, squeeze=False, height_ratios=ratios)
             axes = list(grid[:, 0])
@@ -224,9 +225,30 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
         axes.set_ylabel(f"weight ${symbol}$ (-)")
         axes.set_xlabel("time t (s)")
         _mark_probe_end(axes, result)
-        _legend_outside(axes, title="basis function")
+        size = weights.shape[1]
+        if size <= _MAX_LEGEND_WEIGHTS:
+            _legend_outside(axes, title="basis function", ncols=_legend_columns(size))
+        else:  # a legend of so many functions hides more than it tells
+            axes.text(
+                1.01,
+                1.0,
+                f"{size} basis functions\n(names: adparm.basis_names)",
+                transform=axes.transAxes,
+                va="top",
+                fontsize=8,
+            )
 
     return panel
+
+
+#: Weights named one by one in the legend of a weights figure (more: a note instead), and the
+#: legend rows per column.
+_MAX_LEGEND_WEIGHTS = 30
+_LEGEND_ROWS = 10
+
+
+def _legend_columns(size: int) -> int:
+    return max(1, -(-size // _LEGEND_ROWS))
 
 
 def _relative_error_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -> Panel:
@@ -275,7 +297,17 @@ def _weights_figure(
         _weights_panel(result, weights, symbol),
         _relative_error_panel(result, weights, symbol),
     ]
-    return _draw(panels, ax=ax, fig=fig, height=5.2, title=title, ratios=(2.2, 1.0))
+    size = weights.shape[1]
+    extra = _legend_columns(size) - 1 if size <= _MAX_LEGEND_WEIGHTS else 0
+    return _draw(
+        panels,
+        ax=ax,
+        fig=fig,
+        height=5.2,
+        title=title,
+        ratios=(2.2, 1.0),
+        width=_WIDTH + 1.3 * extra,  # room for the legend's extra columns
+    )
 
 
 def plot_critic_weights(
@@ -335,6 +367,15 @@ def plot_actor_weights(
 
 
 _JOINT_STYLES = ({"color": OKABE_ITO[0], "ls": "-"}, {"color": OKABE_ITO[1], "ls": "--"})
+_LINE_STYLES = ("-", "--", "-.", ":")
+
+
+def _joint_style(j: int) -> dict[str, Any]:
+    """Joint j's line: the two-link arm's two styles, then Okabe-Ito colours with cycling dashes
+    (any n joints stay apart in colour and dash)."""
+    if j < len(_JOINT_STYLES):
+        return _JOINT_STYLES[j]
+    return {"color": OKABE_ITO[j % len(OKABE_ITO)], "ls": _LINE_STYLES[j % len(_LINE_STYLES)]}
 
 
 def _joint_panel(
@@ -347,9 +388,9 @@ def _joint_panel(
     annotate_probe: bool = False,
 ) -> Panel:
     def panel(axes: Axes) -> None:
-        for j in range(2):
+        for j in range(values.shape[1]):  # one line per joint
             y = np.maximum(np.abs(values[:, j]), _FLOOR) if log else values[:, j]
-            axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_JOINT_STYLES[j])
+            axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_joint_style(j))
         if log:
             axes.set_yscale("log")
         axes.set_ylabel(ylabel)
