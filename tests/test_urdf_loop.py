@@ -300,3 +300,20 @@ def test_batch_of_urdf_runs_equals_single_runs() -> None:
         single = adparm.simulate(config, diagnose=False)
         np.testing.assert_array_equal(result.q, single.q)
         np.testing.assert_array_equal(result.critic_weights, single.critic_weights)
+
+
+def test_compare_and_sweep_run_a_urdf_config() -> None:
+    config = _planar(T=1.0)
+    with warnings.catch_warnings():  # the quadratic basis on this arm (diagnosed in the rows)
+        warnings.simplefilter("ignore", adparm.ApproximationWarning)
+        comparison = adparm.compare(config, ["adp", "rise", "optimal"])
+        swept = adparm.sweep(config, {"critic.eta_c": [400.0, 800.0]}, threads=1)
+    assert comparison.optimal_cost is None  # optimal_cost transcribes the two-link arm only
+    assert {r.status for r in comparison.results.values()} == {"finished"}
+    assert all(r.q.shape[1] == 3 for r in comparison.results.values())
+    figure = comparison.plot()
+    assert len(figure.axes) == 2 * 6  # e1 and tau of each of the 3 joints, two columns
+    assert [row["status"] for row in swept.rows] == ["finished", "finished"]
+    assert all("optimum is not known" in row["verdict"] for row in swept.rows)
+    with pytest.raises(ValueError, match=r"plant\.urdf: optimal_cost"):
+        adparm.optimal_cost(config)

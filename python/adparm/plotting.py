@@ -472,12 +472,13 @@ CONTROLLER_STYLES = {
     "optimal": {"color": "k", "ls": (0, (4, 2.5)), "lw": 1.1, "zorder": 4},
 }
 _LEARNING_STYLE = {"color": OKABE_ITO[0], "ls": "-", "lw": 0.7}
-_COMPARE_PANELS = (
-    ("e1", 0, "$e_{1,1}$ (rad)"),
-    ("e1", 1, "$e_{1,2}$ (rad)"),
-    ("tau", 0, "$\\tau_1$ (N m)"),
-    ("tau", 1, "$\\tau_2$ (N m)"),
-)
+
+
+def _compare_panels(joints: int) -> list[tuple[str, int, str]]:
+    """(result attribute, joint, y label) of each row: e1 of every joint, then tau."""
+    return [("e1", j, f"$e_{{1,{j + 1}}}$ (rad)") for j in range(joints)] + [
+        ("tau", j, f"$\\tau_{j + 1}$ (N m)") for j in range(joints)
+    ]
 
 
 def plot_comparison(
@@ -503,8 +504,9 @@ def plot_comparison(
         Time axis of the controllers' column: ``"symlog"`` (default) is linear up to 1 s and
         logarithmic after, so that both the first second and the long run show.
     ax : 2-d array of Axes, optional
-        Four rows (e1 of joints 1 and 2, tau of joints 1 and 2) and one column per group
-        (learning run, controllers), as ``fig.subplots(4, 2)`` returns.
+        2 n rows for n joints (e1 of each joint, then tau of each joint: four for the two-link
+        arm) and one column per group (learning run, controllers), as ``fig.subplots(4, 2)``
+        returns.
     fig : Figure, optional
         Add the panels to this figure.
 
@@ -522,7 +524,9 @@ def plot_comparison(
     learning = {label: r for label, r in results.items() if label == "adp"}
     others = {label: r for label, r in results.items() if label != "adp"}
     groups = [g for g in (learning, others) if g]
-    rows = len(_COMPARE_PANELS)
+    joints = next(iter(results.values())).q.shape[1] if results else 2
+    panels = _compare_panels(joints)
+    rows = len(panels)
     with matplotlib.rc_context(_RC):
         if ax is not None:
             grid = np.asarray(ax, dtype=object).reshape(rows, -1)
@@ -536,13 +540,15 @@ def plot_comparison(
             if fig is None:
                 from matplotlib.figure import Figure
 
-                fig = Figure(figsize=(_WIDTH + 1.0 * (len(groups) - 1), 6.8), layout="constrained")
+                fig = Figure(
+                    figsize=(_WIDTH + 1.0 * (len(groups) - 1), 1.7 * rows), layout="constrained"
+                )
             figure = fig
             grid = figure.subplots(rows, len(groups), sharex="col", squeeze=False)
             figure.suptitle("Controllers compared: tracking errors and applied torques")
         for column, group in enumerate(groups):
             is_learning = group is learning
-            for row, (name, joint, ylabel) in enumerate(_COMPARE_PANELS):
+            for row, (name, joint, ylabel) in enumerate(panels):
                 axes = grid[row, column]
                 for label, result in group.items():
                     style = _LEARNING_STYLE if is_learning else CONTROLLER_STYLES.get(label, {})

@@ -166,6 +166,10 @@ def optimal_cost(
     import casadi
 
     config = _check_config(config)
+    if config.plant.urdf is not None:
+        raise ValueError(
+            "plant.urdf: optimal_cost transcribes the built-in two-link arm only, not a URDF arm"
+        )
     if not config.task.is_set_point:
         raise ValueError("task.qd: optimal_cost needs a set-point (a constant qd)")
     if isinstance(intervals, bool) or not isinstance(intervals, (int, np.integer)):
