@@ -317,3 +317,35 @@ def test_compare_and_sweep_run_a_urdf_config() -> None:
     assert all("optimum is not known" in row["verdict"] for row in swept.rows)
     with pytest.raises(ValueError, match=r"plant\.urdf: optimal_cost"):
         adparm.optimal_cost(config)
+
+
+def test_the_core_checks_a_urdf_run_naming_the_field() -> None:
+    from adparm import _core
+    from adparm.simulation import core_settings
+
+    def settings() -> _core.Settings:
+        return core_settings(_planar(T=0.1))
+
+    assert _core.Simulation(settings()).steps == 100
+    s = settings()
+    s.basis = _core.BasisKind.augmented
+    with pytest.raises(ValueError, match=r"controller\.basis: .*URDF"):
+        _core.Simulation(s)
+    s = settings()
+    model = s.model_urdf
+    model.urdf = str(TWO_LINK)
+    s.model_urdf = model
+    with pytest.raises(ValueError, match=r"model\.urdf: the model has 2 joints"):
+        _core.Simulation(s)
+    s = settings()
+    task = s.task
+    task.q0 = np.zeros(2)
+    s.task = task
+    with pytest.raises(ValueError, match=r"task\.q0"):
+        _core.Simulation(s)
+    s = settings()
+    plant = s.plant_urdf
+    plant.coulomb = np.zeros(2)
+    s.plant_urdf = plant
+    with pytest.raises(ValueError, match=r"plant\.urdf: .*coulomb"):
+        _core.Simulation(s)

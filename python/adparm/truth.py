@@ -404,8 +404,11 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
                 f"the end of the trajectory), and no weights do better than {best:.3g}"
             )
             advice.append(
-                "use a cost of the exact family (adparm.solvable_cost; then W* is known), or a "
-                "basis that can represent V* (controller.basis), and compare with "
+                "use a basis that can represent V* (controller.basis; a richer polynomial), "
+                "and compare the learned V with adparm.lqr_value near the set-point"
+                if config.plant.urdf is not None
+                else "use a cost of the exact family (adparm.solvable_cost; then W* is known), "
+                "or a basis that can represent V* (controller.basis), and compare with "
                 "adparm.lqr_value / adparm.optimal_cost"
             )
         else:
