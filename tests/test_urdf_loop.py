@@ -349,3 +349,31 @@ def test_the_core_checks_a_urdf_run_naming_the_field() -> None:
     s.plant_urdf = plant
     with pytest.raises(ValueError, match=r"plant\.urdf: .*coulomb"):
         _core.Simulation(s)
+
+
+def test_a_six_joint_arm_runs_and_plots_one_line_per_joint() -> None:
+    try:
+        ur5 = adparm.example_robot_urdf("ur5")
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    config = adparm.Config.from_dict(
+        {
+            "plant": {"urdf": str(ur5)},
+            "task": {
+                "q0": [0.1, -1.2, 1.0, -0.5, 0.3, 0.2],
+                "qd": [0.3, -1.0, 0.8, -0.3, 0.5, 0.0],
+            },
+            "sim": {"T": 0.3},
+        }
+    )
+    assert config.dof == 6 and len(adparm.basis_names(config)) == 78
+    result = adparm.simulate(config, diagnose=False)
+    assert result.status == "finished" and result.q.shape[1] == 6
+    # the error shrinks from the start (RISE and the actor's initial policy on the exact model)
+    assert np.linalg.norm(result.e1[-1]) < np.linalg.norm(result.e1[0])
+    figures = result.plot()
+    errors = figures["fig4_errors"].axes[0]
+    assert len(errors.get_lines()) >= 6
+    assert [t.get_text() for t in errors.get_legend().get_texts()][:6] == [
+        f"$q_{j}$" for j in range(1, 7)
+    ]
