@@ -27,9 +27,21 @@ DESCRIPTIONS = {
     "the paper's 9.8 x 1.2.",
     ("plant", "g2"): "See g1 (N m); the paper's 9.8.",
     ("plant", "coulomb"): "Friction F = coulomb sgn(dq) + viscous dq; the paper prints "
-    "F = -0.1 sgn(dq).",
-    ("plant", "viscous"): "Viscous friction coefficient. Not in the paper.",
+    "F = -0.1 sgn(dq). One number; with ``urdf`` one number or one per joint.",
+    ("plant", "viscous"): "Viscous friction coefficient. Not in the paper. One number; with "
+    "``urdf`` one number or one per joint.",
     ("plant", "disturbance"): "tau_d = [d1 sin t, d2 cos t] (N m).",
+    ("plant", "urdf"): "A URDF file of any fixed-base serial arm (through Pinocchio) instead of "
+    "the two-link arm: relative to the TOML file (in a config built from a dict, to the current "
+    "directory), stored absolute. The actuated joints are its revolute, continuous and prismatic "
+    "joints in model order; n follows from it and every sized setting takes the n-joint default. "
+    "p1 ... g2 may not be set with it; the bases ``paper``, ``augmented`` and ``structured`` are "
+    "refused. See :doc:`/guide/urdf-arms`.",
+    ("plant", "gravity"): "Acceleration of gravity [gx, gy, gz] in the URDF's root frame "
+    "(m/s^2); only with ``urdf``.",
+    ("model", "urdf"): "Another URDF of the same joint count as the controller's believed arm "
+    "(a model error); only with ``plant.urdf``.",
+    ("model", "gravity"): "The believed gravity [gx, gy, gz]; only with ``plant.urdf``.",
     ("model", "p1"): "The arm the controller believes (feedforward h, f, g and W*). "
     "Each key left out takes the plant's value; set one to introduce a model error.",
     ("model", "p2"): "As p1.",
@@ -94,10 +106,11 @@ DESCRIPTIONS = {
     ("controller", "basis"): "``augmented`` (the paper's functions with cos q2 = cos(qd2 - x2), "
     "exact for any qd), ``paper`` (the printed phi(x)), ``structured`` (e1 monomials and "
     "e2^T M_k(q) e2, :doc:`/guide/structured-basis`), ``quadratic``, ``polynomial`` (with "
-    "``degree``), or a list of terms and families such as ``[\"quadratic\", \"x3^2*cos(q2)\"]`` "
-    "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`.",
+    '``degree``), or a list of terms and families such as ``["quadratic", "x3^2*cos(q2)"]`` '
+    "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`. A URDF arm takes ``quadratic`` "
+    "by default and refuses the two-link bases.",
     ("controller", "degree"): "The highest (even) degree of the ``polynomial`` basis; only with "
-    "``basis = \"polynomial\"``.",
+    '``basis = "polynomial"``.',
     ("controller", "rise"): "Add the RISE term mu (eqs. 27-28); must be true with "
     '``kind = "rise"``.',
     ("controller", "kp"): "PD gain (a number times I, or 2 x 2), ``pd`` only.",
@@ -121,6 +134,8 @@ DESCRIPTIONS = {
 #: Defaults that are None in the dataclasses, as the run resolves them.
 RESOLVED_DEFAULTS = {
     ("model", "*"): "the plant's value",
+    ("plant", "urdf"): "none (the built-in two-link arm)",
+    ("plant", "gravity"): "[0, 0, -9.81] (with ``urdf``)",
     ("critic", "epsilon_T"): "1e-6; 1e-3 with extrapolation points",
     ("probe", "phases"): "k rad for sinusoid k, both joints",
     ("task.qd sinusoid", "phase"): "zeros",

@@ -174,6 +174,29 @@ class SimSettings:
     divergence_bound: float
     def __init__(self) -> None: ...
 
+class UrdfArmSettings:
+    """A URDF arm of the loop: urdf (path; empty: the two-link arm of ArmParameters), gravity
+    (3,), coulomb and viscous (n values, 1 for every joint, or 0: none). Eigen members are copied
+    on access: assign them whole."""
+
+    urdf: str
+    def __init__(self) -> None: ...
+    @property
+    def gravity(self) -> _FloatArray:
+        """(3,)"""
+    @gravity.setter
+    def gravity(self, value: ArrayLike) -> None: ...
+    @property
+    def coulomb(self) -> _FloatArray:
+        """(n,), (1,) or (0,)"""
+    @coulomb.setter
+    def coulomb(self, value: ArrayLike) -> None: ...
+    @property
+    def viscous(self) -> _FloatArray:
+        """(n,), (1,) or (0,)"""
+    @viscous.setter
+    def viscous(self, value: ArrayLike) -> None: ...
+
 class Settings:
     """All settings of one run. Eigen members are copied on access: assign them whole.
     Q (2n, 2n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,) for n joints
@@ -182,6 +205,8 @@ class Settings:
 
     plant: ArmParameters
     model: ArmParameters
+    plant_urdf: UrdfArmSettings  # urdf not empty: a URDF arm (expression basis) replaces plant
+    model_urdf: UrdfArmSettings  # its believed model; urdf empty: the plant (an exact model)
     task: TaskSettings
     control: ControlSettings
     critic: CriticSettings
@@ -348,8 +373,8 @@ def hjb_residual(
     actor_weights: ArrayLike,
     t: float,
 ) -> _FloatArray:
-    """HJB error of eq. (21) at each row of x (n, 4) for weights (8,), with the desired state at
-    time t; returns (n,)."""
+    """HJB error of eq. (21) at each row of x (m, 2n) for weights (K,), with the desired state at
+    time t; returns (m,)."""
 
 # --- closed loop ----------------------------------------------------------------------------------
 
@@ -365,7 +390,7 @@ def initial_state(settings: Settings) -> _FloatArray:
     """The closed loop's initial state (87,)."""
 
 def extrapolation_points(settings: Settings) -> _FloatArray:
-    """The fixed or grid extrapolation points (N, 4) in x (zeros for mode local)."""
+    """The fixed or grid extrapolation points (N, 2n) in x (zeros for mode local)."""
 
 class Simulation:
     """The closed-loop run (basis from settings.basis); advance(n) takes up to n RK4 steps."""

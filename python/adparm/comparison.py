@@ -307,10 +307,11 @@ def compare(
 
 
 def _optimal_cost(config: Config) -> float | None:
-    """J* of adparm.optimal_cost, or None where it does not apply (moving qd) or IPOPT fails."""
+    """J* of adparm.optimal_cost, or None where it does not apply (moving qd, a URDF arm) or
+    IPOPT fails."""
     from .truth import optimal_cost
 
-    if not config.task.is_set_point:
+    if not config.task.is_set_point or config.plant.urdf is not None:  # two-link arm only
         return None
     try:
         return optimal_cost(config)

@@ -331,6 +331,83 @@ def _check_hurwitz(alpha1: Matrix, name: str) -> None:
 
 
 _ARM_KEYS = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+#: The keys of the built-in two-link arm only (refused together with a URDF arm).
+_TWO_LINK_KEYS = ("p1", "p2", "p3", "g1", "g2")
+#: The defaults of the two-link keys (a URDF arm leaves them so).
+_TWO_LINK_DEFAULTS = {"p1": 5.0, "p2": 1.0, "p3": 1.0, "g1": 9.8 * 1.2, "g2": 9.8}
+#: Gravity of a URDF arm when plant.gravity is left out (m/s^2, in the URDF's root frame).
+DEFAULT_GRAVITY: Vector = (0.0, 0.0, -9.81)
+
+
+def _friction(value: Any, name: str) -> float | Vector:
+    """A friction coefficient: one number (every joint) or one per joint (checked against n)."""
+    if _is_number(value):
+        return _scalar(value, name)
+    return _vector(value, name, None)
+
+
+def _urdf_path(value: Any, name: str) -> str:
+    """An absolute path of an existing URDF file (a relative one is taken from the current
+    directory; load_config makes it relative to the TOML file first)."""
+    import os
+
+    if not isinstance(value, (str, Path)) or not str(value):
+        raise TypeError(f"{name}: expected the path of a URDF file, got {_text(value)}")
+    path = os.path.abspath(Path(value).expanduser())
+    if not Path(path).is_file():
+        raise ValueError(f"{name}: no URDF file {str(path)!r}")
+    return path
+
+
+@functools.lru_cache(maxsize=32)
+def _urdf_info(path: str, mtime_ns: int, size: int) -> tuple[int, tuple[str, ...]]:
+    """(n, joint names) of a URDF read by the core (once per file version)."""
+    from . import _core
+
+    arm = _core.UrdfArm(path)
+    return arm.dof, tuple(arm.joint_names)
+
+
+def urdf_info(path: str, name: str = "plant.urdf") -> tuple[int, tuple[str, ...]]:
+    """The joint count and joint names of the URDF at ``path``; a file that does not parse, has
+    no actuated joint or has a floating base is refused with a ValueError naming ``name``."""
+    import os
+
+    try:
+        stat = os.stat(path)
+        return _urdf_info(path, stat.st_mtime_ns, stat.st_size)
+    except (OSError, ValueError) as error:
+        raise ValueError(f"{name}: {error}") from None
+
+
+def _check_urdf_arm(arm: Any, section: str) -> None:
+    """With a URDF: the two-link keys stay unset, gravity has 3 entries; without: gravity and
+    per-joint friction are refused (the two-link arm has g1, g2 and one coefficient)."""
+    if arm.urdf is not None:
+        for key in _TWO_LINK_KEYS:
+            value = getattr(arm, key)
+            if (
+                value is not None
+                and value != _TWO_LINK_DEFAULTS[key]
+                or (section == "model" and value is not None)
+            ):
+                raise ValueError(
+                    f"{section}.{key}: a parameter of the built-in two-link arm; the arm of "
+                    f"{section}.urdf takes its inertia and geometry from the URDF (leave "
+                    f"{section}.{key} out)"
+                )
+        return
+    if arm.gravity is not None:
+        raise ValueError(
+            f"{section}.gravity: only with {section}.urdf (the two-link arm's gravity terms are "
+            f"{section}.g1 and {section}.g2)"
+        )
+    for key in ("coulomb", "viscous"):
+        if isinstance(getattr(arm, key), tuple):
+            raise ValueError(
+                f"{section}.{key}: one number for the built-in two-link arm (one per joint needs "
+                f"{section}.urdf)"
+            )
 
 
 # --- sections ---------------------------------------------------------------------------------
@@ -339,49 +416,92 @@ _ARM_KEYS = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
 @dataclass(frozen=True)
 class PlantConfig:
     """The arm of eq. (1): M, C, G as in Section 4, F = coulomb sgn(dq) + viscous dq,
-    tau_d = [disturbance[0] sin t, disturbance[1] cos t]."""
+    tau_d = [disturbance[0] sin t, disturbance[1] cos t].
+
+    ``urdf`` names a URDF file instead (any fixed-base serial arm, through Pinocchio; relative to
+    the TOML file, or to the current directory for a config built from a dict; stored absolute),
+    with ``gravity`` (default DEFAULT_GRAVITY) and coulomb, viscous as one number or one per
+    joint; p1 ... g2 are then not used and may not be set."""
 
     p1: float = 5.0
     p2: float = 1.0
     p3: float = 1.0
     g1: float = 9.8 * 1.2
     g2: float = 9.8
-    coulomb: float = -0.1  # as printed: F = -0.1 sgn(dq)
-    viscous: float = 0.0  # not in the paper; 0 keeps its plant
+    coulomb: float | Vector = -0.1  # as printed: F = -0.1 sgn(dq)
+    viscous: float | Vector = 0.0  # not in the paper; 0 keeps its plant
     disturbance: Vector = (0.1, 0.1)
+    urdf: str | None = None
+    gravity: Vector | None = None
 
     def __post_init__(self) -> None:
-        for key in _ARM_KEYS:
+        for key in _TWO_LINK_KEYS:
             object.__setattr__(self, key, _scalar(getattr(self, key), f"plant.{key}"))
+        for key in ("coulomb", "viscous"):
+            object.__setattr__(self, key, _friction(getattr(self, key), f"plant.{key}"))
         disturbance = _vector(self.disturbance, "plant.disturbance", None)
         object.__setattr__(self, "disturbance", disturbance)
+        if self.urdf is not None:
+            object.__setattr__(self, "urdf", _urdf_path(self.urdf, "plant.urdf"))
+            urdf_info(self.urdf, "plant.urdf")
+        if self.gravity is not None:
+            object.__setattr__(self, "gravity", _vector(self.gravity, "plant.gravity", 3))
+        _check_urdf_arm(self, "plant")
         _check_arm(self.p1, self.p2, self.p3, "plant")
+
+    @property
+    def resolved_gravity(self) -> Vector:
+        """plant.gravity, or DEFAULT_GRAVITY when left out."""
+        return DEFAULT_GRAVITY if self.gravity is None else self.gravity
 
 
 @dataclass(frozen=True)
 class ModelConfig:
     """The arm the controller believes (feedforward h of eq. 5 and f, g of eq. 9). A key left
-    out (None) takes the plant's value, so the default is an exact model."""
+    out (None) takes the plant's value, so the default is an exact model. With a URDF plant,
+    ``urdf`` may name another URDF of the same joint count (a model error), with its own
+    ``gravity``, coulomb and viscous (each left out: the plant's)."""
 
     p1: float | None = None
     p2: float | None = None
     p3: float | None = None
     g1: float | None = None
     g2: float | None = None
-    coulomb: float | None = None
-    viscous: float | None = None
+    coulomb: float | Vector | None = None
+    viscous: float | Vector | None = None
+    urdf: str | None = None
+    gravity: Vector | None = None
 
     def __post_init__(self) -> None:
-        for key in _ARM_KEYS:
+        for key in _TWO_LINK_KEYS:
             value = getattr(self, key)
             if value is not None:
                 object.__setattr__(self, key, _scalar(value, f"model.{key}"))
+        for key in ("coulomb", "viscous"):
+            value = getattr(self, key)
+            if value is not None:
+                object.__setattr__(self, key, _friction(value, f"model.{key}"))
+        if self.urdf is not None:
+            object.__setattr__(self, "urdf", _urdf_path(self.urdf, "model.urdf"))
+            urdf_info(self.urdf, "model.urdf")
+        if self.gravity is not None:
+            object.__setattr__(self, "gravity", _vector(self.gravity, "model.gravity", 3))
 
-    def resolve(self, plant: PlantConfig) -> dict[str, float]:
+    def resolve(self, plant: PlantConfig) -> dict[str, Any]:
         """The model's parameters with the plant's values filled in."""
         return {
             key: getattr(plant, key) if getattr(self, key) is None else getattr(self, key)
             for key in _ARM_KEYS
+        }
+
+    def resolve_urdf(self, plant: PlantConfig) -> dict[str, Any]:
+        """The believed URDF arm: urdf, gravity, coulomb, viscous, each the plant's when left
+        out (a URDF plant only)."""
+        return {
+            "urdf": plant.urdf if self.urdf is None else self.urdf,
+            "gravity": plant.resolved_gravity if self.gravity is None else self.gravity,
+            "coulomb": plant.coulomb if self.coulomb is None else self.coulomb,
+            "viscous": plant.viscous if self.viscous is None else self.viscous,
         }
 
 
@@ -803,6 +923,10 @@ class ProbeConfig:
 
 CONTROLLER_KINDS = ("adp", "rise", "pd", "optimal")
 BASIS_KINDS = ("augmented", "paper", "structured")
+#: The basis of a URDF arm (plant.urdf) when controller.basis is left out.
+URDF_DEFAULT_BASIS = "quadratic"
+#: Built-in bases that a URDF arm refuses (written for the two-link arm).
+URDF_REFUSED_BASES = ("augmented", "paper", "structured")
 #: The number of functions of each built-in basis (the length of init.critic_weights and
 #: actor_weights); an expression basis has one per term (ControllerConfig.basis_size).
 BASIS_SIZES = {"augmented": 8, "paper": 8, "structured": 6}
@@ -903,8 +1027,8 @@ class ControllerConfig:
                     "controller.degree: only with the 'polynomial' basis (controller.basis = "
                     f"{_plain(self.basis)!r})"
                 )
-        if self.is_expression:
-            self.expression_basis()  # parsed and checked now (errors name the field and term)
+        # an expression basis is parsed and checked by Config, for the arm's n joints (errors
+        # name the field and the term)
         object.__setattr__(self, "rise", _boolean(self.rise, "controller.rise"))
         if self.kind == "rise" and not self.rise:
             raise ValueError(
@@ -1106,9 +1230,16 @@ class Config:
                 raise TypeError(
                     f"{name}: expected {cls.__name__}, got {type(getattr(self, name)).__name__}"
                 )
+        if self.plant.urdf is not None and self.controller.basis == ControllerConfig.basis:
+            # left at the two-link default: the URDF arm's default (from_dict refuses a
+            # two-link basis set explicitly)
+            controller = dataclasses.replace(self.controller, basis=URDF_DEFAULT_BASIS)
+            object.__setattr__(self, "controller", controller)
+        self._check_model()
         self._fit_to_arm()
-        model = self.model.resolve(self.plant)
-        _check_arm(model["p1"], model["p2"], model["p3"], "model")
+        if self.plant.urdf is None:
+            model = self.model.resolve(self.plant)
+            _check_arm(model["p1"], model["p2"], model["p3"], "model")
         size = self.controller.basis_size(self.dof)
         for key in ("critic_weights", "actor_weights"):
             value = getattr(self.init, key)
@@ -1154,6 +1285,7 @@ class Config:
             for key, value in values.items():
                 _check_depth(value, f"{section}.{key}")
             sections[section] = dataclasses.replace(getattr(base, section), **values)
+        _check_urdf_keys(data, sections.get("plant", base.plant))
         return dataclasses.replace(base, **sections)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
@@ -1164,8 +1296,39 @@ class Config:
                 f.name: getattr(getattr(self, name), f.name)
                 for f in dataclasses.fields(_SECTIONS[name])
             }
+            if name == "plant" and self.plant.urdf is not None:  # the URDF gives the arm
+                section = {k: v for k, v in section.items() if k not in _TWO_LINK_KEYS}
             out[name] = {key: _plain(value) for key, value in section.items() if value is not None}
         return out
+
+    def _check_model(self) -> None:
+        """The model's keys against the plant's kind of arm (URDF or the two-link arm)."""
+        if self.plant.urdf is None:
+            for key in ("urdf", "gravity"):
+                if getattr(self.model, key) is not None:
+                    raise ValueError(
+                        f"model.{key}: only with a URDF plant (plant.urdf); the two-link model "
+                        "takes model.p1 ... model.g2"
+                    )
+            _check_urdf_arm(self.model, "model")
+            return
+        _check_urdf_arm(dataclasses.replace(self.model, urdf=self.plant.urdf), "model")
+        if self.model.urdf is not None:
+            n, n_model = self.dof, urdf_info(self.model.urdf, "model.urdf")[0]
+            if n_model != n:
+                raise ValueError(
+                    f"model.urdf: the model has n = {n_model} joints, the plant (plant.urdf) "
+                    f"n = {n}; a model URDF must have the plant's joints"
+                )
+        basis = self.controller.basis
+        if isinstance(basis, str) and basis in URDF_REFUSED_BASES:
+            works = ", ".join(
+                repr(b) for b in (*BASIS_KINDS, *EXPRESSION_FAMILIES) if b not in URDF_REFUSED_BASES
+            )
+            raise ValueError(
+                f"controller.basis: {basis!r} is a basis of the built-in two-link arm; with "
+                f"plant.urdf use {works} or a list of terms (default {URDF_DEFAULT_BASIS!r})"
+            )
 
     def _fit_to_arm(self) -> None:
         """Sized settings follow the arm's joint count n: for n != 2, a setting left at the
@@ -1181,9 +1344,11 @@ class Config:
 
     @property
     def dof(self) -> int:
-        """The joint count n of the plant: 2 for the built-in two-link arm (the only arm this
-        configuration describes so far; a URDF arm will give its own n)."""
-        return 2
+        """The joint count n of the plant: 2 for the built-in two-link arm, the URDF's
+        revolute, continuous and prismatic joints for plant.urdf."""
+        if self.plant.urdf is None:
+            return 2
+        return urdf_info(self.plant.urdf, "plant.urdf")[0]
 
     def initial_weights(self, key: str = "critic_weights") -> np.ndarray:
         """init.critic_weights (or ``key = "actor_weights"``), or the basis' default when left
@@ -1236,6 +1401,31 @@ class Config:
         return Config.from_dict(changes, base=self)
 
 
+def _check_urdf_keys(data: Mapping[str, Any], plant: PlantConfig) -> None:
+    """With a URDF plant, refuses the two-link keys and bases given explicitly (even at their
+    default values), naming the field."""
+    if plant.urdf is None:
+        return
+    for section in ("plant", "model"):
+        values = data.get(section, {})
+        for key in _TWO_LINK_KEYS:
+            if key in values:
+                raise ValueError(
+                    f"{section}.{key}: a parameter of the built-in two-link arm; a URDF arm "
+                    "(plant.urdf) takes its inertia and geometry from the URDF (leave "
+                    f"{section}.{key} out)"
+                )
+    basis = data.get("controller", {}).get("basis")
+    if isinstance(basis, str) and basis in URDF_REFUSED_BASES:
+        works = ", ".join(
+            repr(b) for b in (*BASIS_KINDS, *EXPRESSION_FAMILIES) if b not in URDF_REFUSED_BASES
+        )
+        raise ValueError(
+            f"controller.basis: {basis!r} is a basis of the built-in two-link arm; with "
+            f"plant.urdf use {works} or a list of terms (default {URDF_DEFAULT_BASIS!r})"
+        )
+
+
 def _joint_defaults(n: int) -> dict[tuple[str, str], Any]:
     """The defaults of the sized settings for an arm of n != 2 joints (the two-link arm keeps the
     paper's): tau_d amplitudes 0.1 and q0 = 0.1 rad on every joint, dq0 = 0, qd = 0; K = I,
@@ -1268,6 +1458,11 @@ def _check_shape(value: Any, name: str, shape: tuple[int, ...], n: int) -> None:
 def _check_sizes(config: Config, n: int) -> None:
     """Every sized setting against the joint count n (ValueError naming the field)."""
     _check_shape(config.plant.disturbance, "plant.disturbance", (n,), n)
+    for section in ("plant", "model"):
+        for key in ("coulomb", "viscous"):
+            value = getattr(getattr(config, section), key)
+            if isinstance(value, tuple):
+                _check_shape(value, f"{section}.{key}", (n,), n)
     _check_shape(config.task.q0, "task.q0", (n,), n)
     _check_shape(config.task.dq0, "task.dq0", (n,), n)
     qd = config.task.qd
@@ -1346,6 +1541,10 @@ def load_config(path: str | Path) -> Config:
         raise ValueError(f"{path}: invalid TOML: {error}") from error
     except RecursionError:
         raise ValueError(f"{path}: {_deep_toml(text)}") from None
+    for section in ("plant", "model"):  # a relative URDF path is relative to the TOML file
+        values = data.get(section)
+        if isinstance(values, Mapping) and isinstance(values.get("urdf"), str):
+            data[section]["urdf"] = str(path.parent / Path(values["urdf"]).expanduser())
     qd = data.get("task", {}).get("qd") if isinstance(data.get("task"), Mapping) else None
     if isinstance(qd, Mapping) and isinstance(qd.get("file"), str):
         data["task"]["qd"] = {**qd, "file": str(path.parent / Path(qd["file"]).expanduser())}

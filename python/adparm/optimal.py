@@ -112,6 +112,25 @@ def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[s
         raise ValueError(
             f"q, dq: expected shape ({n},) each, got {q_array.shape}, {dq_array.shape}"
         )
+    if config.plant.urdf is not None:  # Pinocchio, through the core's URDF arm
+        arm = (
+            config.model.resolve_urdf(config.plant)
+            if model
+            else {
+                "urdf": config.plant.urdf,
+                "gravity": config.plant.resolved_gravity,
+                "coulomb": config.plant.coulomb,
+                "viscous": config.plant.viscous,
+            }
+        )
+        urdf_arm = _core.UrdfArm(
+            arm["urdf"],
+            gravity=np.array(arm["gravity"], dtype=float),
+            coulomb=np.atleast_1d(np.array(arm["coulomb"], dtype=float)),
+            viscous=np.atleast_1d(np.array(arm["viscous"], dtype=float)),
+        )
+        terms = urdf_arm.terms(q_array, dq_array)
+        return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
     parameters = _core.ArmParameters()
     values = (
         config.model.resolve(config.plant)
@@ -222,6 +241,11 @@ def _expression_optimal_weights(config: Config) -> np.ndarray:
     represent it (e.g. "quadratic")."""
     from .truth import lqr_value
 
+    if config.plant.urdf is not None:
+        raise ValueError(
+            "controller.basis: no known W* for an expression basis on a URDF arm (plant.urdf): "
+            "its M(q) and G(q) vary with q, so V* is not a quadratic form in x"
+        )
     p = config.model.resolve(config.plant)
     nonlinear = [key for key in ("p3", "g1", "g2", "coulomb", "viscous") if p[key] != 0.0]
     if nonlinear:
@@ -333,8 +357,8 @@ def hjb_residual(
     ----------
     config : Config
         Cost, alpha1, basis and the arm the controller believes.
-    x : array_like, shape (4,) or (..., 4)
-        One state or a batch.
+    x : array_like, shape (2n,) or (..., 2n)
+        One state or a batch (n joints; 4 for the two-link arm).
     critic_weights, actor_weights : array_like, shape (K,)
         Wc and Wa, in the order of ``adparm.basis_names(config)``.
     t : float, optional
@@ -346,18 +370,13 @@ def hjb_residual(
         A float for one state, else an array of x's leading shape. At Wc = Wa = W* it vanishes
         to round-off at every state.
     """
-    try:
-        states = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise TypeError(f"x: expected an array of shape (..., 4), got {x!r}") from error
-    if states.ndim == 0 or states.shape[-1] != 4:
-        raise ValueError(f"x: expected shape (..., 4), got {states.shape}")
-    if not np.all(np.isfinite(states)):
-        raise ValueError("x: must be finite")
+    _check_config(config)
+    n_x = 2 * config.dof
+    states = _states(x, n_x)
     size = len(basis_names(config))
     residual = _core.hjb_residual(
         residual_settings(config),
-        np.ascontiguousarray(states.reshape(-1, 4)),
+        np.ascontiguousarray(states.reshape(-1, n_x)),
         _weights(critic_weights, "critic_weights", size),
         _weights(actor_weights, "actor_weights", size),
         float(t),

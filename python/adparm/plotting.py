@@ -83,6 +83,7 @@ def _draw(
     height: float,
     title: str,
     ratios: Sequence[float] | None = None,
+    width: float = _WIDTH,
 ) -> Figure:
     """Draw ``panels`` (functions of one Axes) into ``ax``, into new axes of ``fig``, or into a
     new figure of one column; returns the figure."""
@@ -100,7 +101,7 @@ def _draw(
             if fig is None:
                 from matplotlib.figure import Figure
 
-                fig = Figure(figsize=(_WIDTH, height), layout="constrained")
+                fig = Figure(figsize=(width, height), layout="constrained")
             figure = fig
             grid = figure.subplots(len(panels), 1, sharex=True, squeeze=False, height_ratios=ratios)
             axes = list(grid[:, 0])
@@ -224,9 +225,30 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
         axes.set_ylabel(f"weight ${symbol}$ (-)")
         axes.set_xlabel("time t (s)")
         _mark_probe_end(axes, result)
-        _legend_outside(axes, title="basis function")
+        size = weights.shape[1]
+        if size <= _MAX_LEGEND_WEIGHTS:
+            _legend_outside(axes, title="basis function", ncols=_legend_columns(size))
+        else:  # a legend of so many functions hides more than it tells
+            axes.text(
+                1.01,
+                1.0,
+                f"{size} basis functions\n(names: adparm.basis_names)",
+                transform=axes.transAxes,
+                va="top",
+                fontsize=8,
+            )
 
     return panel
+
+
+#: Weights named one by one in the legend of a weights figure (more: a note instead), and the
+#: legend rows per column.
+_MAX_LEGEND_WEIGHTS = 30
+_LEGEND_ROWS = 10
+
+
+def _legend_columns(size: int) -> int:
+    return max(1, -(-size // _LEGEND_ROWS))
 
 
 def _relative_error_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -> Panel:
@@ -275,7 +297,17 @@ def _weights_figure(
         _weights_panel(result, weights, symbol),
         _relative_error_panel(result, weights, symbol),
     ]
-    return _draw(panels, ax=ax, fig=fig, height=5.2, title=title, ratios=(2.2, 1.0))
+    size = weights.shape[1]
+    extra = _legend_columns(size) - 1 if size <= _MAX_LEGEND_WEIGHTS else 0
+    return _draw(
+        panels,
+        ax=ax,
+        fig=fig,
+        height=5.2,
+        title=title,
+        ratios=(2.2, 1.0),
+        width=_WIDTH + 1.3 * extra,  # room for the legend's extra columns
+    )
 
 
 def plot_critic_weights(
@@ -335,6 +367,15 @@ def plot_actor_weights(
 
 
 _JOINT_STYLES = ({"color": OKABE_ITO[0], "ls": "-"}, {"color": OKABE_ITO[1], "ls": "--"})
+_LINE_STYLES = ("-", "--", "-.", ":")
+
+
+def _joint_style(j: int) -> dict[str, Any]:
+    """Joint j's line: the two-link arm's two styles, then Okabe-Ito colours with cycling dashes
+    (any n joints stay apart in colour and dash)."""
+    if j < len(_JOINT_STYLES):
+        return _JOINT_STYLES[j]
+    return {"color": OKABE_ITO[j % len(OKABE_ITO)], "ls": _LINE_STYLES[j % len(_LINE_STYLES)]}
 
 
 def _joint_panel(
@@ -347,9 +388,9 @@ def _joint_panel(
     annotate_probe: bool = False,
 ) -> Panel:
     def panel(axes: Axes) -> None:
-        for j in range(2):
+        for j in range(values.shape[1]):  # one line per joint
             y = np.maximum(np.abs(values[:, j]), _FLOOR) if log else values[:, j]
-            axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_JOINT_STYLES[j])
+            axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_joint_style(j))
         if log:
             axes.set_yscale("log")
         axes.set_ylabel(ylabel)
@@ -431,12 +472,13 @@ CONTROLLER_STYLES = {
     "optimal": {"color": "k", "ls": (0, (4, 2.5)), "lw": 1.1, "zorder": 4},
 }
 _LEARNING_STYLE = {"color": OKABE_ITO[0], "ls": "-", "lw": 0.7}
-_COMPARE_PANELS = (
-    ("e1", 0, "$e_{1,1}$ (rad)"),
-    ("e1", 1, "$e_{1,2}$ (rad)"),
-    ("tau", 0, "$\\tau_1$ (N m)"),
-    ("tau", 1, "$\\tau_2$ (N m)"),
-)
+
+
+def _compare_panels(joints: int) -> list[tuple[str, int, str]]:
+    """(result attribute, joint, y label) of each row: e1 of every joint, then tau."""
+    return [("e1", j, f"$e_{{1,{j + 1}}}$ (rad)") for j in range(joints)] + [
+        ("tau", j, f"$\\tau_{j + 1}$ (N m)") for j in range(joints)
+    ]
 
 
 def plot_comparison(
@@ -462,8 +504,9 @@ def plot_comparison(
         Time axis of the controllers' column: ``"symlog"`` (default) is linear up to 1 s and
         logarithmic after, so that both the first second and the long run show.
     ax : 2-d array of Axes, optional
-        Four rows (e1 of joints 1 and 2, tau of joints 1 and 2) and one column per group
-        (learning run, controllers), as ``fig.subplots(4, 2)`` returns.
+        2 n rows for n joints (e1 of each joint, then tau of each joint: four for the two-link
+        arm) and one column per group (learning run, controllers), as ``fig.subplots(4, 2)``
+        returns.
     fig : Figure, optional
         Add the panels to this figure.
 
@@ -481,7 +524,9 @@ def plot_comparison(
     learning = {label: r for label, r in results.items() if label == "adp"}
     others = {label: r for label, r in results.items() if label != "adp"}
     groups = [g for g in (learning, others) if g]
-    rows = len(_COMPARE_PANELS)
+    joints = next(iter(results.values())).q.shape[1] if results else 2
+    panels = _compare_panels(joints)
+    rows = len(panels)
     with matplotlib.rc_context(_RC):
         if ax is not None:
             grid = np.asarray(ax, dtype=object).reshape(rows, -1)
@@ -495,13 +540,15 @@ def plot_comparison(
             if fig is None:
                 from matplotlib.figure import Figure
 
-                fig = Figure(figsize=(_WIDTH + 1.0 * (len(groups) - 1), 6.8), layout="constrained")
+                fig = Figure(
+                    figsize=(_WIDTH + 1.0 * (len(groups) - 1), 1.7 * rows), layout="constrained"
+                )
             figure = fig
             grid = figure.subplots(rows, len(groups), sharex="col", squeeze=False)
             figure.suptitle("Controllers compared: tracking errors and applied torques")
         for column, group in enumerate(groups):
             is_learning = group is learning
-            for row, (name, joint, ylabel) in enumerate(_COMPARE_PANELS):
+            for row, (name, joint, ylabel) in enumerate(panels):
                 axes = grid[row, column]
                 for label, result in group.items():
                     style = _LEARNING_STYLE if is_learning else CONTROLLER_STYLES.get(label, {})

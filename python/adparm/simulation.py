@@ -48,13 +48,22 @@ def core_settings(config: Config) -> _core.Settings:
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     settings = _core.Settings()
     plant = _core.ArmParameters()
-    for key in _ARM_KEYS:
-        setattr(plant, key, getattr(config.plant, key))
     model = _core.ArmParameters()
-    for key, value in config.model.resolve(config.plant).items():
-        setattr(model, key, value)
+    if config.plant.urdf is None:
+        for key in _ARM_KEYS:
+            setattr(plant, key, getattr(config.plant, key))
+        for key, value in config.model.resolve(config.plant).items():
+            setattr(model, key, value)
     settings.plant = plant
     settings.model = model
+    if config.plant.urdf is not None:  # a URDF arm: the two-link parameters are not used
+        settings.plant_urdf = _urdf_settings(
+            config.plant.urdf,
+            config.plant.resolved_gravity,
+            config.plant.coulomb,
+            config.plant.viscous,
+        )
+        settings.model_urdf = _urdf_settings(**config.model.resolve_urdf(config.plant))
     settings.disturbance = np.array(config.plant.disturbance)
 
     task = _core.TaskSettings()
@@ -127,6 +136,18 @@ def core_settings(config: Config) -> _core.Settings:
     return settings
 
 
+def _urdf_settings(
+    urdf: str, gravity: Any, coulomb: float | tuple[float, ...], viscous: float | tuple[float, ...]
+) -> _core.UrdfArmSettings:
+    """The core's description of a URDF arm (friction: one value per joint, or one for all)."""
+    arm = _core.UrdfArmSettings()
+    arm.urdf = urdf
+    arm.gravity = np.array(gravity, dtype=float)
+    arm.coulomb = np.atleast_1d(np.array(coulomb, dtype=float))
+    arm.viscous = np.atleast_1d(np.array(viscous, dtype=float))
+    return arm
+
+
 def _trajectory_settings(config: Config) -> _core.TrajectorySettings:
     qd = config.task.qd
     trajectory = _core.TrajectorySettings()
@@ -150,20 +171,20 @@ def _trajectory_settings(config: Config) -> _core.TrajectorySettings:
 
 
 def desired_state(config: Config, t: Any) -> np.ndarray:
-    """The desired state of ``config.task.qd`` as the core evaluates it: for one time t, a (3, 2)
-    array [qd, dqd, ddqd]; for times (n,), an (n, 3, 2) array."""
+    """The desired state of ``config.task.qd`` as the core evaluates it: for one time t, a (3, n)
+    array [qd, dqd, ddqd] (n joints); for times (m,), an (m, 3, n) array."""
     if not isinstance(config, Config):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     times = np.asarray(t, dtype=float)
     if times.ndim > 1:
         raise ValueError(f"t: expected a time or a 1-d array of times, got shape {times.shape}")
     rows = np.asarray(_core.desired_state(_trajectory_settings(config), times.reshape(-1)))
-    rows = rows.reshape(-1, 3, 2)
+    rows = rows.reshape(-1, 3, config.dof)
     return rows[0] if times.ndim == 0 else rows
 
 
 def extrapolation_points(config: Config) -> np.ndarray:
-    """The extrapolation points (N, 4) in x = [e1; e2] of a fixed or grid ``config.extrapolation``
+    """The extrapolation points (N, 2n) in x = [e1; e2] of a fixed or grid ``config.extrapolation``
     (for mode local: the offsets are drawn anew at each step, and this returns zeros)."""
     return np.array(_core.extrapolation_points(core_settings(config)))
 
@@ -246,7 +267,8 @@ class SimulationResult:
         if n < 0:
             raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
         shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
-        shapes.update({name: (n, 2) for name in _ARRAYS_2})
+        joints = self.config.dof if isinstance(self.config, Config) else 2
+        shapes.update({name: (n, joints) for name in _ARRAYS_2})
         size = len(self.config.initial_weights()) if isinstance(self.config, Config) else 8
         shapes.update({name: (n, size) for name in _ARRAYS_N})
         for name, shape in shapes.items():
@@ -325,7 +347,9 @@ class SimulationResult:
             raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
         from .storage import columns, table
 
-        return pandas.DataFrame(table(self), columns=columns(self.critic_weights.shape[1]))
+        return pandas.DataFrame(
+            table(self), columns=columns(self.critic_weights.shape[1], self.q.shape[1])
+        )
 
     @functools.cached_property
     def diagnostics(self) -> dict[str, Any]:

@@ -20,47 +20,55 @@ __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
 
 FORMAT_VERSION = 2
 
-# (result attribute, column names); weights in the order of adparm.basis_names(config).
-_COLUMNS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("t", ("t",)),
-    ("q", ("q1", "q2")),
-    ("dq", ("dq1", "dq2")),
-    ("qd", ("qd1", "qd2")),
-    ("e1", ("e1_1", "e1_2")),
-    ("e2", ("e2_1", "e2_2")),
-    ("tau", ("tau1", "tau2")),
-    ("u", ("u1", "u2")),
-    ("u_hat", ("u_hat1", "u_hat2")),
-    ("mu", ("mu1", "mu2")),
-    ("probe", ("probe1", "probe2")),
-    ("critic_weights", ("Wc",)),  # Wc1 ... WcK, K the basis size
-    ("actor_weights", ("Wa",)),
-    ("hjb_error", ("hjb_error",)),
-    ("cost", ("cost",)),
+# (result attribute, column names); one column per joint j = 1 ... n ("{j}") and per basis function
+# i = 1 ... K ("{i}", in the order of adparm.basis_names(config)).
+_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("t", "t"),
+    ("q", "q{j}"),
+    ("dq", "dq{j}"),
+    ("qd", "qd{j}"),
+    ("e1", "e1_{j}"),
+    ("e2", "e2_{j}"),
+    ("tau", "tau{j}"),
+    ("u", "u{j}"),
+    ("u_hat", "u_hat{j}"),
+    ("mu", "mu{j}"),
+    ("probe", "probe{j}"),
+    ("critic_weights", "Wc{i}"),
+    ("actor_weights", "Wa{i}"),
+    ("hjb_error", "hjb_error"),
+    ("cost", "cost"),
 )
 
 
-def _columns(basis_size: int) -> list[tuple[str, tuple[str, ...]]]:
-    return [
-        (attr, tuple(f"{names[0]}{i}" for i in range(1, basis_size + 1)))
-        if attr in ("critic_weights", "actor_weights")
-        else (attr, names)
-        for attr, names in _COLUMNS
-    ]
+def _columns(basis_size: int, joints: int = 2) -> list[tuple[str, tuple[str, ...]]]:
+    out = []
+    for attr, template in _COLUMNS:
+        if "{i}" in template:
+            names = tuple(template.format(i=i) for i in range(1, basis_size + 1))
+        elif "{j}" in template:
+            names = tuple(template.format(j=j) for j in range(1, joints + 1))
+        else:
+            names = (template,)
+        out.append((attr, names))
+    return out
 
 
-def columns(basis_size: int = 8) -> list[str]:
+def columns(basis_size: int = 8, joints: int = 2) -> list[str]:
     """Column names of :func:`table`, the CSV file and ``to_dataframe()`` for a basis of
-    ``basis_size`` functions (8; 6 for the structured basis)."""
-    return [name for _, names in _columns(basis_size) for name in names]
+    ``basis_size`` functions (8; 6 for the structured basis) and an arm of ``joints`` joints."""
+    return [name for _, names in _columns(basis_size, joints) for name in names]
 
 
 def table(result: SimulationResult) -> np.ndarray:
     """The recorded time series as one (rows, len(columns(K))) array."""
     n = result.t.size
-    size = result.critic_weights.shape[1]
+    size, joints = result.critic_weights.shape[1], result.q.shape[1]
     return np.hstack(
-        [np.asarray(getattr(result, attr)).reshape(n, len(names)) for attr, names in _columns(size)]
+        [
+            np.asarray(getattr(result, attr)).reshape(n, len(names))
+            for attr, names in _columns(size, joints)
+        ]
     )
 
 
@@ -85,15 +93,15 @@ def _metadata(result: SimulationResult) -> dict[str, Any]:
 def _write_csv(result: SimulationResult, path: Path) -> None:
     with open(path, "w", encoding="utf-8", newline="\n") as stream:
         stream.write(CSV_PREFIX + json.dumps(_metadata(result)) + "\n")
-        size = result.critic_weights.shape[1]
-        stream.write(",".join(columns(size)) + "\n")
+        size, joints = result.critic_weights.shape[1], result.q.shape[1]
+        stream.write(",".join(columns(size, joints)) + "\n")
         n = result.t.size
         for start in range(0, n, _CSV_ROWS):
             stop = min(n, start + _CSV_ROWS)
             block = np.hstack(
                 [
                     np.asarray(getattr(result, attr))[start:stop].reshape(stop - start, len(names))
-                    for attr, names in _columns(size)
+                    for attr, names in _columns(size, joints)
                 ]
             )
             np.savetxt(stream, block, delimiter=",", fmt="%.18e")
@@ -148,7 +156,8 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
             meta = json.loads(first[len(CSV_PREFIX) :])
             header = stream.readline().strip().split(",")
             size = sum(1 for name in header if name.startswith("Wc"))  # the basis size
-            if header != columns(size):
+            joints = sum(1 for name in header if name.startswith("dq"))  # n
+            if header != columns(size, joints):
                 raise _corrupt(path, "the header line does not name adparm's columns")
             lines = stream.read().splitlines()
             if not lines or lines[-1] != f"{CSV_END}{len(lines) - 1} rows":
@@ -162,14 +171,14 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         raise _corrupt(path, str(error)) from None
     if not isinstance(meta, dict):
         raise _corrupt(path, "the first line holds no JSON object")
-    width = len(columns(size))
+    width = len(columns(size, joints))
     if data.size == 0:
         data = np.zeros((0, width))
     if data.shape[1] != width:
         raise _corrupt(path, f"expected {width} columns, got {data.shape[1]}")
     fields: dict[str, Any] = {}
     start = 0
-    for attr, names in _columns(size):
+    for attr, names in _columns(size, joints):
         block = data[:, start : start + len(names)]
         fields[attr] = block[:, 0] if attr in ("t", "hjb_error", "cost") else block
         start += len(names)

@@ -77,8 +77,15 @@ def _linearisation(config: Config) -> tuple[np.ndarray, np.ndarray]:
     M(qd) de2 = u (C e2 is quadratic in x and the feedforward cancels G and F)."""
     alpha1 = np.array(config.control.alpha1)
     qd = desired_state(config, 0.0)[0]
-    A = np.block([[-alpha1, np.eye(2)], [np.zeros((2, 2)), np.zeros((2, 2))]])
-    B = np.vstack([np.zeros((2, 2)), np.linalg.inv(_mass(config, qd[1]))])
+    n = config.dof
+    if config.plant.urdf is None:
+        M = _mass(config, qd[1])
+    else:
+        from .optimal import arm_terms
+
+        M = arm_terms(config, qd, np.zeros(n), model=True)["M"]
+    A = np.block([[-alpha1, np.eye(n)], [np.zeros((n, n)), np.zeros((n, n))]])
+    B = np.vstack([np.zeros((n, n)), np.linalg.inv(M)])
     return A, B
 
 
@@ -159,6 +166,10 @@ def optimal_cost(
     import casadi
 
     config = _check_config(config)
+    if config.plant.urdf is not None:
+        raise ValueError(
+            "plant.urdf: optimal_cost transcribes the built-in two-link arm only, not a URDF arm"
+        )
     if not config.task.is_set_point:
         raise ValueError("task.qd: optimal_cost needs a set-point (a constant qd)")
     if isinstance(intervals, bool) or not isinstance(intervals, (int, np.integer)):
@@ -236,7 +247,7 @@ def optimal_cost(
 def _explored_states(result: SimulationResult, rng: np.random.Generator) -> np.ndarray:
     x = np.hstack([result.e1, result.e2])
     low, high = x.min(axis=0), x.max(axis=0)
-    return rng.uniform(low, high, size=(_SAMPLES, 4))
+    return rng.uniform(low, high, size=(_SAMPLES, x.shape[1]))
 
 
 def _relative_residual(
@@ -326,9 +337,9 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     out["hjb_residual_explored"] = _relative_residual(config, X, Wc, Wa, t_end)
     out["hjb_residual_box"] = None
     if config.extrapolation.points > 0:
-        box = np.array(config.extrapolation.box_vector())
+        box = np.array(config.extrapolation.box_vector(config.dof))
         out["hjb_residual_box"] = _relative_residual(
-            config, rng.uniform(-box, box, size=(_SAMPLES, 4)), Wc, Wa, t_end
+            config, rng.uniform(-box, box, size=(_SAMPLES, box.size)), Wc, Wa, t_end
         )
     tail = result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0])
     x_tail = np.hstack([result.e1, result.e2])[tail]
@@ -393,8 +404,11 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
                 f"the end of the trajectory), and no weights do better than {best:.3g}"
             )
             advice.append(
-                "use a cost of the exact family (adparm.solvable_cost; then W* is known), or a "
-                "basis that can represent V* (controller.basis), and compare with "
+                "use a basis that can represent V* (controller.basis; a richer polynomial), "
+                "and compare the learned V with adparm.lqr_value near the set-point"
+                if config.plant.urdf is not None
+                else "use a cost of the exact family (adparm.solvable_cost; then W* is known), "
+                "or a basis that can represent V* (controller.basis), and compare with "
                 "adparm.lqr_value / adparm.optimal_cost"
             )
         else:
@@ -411,8 +425,25 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     elif target is not None and out["critic_relative_error"] > tolerance:
         out["approximation"] = "not converged"
         advice.append("run longer (sim.T) or excite more (probe.amplitude)")
+    unknown = target is None and config.plant.urdf is not None
     if problems:
         out["verdict"] = "; ".join(problems)
+        if unknown:
+            out["verdict"] += (
+                "; the optimum is not known (no exact W* for this basis on a URDF arm)"
+            )
+    elif unknown:
+        # nothing wrong was found, but nothing proves the optimum was reached either
+        yardstick = (
+            f"; its quadratic form is {out['value_error']:.3g} off the LQR value of the "
+            "linearisation at the set-point"
+            if out["value_error"] is not None
+            else ""
+        )
+        out["verdict"] = (
+            "ok, but the optimum is not known: no exact W* for this basis on a URDF arm "
+            f"(HJB residual {residual:.3g} of x^T Q x over the explored region{yardstick})"
+        )
     return out
 
 

@@ -21,13 +21,20 @@ using namespace adparm;
 
 namespace {
 
-using RowsX4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using ExpressionLoop = ClosedLoop<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>;
+using UrdfLoop = ClosedLoop<UrdfLoopArm, ExpressionLoopBasis>;
 
-// Calls f(Loop*) (a null pointer of the loop type) for the two-link loop of settings.basis: the
-// fixed-size loop of a built-in basis, the dynamic-size loop of the expression basis.
+// Calls f(Loop*) (a null pointer of the loop type) for the loop of the settings: a URDF arm's
+// (expression basis), or the two-link loop of settings.basis: the fixed-size loop of a built-in
+// basis, the dynamic-size loop of the expression basis.
 template <class F>
 decltype(auto) with_loop(const Settings& settings, F&& f) {
+  if (!settings.plant_urdf.urdf.empty()) {
+    if (settings.basis != BasisKind::expression)
+      throw std::invalid_argument("controller.basis: a URDF arm takes an expression basis");
+    return f(static_cast<UrdfLoop*>(nullptr));
+  }
   if (settings.basis == BasisKind::expression) return f(static_cast<ExpressionLoop*>(nullptr));
   return with_basis(settings.basis, [&](auto basis) {
     return f(static_cast<ClosedLoop<TwoLinkArm, decltype(basis)>*>(nullptr));
@@ -135,6 +142,14 @@ void bind_settings(py::module_& m) {
       .def_readwrite("dt", &SimSettings::dt)
       .def_readwrite("record_every", &SimSettings::record_every)
       .def_readwrite("divergence_bound", &SimSettings::divergence_bound);
+  py::class_<UrdfArmSettings>(m, "UrdfArmSettings",
+                              "A URDF arm of the loop: urdf (path; empty: the two-link arm), "
+                              "gravity (3,), coulomb and viscous (n, 1 or 0 values).")
+      .def(py::init<>())
+      .def_readwrite("urdf", &UrdfArmSettings::urdf)
+      .def_readwrite("gravity", &UrdfArmSettings::gravity)
+      .def_readwrite("coulomb", &UrdfArmSettings::coulomb)
+      .def_readwrite("viscous", &UrdfArmSettings::viscous);
   py::class_<Settings>(m, "Settings",
                        "All settings of one run. Eigen members are copied on access: assign them "
                        "whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and "
@@ -144,6 +159,8 @@ void bind_settings(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("plant", &Settings::plant)
       .def_readwrite("model", &Settings::model)
+      .def_readwrite("plant_urdf", &Settings::plant_urdf)
+      .def_readwrite("model_urdf", &Settings::model_urdf)
       .def_readwrite("disturbance", &Settings::disturbance)
       .def_readwrite("task", &Settings::task)
       .def_readwrite("Q", &Settings::Q)
@@ -405,7 +422,7 @@ void bind_expression_basis(py::module_& m) {
 void bind_hjb(py::module_& m) {
   m.def(
       "hjb_residual",
-      [](const Settings& settings, const RowsX4& states, const Eigen::VectorXd& critic_weights,
+      [](const Settings& settings, const RowsXX& states, const Eigen::VectorXd& critic_weights,
          const Eigen::VectorXd& actor_weights, double t) {
         check_finite(critic_weights, "critic_weights");
         check_finite(actor_weights, "actor_weights");
@@ -416,6 +433,7 @@ void bind_hjb(py::module_& m) {
           const Loop loop(settings);
           check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
           check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
+          check_size(states, states.rows(), 2 * loop.dof(), "x");
           const typename Loop::Weights wc = critic_weights, wa = actor_weights;
           const typename Loop::Desired desired = loop.trajectory()(t);
           Eigen::VectorXd residual(states.rows());
@@ -429,7 +447,8 @@ void bind_hjb(py::module_& m) {
       },
       py::arg("settings"), py::arg("x"), py::arg("critic_weights"), py::arg("actor_weights"),
       py::arg("t"),
-      "HJB error of eq. (21) at each row of x (n, 4) for weights (K,) of settings.basis, with the "
+      "HJB error of eq. (21) at each row of x (m, 2 n) for weights (K,) of settings.basis, with "
+      "the "
       "desired state at time t; returns (n,).");
 }
 
@@ -484,13 +503,14 @@ void bind_closed_loop(py::module_& m) {
         return with_loop(settings, [&](auto* tag) {
           const std::remove_pointer_t<decltype(tag)> loop(settings);
           const auto& points = loop.extrapolation().points();
-          RowsX4 out(static_cast<Eigen::Index>(points.size()), 4);
+          RowsXX out(static_cast<Eigen::Index>(points.size()), 2 * loop.dof());
           for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
           return out;
         });
       },
       py::arg("settings"),
-      "The fixed or grid extrapolation points (N, 4) in x (zeros for mode local, whose points are "
+      "The fixed or grid extrapolation points (N, 2 n) in x (zeros for mode local, whose points "
+      "are "
       "drawn around the state at each step).");
 }
 

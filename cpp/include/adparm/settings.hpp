@@ -2,10 +2,12 @@
 // paper_settings()). Python's adparm.paper_config() holds the same values; a test keeps them equal.
 // Every sized member follows the arm's joint count n (the defaults are for n = 2) and the basis
 // size K; the loop checks each against n and K and names the member when a size is wrong. The arm
-// itself is given to the loop (closed_loop.hpp); `plant` and `model` are the two-link arm's.
+// itself is given to the loop (closed_loop.hpp); `plant` and `model` are the two-link arm's, and
+// `plant_urdf` / `model_urdf` name a URDF arm instead (urdf_loop_arm.hpp).
 #pragma once
 
 #include <cmath>
+#include <string>
 
 #include "adparm/actor.hpp"
 #include "adparm/arm_model.hpp"
@@ -38,9 +40,25 @@ struct SimSettings {
   double divergence_bound = 1e6;  // |q|, |dq|, |Wc|, |Wa| above this stop the run as diverged
 };
 
+// A URDF arm of the loop (urdf_loop_arm.hpp): an empty path is the two-link arm of
+// TwoLinkArmParameters. coulomb, viscous: one value per joint, one value for all, or empty (0).
+struct UrdfArmSettings {
+  std::string urdf;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
+  Eigen::VectorXd coulomb;
+  Eigen::VectorXd viscous;
+
+  friend bool operator==(const UrdfArmSettings& a, const UrdfArmSettings& b) {
+    return a.urdf == b.urdf && a.gravity == b.gravity && a.coulomb.size() == b.coulomb.size() &&
+           a.coulomb == b.coulomb && a.viscous.size() == b.viscous.size() && a.viscous == b.viscous;
+  }
+};
+
 struct Settings {
   TwoLinkArmParameters plant{};
   TwoLinkArmParameters model{};  // the arm the controller believes (feedforward h, f, g)
+  UrdfArmSettings plant_urdf{};  // a URDF plant (urdf not empty): the arm of the run
+  UrdfArmSettings model_urdf{};  // its believed model; empty urdf: the plant (an exact model)
   Eigen::VectorXd disturbance = Vec2(0.1, 0.1);  // n amplitudes (arm_model.hpp)
   TaskSettings task{};
   Eigen::MatrixXd Q = Mat4::Identity();  // 2n x 2n

@@ -14,6 +14,7 @@
 #include "adparm/closed_loop.hpp"
 #include "adparm/dynamic_size.hpp"
 #include "adparm/rk4.hpp"
+#include "adparm/urdf_loop_arm.hpp"
 
 namespace adparm {
 
@@ -240,7 +241,12 @@ class Simulation {
 
 using PaperSimulation = Simulation<TwoLinkArm, PaperBasis>;
 
-// A simulation of the two-link arm whose basis is picked at run time by settings.basis.
+// The run of a URDF arm (settings.plant_urdf.urdf not empty): an expression basis on the
+// dynamic-size loop. Other bases of a URDF arm are refused, naming controller.basis.
+using UrdfSimulation = Simulation<UrdfLoopArm, ExpressionLoopBasis>;
+
+// A simulation picked at run time: the two-link arm with the basis of settings.basis, or a URDF
+// arm (settings.plant_urdf) with an expression basis.
 class AnySimulation {
  public:
   explicit AnySimulation(const Settings& settings) : impl_(make(settings)) {}
@@ -278,8 +284,15 @@ class AnySimulation {
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>>;
+                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>, UrdfSimulation>;
   static Variant make(const Settings& settings) {
+    if (!settings.plant_urdf.urdf.empty()) {
+      if (settings.basis != BasisKind::expression)
+        throw std::invalid_argument(
+            "controller.basis: the paper, augmented and structured bases are the two-link arm's; "
+            "a URDF arm (plant.urdf) takes an expression basis (quadratic, polynomial, terms)");
+      return Variant(std::in_place_type<UrdfSimulation>, settings);
+    }
     if (settings.basis == BasisKind::expression)  // dynamic sizes only
       return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>>,
                      settings);

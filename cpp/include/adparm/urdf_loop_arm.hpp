@@ -1,0 +1,103 @@
+// A URDF arm in the closed loop: PinocchioArm (pinocchio_arm.hpp) behind the Arm concept of
+// arm_model.hpp, with bounded dynamic sizes (types.hpp), so that ClosedLoop<UrdfLoopArm, Basis>
+// runs the paper's laws (eqs. 1-28) on any fixed-base serial arm of up to kMaxDof joints.
+//   M, M^-1, C, G, F   PinocchioArm::compute, copied into the loop's bounded Terms
+//   ddq                eq. (1): M^-1 (tau - C dq - G - F - tau_d)
+// The loop builds its plant from Settings::plant_urdf and its model from Settings::model_urdf (an
+// empty model path: the plant, an exact model) through settings_arm below.
+//
+// Not thread-safe, like PinocchioArm: compute() works in buffers the arm owns; every run has its
+// own arms.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "adparm/closed_loop.hpp"
+#include "adparm/pinocchio_arm.hpp"
+#include "adparm/settings.hpp"
+#include "adparm/types.hpp"
+
+namespace adparm {
+
+class UrdfLoopArm {
+ public:
+  static constexpr int kDof = Dynamic;
+  using Joint = JointVector<Dynamic>;
+
+  struct Terms {
+    JointMatrix<Dynamic> mass, mass_inverse, coriolis;
+    JointVector<Dynamic> gravity, friction;
+  };
+
+  // Reads the URDF of `arm`; errors name `field` (plant.urdf or model.urdf).
+  UrdfLoopArm(const UrdfArmSettings& arm, const std::string& field)
+      : arm_(read(arm, field)), buffer_(arm_.make_terms()) {
+    if (arm_.dof() > kMaxDof)
+      throw std::invalid_argument(field + ": the arm has " + std::to_string(arm_.dof()) +
+                                  " joints; the core supports 1 to " + std::to_string(kMaxDof));
+  }
+
+  int dof() const { return arm_.dof(); }
+  const PinocchioArm& arm() const { return arm_; }
+
+  void init_terms(Terms& terms) const {
+    const Eigen::Index n = dof();
+    terms.mass.setZero(n, n);
+    terms.mass_inverse.setZero(n, n);
+    terms.coriolis.setZero(n, n);
+    terms.gravity.setZero(n);
+    terms.friction.setZero(n);
+  }
+
+  // No heap allocation: Pinocchio fills the arm's buffers, copied into the bounded terms.
+  void compute(const Joint& q, const Joint& dq, Terms& terms) const {
+    arm_.compute(q, dq, buffer_);
+    terms.mass = buffer_.mass;
+    terms.mass_inverse = buffer_.mass_inverse;
+    terms.coriolis = buffer_.coriolis;
+    terms.gravity = buffer_.gravity;
+    terms.friction = buffer_.friction;
+  }
+
+  // eq. (1)
+  Joint acceleration(const Terms& terms, const Joint& dq, const Joint& tau,
+                     const Joint& tau_d) const {
+    return terms.mass_inverse *
+           (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+  }
+
+ private:
+  static PinocchioArm read(const UrdfArmSettings& arm, const std::string& field) {
+    if (arm.urdf.empty()) throw std::invalid_argument(field + ": no URDF file given");
+    try {
+      return PinocchioArm(arm.urdf, arm.gravity, arm.coulomb, arm.viscous);
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument(field + ": " + error.what());
+    }
+  }
+
+  PinocchioArm arm_;
+  mutable PinocchioArm::Terms buffer_;
+};
+
+// The plant of settings.plant_urdf; the model of settings.model_urdf, or the plant's when its
+// path is empty.
+inline UrdfLoopArm settings_arm(ArmTag<UrdfLoopArm>, const Settings& settings, bool model) {
+  if (model && !settings.model_urdf.urdf.empty()) {
+    UrdfLoopArm arm(settings.model_urdf, "model.urdf");
+    const int n = UrdfLoopArm(settings.plant_urdf, "plant.urdf").dof();
+    if (arm.dof() != n)
+      throw std::invalid_argument("model.urdf: the model has " + std::to_string(arm.dof()) +
+                                  " joints, the plant (plant.urdf) " + std::to_string(n));
+    return arm;
+  }
+  return UrdfLoopArm(settings.plant_urdf, "plant.urdf");
+}
+
+inline bool settings_model_is_plant(ArmTag<UrdfLoopArm>, const Settings& settings) {
+  return settings.model_urdf.urdf.empty() || settings.model_urdf == settings.plant_urdf;
+}
+
+}  // namespace adparm
