@@ -174,3 +174,21 @@ def test_quadratic_basis_matches_the_core_expression_basis(rng) -> None:
         phi, jacobian, _ = core.evaluate(x)
         np.testing.assert_array_equal(basis.phi(x), phi)
         np.testing.assert_array_equal(basis.jacobian(x), jacobian)
+
+
+@pytest.mark.parametrize("name", ["two_link", "planar_3link", "spatial_3dof", "ur5"])
+def test_numpy_pinocchio_arm_matches_the_core_urdf_arm(name: str, rng) -> None:
+    # the arm of urdf_speed.py's NumPy loop is the core's (continuous joints as angles, friction)
+    if name == "ur5":
+        path = adparm.example_robot_urdf("ur5")
+    else:
+        path = TWO_LINK_URDF.parent / f"{name}.urdf"
+    gravity, coulomb, viscous = [0.1, -0.2, -9.81], -0.1, 0.3
+    ours = numpy_pinocchio_loop.PinocchioArm(path, gravity, coulomb=coulomb, viscous=viscous)
+    core = adparm.UrdfArm(path, gravity=gravity, coulomb=coulomb, viscous=viscous)
+    assert ours.dof == core.dof
+    for _ in range(5):
+        q, dq = rng.uniform(-2.0, 2.0, (2, core.dof))
+        terms = core.terms(q, dq)
+        for key, value in zip("MCGF", ours.terms(q, dq), strict=True):
+            np.testing.assert_allclose(value, terms[key], rtol=1e-12, atol=1e-12, err_msg=key)
