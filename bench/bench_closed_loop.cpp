@@ -2,6 +2,8 @@
 //
 // Usage: adparm_bench [--checks] [simulated_seconds] [extrapolation_points ...]
 //   default: 110 s (the paper's claim time) and N = 0, 10, 50 points.
+//        adparm_bench --urdf [simulated_seconds] [extrapolation_points ...]
+//   only the URDF arms in the closed loop (below); default 2 s and N = 0, 50.
 // Each N runs the paper's settings (paper_settings(), the basis adparm.paper_config() uses) for
 // the given horizon, three times; the fastest run is reported. With points (fixed, drawn in
 // [-1, 1]^4) the probing signal stays on, so the loop does the paper's work plus the points'.
@@ -19,6 +21,13 @@
 //     PinocchioArm::compute (M, C, G, M^-1, F through Pinocchio) on examples/arms/planar_3link.urdf
 //     and example-robot-data's UR5 (skipped=... when that package is not found at build time);
 //     any heap allocation inside compute fails the bench.
+//   bench=urdf_loop arm=NAME dof=n basis=quadratic functions=K points=N steps=s repeats=3
+//     ns_per_step=x heap_allocations=0 status=finished
+//     the closed loop of a URDF arm (PinocchioArm, dynamic sizes) with the quadratic expression
+//     basis, a set-point and N fixed extrapolation points (urdf_settings below): the planar 3-link
+//     arm and the UR5, N = 0 and 50, over min(simulated_seconds, 2 s); a run that does not finish
+//     or allocates in its steps fails the bench. bench/urdf_speed.py times the same 3-link case
+//     in NumPy + Pinocchio's Python bindings against this line.
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (glibc only; -1 elsewhere or under
 // AddressSanitizer, which owns malloc).
@@ -53,6 +62,7 @@
 
 #include "adparm/batch.hpp"
 #include "adparm/pinocchio_arm.hpp"
+#include "adparm/urdf_loop_arm.hpp"
 
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
 #define ADPARM_COUNT_MALLOC 1
@@ -221,6 +231,160 @@ bool time_pinocchio_arms() {
     std::printf("bench=pinocchio_arm arm=ur5 skipped=example-robot-data_not_found\n");
   } else {
     ok = time_pinocchio_arm("ur5", robots + "/ur_description/urdf/ur5_robot.urdf") && ok;
+  }
+  return ok;
+}
+
+// URDF arms in the closed loop ------------------------------------------------------------------
+//
+// The core's loop arm of a URDF (urdf_loop_arm.hpp: PinocchioArm behind the Arm concept).
+using LoopArm = adparm::UrdfLoopArm;
+
+// Simulated seconds of each URDF loop case (its own default: a step of the 6-joint arm with 50
+// points costs about a thousand paper steps).
+constexpr double kUrdfHorizon = 2.0;
+
+// The quadratic expression basis of n joints: every x_i x_j (i <= j) of x = [e1; e2] (2n), in
+// the order of python/adparm/bases.py's quadratic_terms (21 functions for 3 joints, 78 for 6).
+adparm::ExpressionProgram quadratic_program(int joints) {
+  using Op = adparm::ExpressionOp;
+  adparm::ExpressionProgram program;
+  const auto add = [&](Op op, double argument) {
+    program.opcodes.push_back(static_cast<int>(op));
+    program.arguments.push_back(argument);
+  };
+  for (int i = 0; i < 2 * joints; ++i)
+    for (int j = i; j < 2 * joints; ++j) {
+      add(Op::variable, i);
+      if (i == j) {
+        add(Op::power, 2.0);
+      } else {
+        add(Op::variable, j);
+        add(Op::multiply, 0.0);
+      }
+      add(Op::store, 0.0);
+    }
+  return program;
+}
+
+// A basis of the URDF loop cases: its name, the basis for an arm, and the weights of
+// x^T blockdiag(I, M(qd)) x (qd = 0), the default initial value of Python's expression bases
+// (the actor then starts at u_hat = -R^-1 e2, which stabilises). Another basis is another such
+// struct and one line in run_urdf_loops() (e.g. a structured basis: weights [entries of K = I;
+// the arm's base inertial parameters]).
+struct QuadraticCase {
+  using Basis = adparm::ExpressionLoopBasis;
+  static const char* name() { return "quadratic"; }
+  static Basis basis(const adparm::PinocchioArm& arm) {
+    return Basis(arm.dof(), quadratic_program(arm.dof()));
+  }
+  static Eigen::VectorXd initial_weights(const adparm::PinocchioArm& arm) {
+    const int n = arm.dof();
+    adparm::PinocchioArm::Terms terms = arm.make_terms();
+    arm.compute(Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), terms);
+    Eigen::MatrixXd P = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+    P.bottomRightCorner(n, n) = terms.mass;
+    Eigen::VectorXd weights(n * (2 * n + 1));
+    Eigen::Index k = 0;
+    for (int i = 0; i < 2 * n; ++i)
+      for (int j = i; j < 2 * n; ++j) weights[k++] = i == j ? P(i, i) : P(i, j) + P(j, i);
+    return weights;
+  }
+};
+
+// The settings of the URDF loop cases (n joints; bench/urdf_speed.py builds the same for its
+// NumPy + Pinocchio loop): a set-point qd = 0 from q0 = 0.2 rad on every joint at rest, no RISE
+// (controller.rise = false), no probing signal, no disturbance, K = I, alpha1 = 2 I, R = I and
+// the cost under which V* = e1^T K e1 + e2^T M(q) e2 is exact (Q11 = K alpha1 + alpha1^T K,
+// Q12 = -K, Q22 = R^-1), the paper's actor gains (eta_a1 = 0.01, eta_a2 = 1) and critic gains
+// (nu = 1, gamma0 = 100) except eta_c = 1 (with the paper's 800 the quadratic basis, which cannot
+// represent V* = e1^T K e1 + e2^T M(q) e2, diverges within 1.3 s on the 3-link arm; a step's work
+// does not depend on the gains), epsilon_T = 1e-3 (Python's default with extrapolation), N fixed
+// extrapolation points in [-1, 1]^2n (seed 0), RK4 at dt = 1 ms.
+adparm::Settings urdf_settings(int n, long points, double horizon) {
+  adparm::Settings s = adparm::paper_settings();
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  s.disturbance = Eigen::VectorXd::Zero(n);
+  s.task.q0 = Eigen::VectorXd::Constant(n, 0.2);
+  s.task.dq0 = Eigen::VectorXd::Zero(n);
+  s.task.qd.offset = Eigen::VectorXd::Zero(n);
+  s.control.alpha1 = 2.0 * I;
+  s.R = I;
+  s.Q.resize(2 * n, 2 * n);
+  s.Q << 4.0 * I, -I, -I, I;
+  s.controller.rise = false;
+  s.controller.kp = 50.0 * I;
+  s.controller.kd = 10.0 * I;
+  s.probe.until = 0.0;
+  s.probe.frequencies.resize(0);
+  s.probe.amplitude.resize(n, 0);
+  s.probe.phases.resize(n, 0);
+  s.critic.eta_c = 1.0;
+  s.critic.epsilon_T = 1e-3;
+  s.extrapolation.points = points;
+  s.extrapolation.box = Eigen::VectorXd::Ones(2 * n);
+  s.extrapolation.mode = adparm::ExtrapolationMode::fixed;
+  s.extrapolation.seed = 0;
+  s.sim.T = horizon;
+  return s;
+}
+
+template <class Case>
+bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
+                    double horizon, int repeats) {
+  using Simulation = adparm::Simulation<LoopArm, typename Case::Basis>;
+  adparm::Settings settings = urdf_settings(arm.dof(), points, horizon);
+  settings.critic_weights = Case::initial_weights(arm);
+  settings.actor_weights = settings.critic_weights;
+  const LoopArm loop_arm(arm);
+  const typename Case::Basis basis = Case::basis(arm);
+  LoopTiming best;
+  for (int r = 0; r < repeats; ++r) {
+    Simulation simulation(settings, loop_arm, loop_arm, true, basis);
+    LoopTiming timing;
+#ifdef ADPARM_COUNT_MALLOC
+    allocations = 0;
+    counting = true;
+#endif
+    const auto start = Clock::now();
+    timing.steps = simulation.advance(simulation.steps());
+    timing.seconds = seconds_since(start);
+#ifdef ADPARM_COUNT_MALLOC
+    counting = false;
+    timing.heap_allocations = allocations;
+#endif
+    timing.status = simulation.status();
+    if (r == 0 || timing.seconds < best.seconds) best = timing;
+  }
+  std::printf(
+      "bench=urdf_loop arm=%s dof=%d basis=%s functions=%d points=%ld steps=%ld repeats=%d "
+      "ns_per_step=%.1f heap_allocations=%ld status=%s\n",
+      arm_name, arm.dof(), Case::name(), basis.size(), points, best.steps, repeats,
+      1e9 * best.seconds / std::max(best.steps, 1L), best.heap_allocations,
+      status_name(best.status));
+  std::fflush(stdout);
+  return best.status == adparm::RunStatus::finished && best.heap_allocations <= 0;
+}
+
+// The planar 3-link arm (examples/arms) and example-robot-data's UR5 in the closed loop, each
+// with every N of `point_counts`. Friction: viscous 0.1 N m s / rad on every joint, no Coulomb;
+// gravity [0, 0, -9.81].
+bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int repeats) {
+  std::vector<std::pair<const char*, std::string>> arms = {
+      {"planar_3link", std::string(ADPARM_ARMS_DIR) + "/planar_3link.urdf"}};
+  const std::string robots = ADPARM_ROBOTS_DIR;
+  if (robots.empty())
+    std::printf("bench=urdf_loop arm=ur5 skipped=example-robot-data_not_found\n");
+  else
+    arms.emplace_back("ur5", robots + "/ur_description/urdf/ur5_robot.urdf");
+  bool ok = true;
+  for (const auto& [name, path] : arms) {
+    const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),
+                                   Eigen::VectorXd::Constant(1, 0.1));
+    for (const long points : point_counts) {
+      ok = time_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
+      // a structured basis: the same call with its Case
+    }
   }
   return ok;
 }
@@ -629,23 +793,32 @@ void check_invalid_settings() {
 }
 
 void usage() {
-  std::fprintf(stderr, "usage: adparm_bench [--checks] [simulated_seconds] [points ...]\n");
+  std::fprintf(stderr,
+               "usage: adparm_bench [--checks] [simulated_seconds] [points ...]\n"
+               "       adparm_bench --urdf [simulated_seconds] [points ...]\n");
 }
 
 }  // namespace
 
 int run(double horizon, std::vector<long> point_counts, bool checks);
+int run_urdf(double horizon, std::vector<long> point_counts);
 
 int main(int argc, char** argv) {
-  bool checks = false;
+  bool checks = false, urdf = false;
   std::vector<const char*> arguments;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--checks") == 0)
       checks = true;
+    else if (std::strcmp(argv[i], "--urdf") == 0)
+      urdf = true;
     else
       arguments.push_back(argv[i]);
   }
-  double horizon = 110.0;
+  if (checks && urdf) {
+    usage();
+    return 2;
+  }
+  double horizon = urdf ? kUrdfHorizon : 110.0;
   std::vector<long> point_counts;
   for (std::size_t i = 0; i < arguments.size(); ++i) {
     char* end = nullptr;
@@ -660,11 +833,17 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    return run(horizon, point_counts, checks);
+    return urdf ? run_urdf(horizon, point_counts) : run(horizon, point_counts, checks);
   } catch (const std::exception& error) {  // e.g. invalid_argument for a horizon <= 0
     std::fprintf(stderr, "adparm_bench: %s\n", error.what());
     return 2;
   }
+}
+
+// --urdf: the URDF loop cases alone, N = 0 and 50 unless points are given.
+int run_urdf(double horizon, std::vector<long> point_counts) {
+  if (point_counts.empty()) point_counts = {0, 50};
+  return run_urdf_loops(horizon, point_counts, 3) ? 0 : 1;
 }
 
 int run(double horizon, std::vector<long> point_counts, bool checks) {
@@ -761,7 +940,13 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
         serial / seconds, identical ? 1 : 0);
   }
   std::fflush(stdout);  // a LeakSanitizer report at exit ends the program without flushing
-  const bool arms_ok = time_pinocchio_arms();
+  bool arms_ok = time_pinocchio_arms();
+  // The URDF arms in the closed loop: N = 0 and 50 over at most kUrdfHorizon (best of 3); under
+  // --checks (the sanitizers) N = 0 and 10 over 0.05 s, once.
+  if (checks)
+    arms_ok = run_urdf_loops(std::min(horizon, 0.05), {0, 10}, 1) && arms_ok;
+  else
+    arms_ok = run_urdf_loops(std::min(horizon, kUrdfHorizon), {0, 50}, 3) && arms_ok;
   if (checks) {
     check_runs(horizon);
     check_invalid_settings();

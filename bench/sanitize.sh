@@ -2,7 +2,8 @@
 # The C++ core under AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer), with Eigen's
 # and libstdc++'s assertions on: builds only the bench in build-sanitize/ (-DADPARM_SANITIZE=ON, see
 # CMakeLists.txt) and runs it briefly with --checks: the paper loop, fixed extrapolation points, the
-# 16-run batch on 1 and 2 threads, then local/grid points, tracking, the other controllers, a
+# 16-run batch on 1 and 2 threads, the URDF arms in the closed loop (50 steps of the planar 3-link
+# arm and the UR5, N = 0 and 10), then local/grid points, tracking, the other controllers, a
 # diverging run, chunked and threaded runs, a streamed batch (window 2) stopped part-way and resumed,
 # and invalid settings that must throw; then the expression basis bench (adparm_bench_basis
 # --checks: exactness, no heap allocation per evaluation, invalid programs and sizes).

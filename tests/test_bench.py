@@ -73,3 +73,122 @@ def test_covariance_reset_happens_within_the_compared_steps() -> None:
 def test_out_of_scope_config_is_refused(changes: dict, field: str) -> None:
     with pytest.raises(ValueError, match=re.escape(field)):
         numpy_loop.NumpyPaperLoop(adparm.paper_config().updated(changes))
+
+
+# --- bench/numpy_pinocchio_loop.py: NumPy + Pinocchio's Python bindings, any URDF arm -------------
+
+import numpy_pinocchio_loop  # noqa: E402
+
+TWO_LINK_URDF = Path(__file__).resolve().parents[1] / "examples" / "arms" / "two_link.urdf"
+#: state entries of the two-link loop with the quadratic basis (10 functions): q, dq, Wc, Wa, J
+PINOCCHIO_FIELDS = {
+    "q": slice(0, 2),
+    "dq": slice(2, 4),
+    "critic_weights": slice(4, 14),
+    "actor_weights": slice(14, 24),
+    "cost": -1,
+}
+
+
+def pinocchio_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinocchioLoop:
+    """The NumPy + Pinocchio loop of the built-in two-link arm of ``config``: the same arm from
+    examples/arms/two_link.urdf with gravity [0, 0, -9.8] and the config's friction."""
+    p = config.plant
+    arm = numpy_pinocchio_loop.PinocchioArm(
+        TWO_LINK_URDF, [0.0, 0.0, -9.8], coulomb=p.coulomb, viscous=p.viscous
+    )
+    basis = numpy_pinocchio_loop.QuadraticBasis(arm.dof)
+    c, a, e = config.critic, config.actor, config.extrapolation
+    settings = numpy_pinocchio_loop.LoopSettings(
+        q0=np.array(config.task.q0),
+        dq0=np.array(config.task.dq0),
+        qd=np.array(config.task.qd, dtype=float),
+        critic_weights=config.initial_weights("critic_weights"),
+        actor_weights=config.initial_weights("actor_weights"),
+        Q=np.array(config.cost.Q),
+        R=np.array(config.cost.R),
+        alpha1=np.array(config.control.alpha1),
+        disturbance=np.array(p.disturbance),
+        eta_c=c.eta_c,
+        nu=c.nu,
+        gamma0=c.gamma0,
+        epsilon_T=config.resolved_epsilon_T,
+        eta_a1=a.eta_a1,
+        eta_a2=a.eta_a2,
+        weight_bound=a.weight_bound,
+        points=e.points,
+        box=np.broadcast_to(np.asarray(e.box, dtype=float), (4,)).copy(),
+        seed=e.seed,
+        dt=config.sim.dt,
+    )
+    return numpy_pinocchio_loop.NumpyPinocchioLoop(arm, basis, settings)
+
+
+def pinocchio_config(**changes) -> adparm.Config:
+    """The paper's run with the quadratic basis (the dynamic path), no RISE, no probing signal."""
+    base = {"controller": {"basis": "quadratic", "rise": False}, "probe": {"until": 0.0}}
+    for key, value in changes.items():
+        base.setdefault(key, {}).update(value)
+    return adparm.paper_config().updated(base)
+
+
+@pytest.mark.parametrize(
+    "points, critic", [(0, {}), (10, {}), (0, {"epsilon_T": 1.0})], ids=["N0", "N10", "N0-resets"]
+)
+def test_numpy_pinocchio_loop_matches_core_on_the_paper_arm(points: int, critic: dict) -> None:
+    steps = 600
+    config = pinocchio_config(
+        extrapolation={"points": points}, critic=critic, sim={"T": steps * 1e-3}
+    )
+    states = pinocchio_loop_of(config).run(steps)
+    result = adparm.simulate(config)
+    index = np.rint(np.asarray(result.t) / config.sim.dt).astype(int)
+    assert index[-1] == steps
+    for name, entries in PINOCCHIO_FIELDS.items():
+        ours, core = states[index][..., entries], np.asarray(getattr(result, name))
+        scale = max(1.0, float(np.abs(core).max()))
+        difference = float(np.abs(ours - core).max())
+        assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
+    # the run learns (the weights move); with points (epsilon_T = 1e-3) or a raised epsilon_T the
+    # covariance is reset within the compared steps
+    assert np.abs(states[-1, 4:14] - states[0, 4:14]).max() > 0.1
+    assert (result.covariance_resets > 0) == (points > 0 or bool(critic))
+
+
+def test_numpy_pinocchio_loop_differs_from_the_core_on_another_arm() -> None:
+    # the comparison above can fail: a 10 % heavier link 2 changes the states far above 1e-8
+    steps = 200
+    config = pinocchio_config(extrapolation={"points": 10}, sim={"T": steps * 1e-3})
+    states = pinocchio_loop_of(config).run(steps)
+    heavier = config.updated({"plant": {"p2": 1.1 * config.plant.p2}})
+    result = adparm.simulate(heavier)
+    assert np.abs(states[-1, 0:2] - np.asarray(result.q)[-1]).max() > 1e-6
+
+
+def test_quadratic_basis_matches_the_core_expression_basis(rng) -> None:
+    # the same functions in the same order (adparm's "quadratic" family) and the same Jacobian
+    basis = numpy_pinocchio_loop.QuadraticBasis(3)
+    core = adparm.ExpressionBasis("quadratic", joints=3)
+    assert basis.size == core.size == 21
+    for x in rng.uniform(-1.0, 1.0, (5, 6)):
+        phi, jacobian, _ = core.evaluate(x)
+        np.testing.assert_array_equal(basis.phi(x), phi)
+        np.testing.assert_array_equal(basis.jacobian(x), jacobian)
+
+
+@pytest.mark.parametrize("name", ["two_link", "planar_3link", "spatial_3dof", "ur5"])
+def test_numpy_pinocchio_arm_matches_the_core_urdf_arm(name: str, rng) -> None:
+    # the arm of urdf_speed.py's NumPy loop is the core's (continuous joints as angles, friction)
+    if name == "ur5":
+        path = adparm.example_robot_urdf("ur5")
+    else:
+        path = TWO_LINK_URDF.parent / f"{name}.urdf"
+    gravity, coulomb, viscous = [0.1, -0.2, -9.81], -0.1, 0.3
+    ours = numpy_pinocchio_loop.PinocchioArm(path, gravity, coulomb=coulomb, viscous=viscous)
+    core = adparm.UrdfArm(path, gravity=gravity, coulomb=coulomb, viscous=viscous)
+    assert ours.dof == core.dof
+    for _ in range(5):
+        q, dq = rng.uniform(-2.0, 2.0, (2, core.dof))
+        terms = core.terms(q, dq)
+        for key, value in zip("MCGF", ours.terms(q, dq), strict=True):
+            np.testing.assert_allclose(value, terms[key], rtol=1e-12, atol=1e-12, err_msg=key)

@@ -39,6 +39,13 @@ class UrdfLoopArm {
                                   " joints; the core supports 1 to " + std::to_string(kMaxDof));
   }
 
+  // An arm already read (the bench builds its arms so).
+  explicit UrdfLoopArm(const PinocchioArm& arm) : arm_(arm), buffer_(arm_.make_terms()) {
+    if (arm_.dof() > kMaxDof)
+      throw std::invalid_argument("the arm has " + std::to_string(arm_.dof()) +
+                                  " joints; the core supports 1 to " + std::to_string(kMaxDof));
+  }
+
   int dof() const { return arm_.dof(); }
   const PinocchioArm& arm() const { return arm_; }
 
