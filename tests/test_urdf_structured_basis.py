@@ -27,6 +27,31 @@ def arm_path(name: str) -> Path:
 
 
 NAMES = ["planar_3link", "spatial_3dof", "ur5"]
+# and, for the checks against Pinocchio's Python bindings, the two-link URDF (continuous joints:
+# Pinocchio's cos, sin coordinates) and an arm with a prismatic joint (written below)
+CHECKED = NAMES + ["two_link", "prismatic"]
+
+PRISMATIC_URDF = """<robot name="prismatic">
+  <link name="base"/>
+  <link name="turret"><inertial><origin xyz="0.02 0.01 0.1"/><mass value="2"/>
+    <inertia ixx="0.05" ixy="0.001" ixz="0.002" iyy="0.06" iyz="0.003" izz="0.04"/>
+  </inertial></link>
+  <link name="slider"><inertial><origin xyz="0.2 0.0 0.03"/><mass value="1.5"/>
+    <inertia ixx="0.02" ixy="0.0" ixz="0.001" iyy="0.03" iyz="0.0" izz="0.025"/>
+  </inertial></link>
+  <link name="wrist"><inertial><origin xyz="0.05 0.02 0.0"/><mass value="0.5"/>
+    <inertia ixx="0.004" ixy="0.0005" ixz="0.0" iyy="0.003" iyz="0.0002" izz="0.005"/>
+  </inertial></link>
+  <joint name="yaw" type="revolute"><parent link="base"/><child link="turret"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="reach" type="prismatic"><parent link="turret"/><child link="slider"/>
+    <origin xyz="0 0 0.2"/><axis xyz="1 0 0"/>
+    <limit lower="0.1" upper="0.8" effort="10" velocity="1"/></joint>
+  <joint name="pitch" type="revolute"><parent link="slider"/><child link="wrist"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="10" velocity="2"/></joint>
+</robot>
+"""
 
 
 class PinArm:
@@ -66,9 +91,13 @@ class PinArm:
         return 2.0 * self.energy_regressor(qd - x[:n], x[n:])[columns]
 
 
-@pytest.fixture(scope="module", params=NAMES)
-def arm(request) -> tuple[adparm.UrdfArm, PinArm]:
-    path = arm_path(request.param)
+@pytest.fixture(scope="module", params=CHECKED)
+def arm(request, tmp_path_factory) -> tuple[adparm.UrdfArm, PinArm]:
+    if request.param == "prismatic":
+        path = tmp_path_factory.mktemp("arms") / "prismatic.urdf"
+        path.write_text(PRISMATIC_URDF)
+    else:
+        path = arm_path(request.param)
     return adparm.UrdfArm(path), PinArm(path)
 
 
