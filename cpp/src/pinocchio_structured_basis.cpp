@@ -164,6 +164,12 @@ std::vector<std::string> inertial_parameter_names(const PinocchioArm& arm) {
   return names;
 }
 
+// The base parameters of one body: rows [begin, end) of the e2 block.
+struct Group {
+  pinocchio::JointIndex joint;
+  Eigen::Index begin, end;
+};
+
 // Everything but Pinocchio's work space (in `arm`, which a copy builds afresh).
 struct PinocchioStructuredBasis::Impl {
   PinocchioArm::Impl arm;  // model, configuration buffer, set_configuration
@@ -171,8 +177,10 @@ struct PinocchioStructuredBasis::Impl {
   std::vector<std::string> names;
   std::vector<pinocchio::JointIndex> joint;  // per base parameter: the joint whose body it is
   std::vector<int> local;                    // per base parameter: its index 0..9 in that body
-  mutable Eigen::VectorXd position;          // q = qd - e1
-  mutable Eigen::VectorXd acceleration;      // zero (computeForwardKinematicsDerivatives needs one)
+  std::vector<Group> groups;                 // the base parameters body by body
+  mutable Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6> gradients;
+  mutable Eigen::VectorXd position;      // q = qd - e1
+  mutable Eigen::VectorXd acceleration;  // zero (computeForwardKinematicsDerivatives needs one)
   mutable pinocchio::Data::Matrix6x dv_dq, dv_dv;
 
   explicit Impl(const PinocchioArm::Impl& arm_impl) : arm(arm_impl) {}
@@ -205,6 +213,13 @@ PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
     s.local.push_back(column % 10);
     s.names.push_back("e2'M_b e2 (" + parameters[static_cast<std::size_t>(column)] + ")");
   }
+  for (std::size_t b = 0; b < s.joint.size(); ++b) {
+    const Eigen::Index index = static_cast<Eigen::Index>(b);
+    if (s.groups.empty() || s.groups.back().joint != s.joint[b])
+      s.groups.push_back({s.joint[b], index, index});
+    s.groups.back().end = index + 1;
+  }
+  s.gradients.setZero(10, 6);
   s.position = Eigen::VectorXd::Zero(n);
   s.acceleration = Eigen::VectorXd::Zero(n);
   s.dv_dq = pinocchio::Data::Matrix6x::Zero(6, n);
@@ -278,24 +293,24 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
   arm.velocity = x.tail(n);
   pinocchio::computeForwardKinematicsDerivatives(arm.model, data, arm.configuration, arm.velocity,
                                                  s.acceleration);
-  pinocchio::JointIndex current = 0;
-  for (std::size_t b = 0; b < s.joint.size(); ++b, ++k) {
-    const pinocchio::JointIndex joint = s.joint[b];
-    if (joint != current) {
-      s.dv_dq.setZero();
-      s.dv_dv.setZero();
-      pinocchio::getJointVelocityDerivatives(arm.model, data, joint, pinocchio::LOCAL, s.dv_dq,
-                                             s.dv_dv);
-      current = joint;
-    }
-    const auto& velocity = data.v[joint];
-    const Eigen::Matrix<double, 1, 6> g =
-        energy_gradient(s.local[b], velocity.linear(), velocity.angular());
-    phi[k] = 0.5 * (g.head<3>().dot(velocity.linear()) + g.tail<3>().dot(velocity.angular()));
-    // d phi / dq = g dv/dq (g is already the gradient of 2 T); q = qd - e1
-    jacobian.row(k).head(n).noalias() = -g.lazyProduct(s.dv_dq);
-    jacobian.row(k).tail(n).noalias() = g.lazyProduct(s.dv_dv);
-    desired_rate[k] = -jacobian.row(k).head(n).dot(dqd);
+  // per body: its rows' gradients G (rows x 6), then d phi / d(q, v) = G [dv/dq, dv/dv]
+  for (const Group& group : s.groups) {
+    s.dv_dq.setZero();
+    s.dv_dv.setZero();
+    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, s.dv_dq,
+                                           s.dv_dv);
+    const auto& velocity = data.v[group.joint];
+    const Eigen::Index rows = group.end - group.begin;
+    for (Eigen::Index b = 0; b < rows; ++b)
+      s.gradients.row(b) = energy_gradient(s.local[static_cast<std::size_t>(group.begin + b)],
+                                           velocity.linear(), velocity.angular());
+    const auto G = s.gradients.topRows(rows);
+    phi.segment(k, rows).noalias() = 0.5 * G.lazyProduct(velocity.toVector());
+    // q = qd - e1: d phi / d e1 = -G dv/dq, and the desired rate is G dv/dq dqd
+    jacobian.block(k, 0, rows, n).noalias() = -G.lazyProduct(s.dv_dq);
+    jacobian.block(k, n, rows, n).noalias() = G.lazyProduct(s.dv_dv);
+    desired_rate.segment(k, rows).noalias() = -jacobian.block(k, 0, rows, n).lazyProduct(dqd);
+    k += rows;
   }
 }
 
