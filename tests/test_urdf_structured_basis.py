@@ -171,6 +171,30 @@ def test_structured_weights(rng) -> None:
         arm.structured_weights(np.eye(2))
 
 
+def test_weights_of_another_arm_of_the_same_kinematics(rng, tmp_path) -> None:
+    # the believed model's basis, the plant's W*: heavier and lighter links, the same geometry
+    text = (ARMS / "planar_3link.urdf").read_text()
+    heavier = text.replace('<mass value="2.0"/>', '<mass value="2.6"/>').replace(
+        '<mass value="1.5"/>', '<mass value="1.2"/>'
+    )
+    heavier = heavier.replace('iyy="0.02" iyz="0" izz="0.02"', 'iyy="0.03" iyz="0" izz="0.03"')
+    assert heavier != text
+    (tmp_path / "heavier.urdf").write_text(heavier)
+    model = adparm.UrdfArm(ARMS / "planar_3link.urdf")
+    plant = adparm.UrdfArm(tmp_path / "heavier.urdf")
+    K = np.diag([3.0, 2.0, 1.0])
+    W = model.structured_weights(K, plant.inertial_parameters)
+    assert np.abs(W - model.structured_weights(K)).max() > 0.05
+    x, qd, _ = random_rows(rng, 3, 20)
+    phi, _, _ = model.structured_basis(x, qd)
+    for i in range(len(x)):
+        e1, e2 = x[i, :3], x[i, 3:]
+        M = plant.terms(qd[i] - e1, np.zeros(3))["M"]
+        assert W @ phi[i] == pytest.approx(e1 @ K @ e1 + e2 @ M @ e2, rel=1e-12)
+    with pytest.raises(ValueError, match=r"inertial_parameters: expected shape \(30,\)"):
+        model.structured_weights(K, np.ones(20))
+
+
 def test_bad_shapes_are_refused() -> None:
     arm = adparm.UrdfArm(arm_path("planar_3link"))
     with pytest.raises(ValueError, match=r"x: expected shape \(\.\.\., 6\)"):

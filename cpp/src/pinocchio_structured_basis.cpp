@@ -249,13 +249,23 @@ const std::vector<std::string>& PinocchioStructuredBasis::names() const { return
 
 Eigen::VectorXd PinocchioStructuredBasis::optimal_weights(
     const Eigen::Ref<const Eigen::MatrixXd>& K) const {
+  Eigen::VectorXd W = optimal_weights(K, Eigen::VectorXd::Zero(10 * joints_));
+  W.tail(size_ - e1_size()) = impl_->base.values;
+  return W;
+}
+
+Eigen::VectorXd PinocchioStructuredBasis::optimal_weights(
+    const Eigen::Ref<const Eigen::MatrixXd>& K,
+    const Eigen::Ref<const Eigen::VectorXd>& inertial_parameters) const {
   check_size(K, joints_, joints_, "K");
   check_finite(K, "K");
+  check_size(inertial_parameters, 10 * joints_, 1, "inertial_parameters");
+  check_finite(inertial_parameters, "inertial_parameters");
   Eigen::VectorXd W(size_);
   int k = 0;
   for (int i = 0; i < joints_; ++i)
     for (int j = i; j < joints_; ++j) W[k++] = i == j ? K(i, i) : K(i, j) + K(j, i);
-  W.tail(size_ - k) = impl_->base.values;
+  W.tail(size_ - k) = impl_->base.combination * inertial_parameters;
   return W;
 }
 

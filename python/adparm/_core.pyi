@@ -306,8 +306,12 @@ class UrdfStructuredBasis:
     def names(self) -> list[str]: ...
     @property
     def base_parameters(self) -> tuple[_FloatArray, list[int], _FloatArray]: ...
-    def optimal_weights(self, K: ArrayLike) -> _FloatArray:
-        """W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n)."""
+    def optimal_weights(
+        self, K: ArrayLike, inertial_parameters: ArrayLike | None = None
+    ) -> _FloatArray:
+        """W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n); the
+        base parameters of inertial_parameters (10 n) of an arm of the same kinematics if
+        given."""
     def evaluate_rows(
         self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
     ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:

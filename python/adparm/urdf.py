@@ -171,14 +171,24 @@ class UrdfArm:
         "e2'M_b e2 (m link2)", ... (one per base parameter, ``base_parameters()``)."""
         return list(self._structured().names)
 
-    def structured_weights(self, K: ArrayLike) -> NDArray[np.float64]:
+    def structured_weights(
+        self, K: ArrayLike, inertial_parameters: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
         """The structured basis' exact weights W* for V* = e1^T K e1 + e2^T M(q) e2:
-        [K_ii on squares, K_ij + K_ji on cross terms; the base parameters' values]."""
+        [K_ii on squares, K_ij + K_ji on cross terms; the base parameters' values].
+
+        With ``inertial_parameters`` (10 n,) of another arm of the same kinematics (the plant,
+        when this arm is the believed model), its base parameters combination @ pi instead:
+        W* of that arm in this arm's basis (exact when the arms differ in their inertias only).
+        """
         n = self.dof
         K = np.asarray(K, dtype=float)
         if K.shape != (n, n):
             raise ValueError(f"K: expected shape ({n}, {n}), got {K.shape}")
-        return self._structured().optimal_weights(K)
+        if inertial_parameters is None:
+            return self._structured().optimal_weights(K)
+        pi = _vector(inertial_parameters, 10 * n, "inertial_parameters")
+        return self._structured().optimal_weights(K, pi)
 
     def structured_basis(
         self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike | None = None

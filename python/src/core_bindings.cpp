@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
 #include <type_traits>
 #include <variant>
 
@@ -303,8 +304,17 @@ void bind_urdf_structured_basis(py::module_& m) {
                                const BaseParameters& base = basis.base_parameters();
                                return py::make_tuple(base.values, base.columns, base.combination);
                              })
-      .def("optimal_weights", &PinocchioStructuredBasis::optimal_weights, py::arg("K"),
-           "W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n).")
+      .def(
+          "optimal_weights",
+          [](const PinocchioStructuredBasis& basis, const Eigen::MatrixXd& K,
+             const std::optional<Eigen::VectorXd>& inertial_parameters) {
+            return inertial_parameters ? basis.optimal_weights(K, *inertial_parameters)
+                                       : basis.optimal_weights(K);
+          },
+          py::arg("K"), py::arg("inertial_parameters") = py::none(),
+          "W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n); "
+          "the base parameters of inertial_parameters (10 n) of an arm of the same kinematics "
+          "if given.")
       .def(
           "evaluate_rows",
           [](const PinocchioStructuredBasis& basis, const RowsX& x, const RowsX& qd,

@@ -95,6 +95,13 @@ class PinocchioStructuredBasis {
   // W* = [K_ii on squares, K_ij + K_ji on cross terms; beta] for a K (n x n). Throws
   // std::invalid_argument for a K of the wrong size or not finite.
   Eigen::VectorXd optimal_weights(const Eigen::Ref<const Eigen::MatrixXd>& K) const;
+  // The same for another arm of the same kinematics (the plant, when this basis is the believed
+  // model's): beta = combination pi for its inertial parameters pi (10 n). The combination
+  // depends on the kinematics only, so this is exact when the two arms differ in their inertias
+  // alone (not checked here). Throws std::invalid_argument for a pi of the wrong size.
+  Eigen::VectorXd optimal_weights(
+      const Eigen::Ref<const Eigen::MatrixXd>& K,
+      const Eigen::Ref<const Eigen::VectorXd>& inertial_parameters) const;
 
   // phi (size()), d phi / dx (size() x 2n) and (d phi / d qd) dqd (size()) at x = [e1; e2] (2n)
   // and the desired qd, dqd (n); no heap allocation. Sizes are checked.
