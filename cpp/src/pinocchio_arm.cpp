@@ -1,4 +1,5 @@
-// adparm::PinocchioArm (pinocchio_arm.hpp): the only translation unit that includes Pinocchio.
+// adparm::PinocchioArm (pinocchio_arm.hpp). With pinocchio_structured_basis.cpp, the translation
+// units that include Pinocchio (the library adparm_pinocchio); Impl is in pinocchio_arm_impl.hpp.
 #include "adparm/pinocchio_arm.hpp"
 
 #include <urdf_parser/urdf_parser.h>
@@ -16,6 +17,7 @@
 #include <stdexcept>
 
 #include "adparm/types.hpp"
+#include "pinocchio_arm_impl.hpp"
 
 namespace adparm {
 
@@ -59,46 +61,6 @@ Eigen::VectorXd per_joint(const Eigen::VectorXd& values, int dof, const std::str
 }
 
 }  // namespace
-
-// Everything but the work space, copied as is.
-struct PinocchioArmFields {
-  std::string source;
-  pinocchio::Model model;
-  pinocchio::Model model_without_gravity;  // for mass_regressor
-  mutable Eigen::VectorXd configuration;   // Pinocchio's q (nq: cos, sin for a continuous joint)
-  mutable Eigen::VectorXd velocity;
-  mutable Eigen::VectorXd zero_velocity;
-  mutable Eigen::VectorXd unit_acceleration;
-  std::vector<int> q_index;  // Pinocchio's idx_q of joint i
-  std::vector<bool> continuous;
-  std::vector<std::string> joint_names, joint_types;
-  PinocchioArm::Limits limits;
-  Eigen::Vector3d gravity;
-  Eigen::VectorXd coulomb, viscous;
-};
-
-// The fields and Pinocchio's work space (pinocchio::Data), which a copy builds afresh from the
-// model: copying a Data would read its never-set members (UBSan finds Eigen's LLT::m_info).
-struct PinocchioArm::Impl : PinocchioArmFields {
-  std::unique_ptr<pinocchio::Data> data;
-
-  Impl() = default;
-  Impl(const Impl& other)
-      : PinocchioArmFields(other), data(std::make_unique<pinocchio::Data>(other.model)) {}
-
-  // Pinocchio's configuration for joint angles/positions q.
-  void set_configuration(const Eigen::Ref<const Eigen::VectorXd>& q) const {
-    for (std::size_t i = 0; i < q_index.size(); ++i) {
-      const Eigen::Index j = static_cast<Eigen::Index>(i);
-      if (continuous[i]) {
-        configuration[q_index[i]] = std::cos(q[j]);
-        configuration[q_index[i] + 1] = std::sin(q[j]);
-      } else {
-        configuration[q_index[i]] = q[j];
-      }
-    }
-  }
-};
 
 namespace {
 

@@ -310,6 +310,38 @@ class UrdfArm:
     def mass_regressor(self, q: ArrayLike) -> _FloatArray:
         """M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns
         [k n, (k + 1) n)."""
+    @property
+    def inertial_parameter_names(self) -> list[str]:
+        """ "m link1", "mc_x link1", ..., "I_zz linkn" (10 n)."""
+    def base_parameters(
+        self, samples: int = 100, seed: int = 0, tolerance: float = 1e-9
+    ) -> tuple[_FloatArray, list[int], _FloatArray]:
+        """(values (r,), columns (r,), combination (r, 10 n)): the base inertial parameters."""
+
+class UrdfStructuredBasis:
+    """The structured basis of a URDF arm: [e1_i e1_j (i <= j); e2^T M_b(q) e2 per base
+    inertial parameter b] (pinocchio_structured_basis.hpp)."""
+
+    def __init__(self, arm: UrdfArm) -> None: ...
+    @property
+    def size(self) -> int: ...
+    @property
+    def joints(self) -> int: ...
+    @property
+    def names(self) -> list[str]: ...
+    @property
+    def base_parameters(self) -> tuple[_FloatArray, list[int], _FloatArray]: ...
+    def optimal_weights(
+        self, K: ArrayLike, inertial_parameters: ArrayLike | None = None
+    ) -> _FloatArray:
+        """W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n); the
+        base parameters of inertial_parameters (10 n) of an arm of the same kinematics if
+        given."""
+    def evaluate_rows(
+        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
+    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
+        """At rows x (m, 2n), qd (m, n), dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and
+        (d phi / d qd) dqd (m, N)."""
 
 def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
     """The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)]

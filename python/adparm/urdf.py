@@ -135,6 +135,12 @@ class UrdfArm:
         side_by_side = self._arm.mass_regressor(_vector(q, n, "q"))
         return side_by_side.reshape(n, 10 * n, n).transpose(1, 0, 2)
 
+    @property
+    def inertial_parameter_names(self) -> list[str]:
+        """Names of the 10 n inertial parameters: "m link1", "mc_x link1", ..., "I_zz linkn"
+        (the body each joint moves, by its URDF link name)."""
+        return list(self._arm.inertial_parameter_names)
+
     def base_parameters(
         self, samples: int = 100, seed: int = 0, tolerance: float = 1e-9
     ) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.float64]]:
@@ -142,33 +148,87 @@ class UrdfArm:
 
         Returns (values, columns, combination): values (r,) = combination (r, 10 n) @
         inertial_parameters, and M(q) = sum_i values[i] * mass_regressor(q)[columns[i]] for every
-        q. The M_k(q) of `samples` random poses (seeded) are stacked and reduced by a QR
-        decomposition with column pivoting: r is the rank, the pivot columns are independent
-        and every other column is a fixed combination of them, folded into `values`.
+        q. The upper-triangle entries of the M_k(q) of `samples` random poses (a seeded
+        generator, within the joint limits clipped to [-pi, pi]) are stacked and reduced by a QR
+        decomposition with column pivoting: r is the number of pivots above `tolerance` times the
+        largest, the pivot columns (in increasing order) are independent and every other column
+        is a fixed combination of them, folded into `values`. Computed by the C++ core, the same
+        computation that chooses the structured basis' functions (``structured_basis``).
         """
-        from scipy.linalg import qr, solve_triangular
-
-        n, p = self.dof, 10 * self.dof
-        rng = np.random.default_rng(seed)
-        lower = np.maximum(self.limits["lower"], -np.pi)
-        upper = np.minimum(self.limits["upper"], np.pi)
-        rows = np.triu_indices(n)
-        W = np.concatenate(
-            [
-                self.mass_regressor(rng.uniform(lower, upper))[:, rows[0], rows[1]].T
-                for _ in range(samples)
-            ]
+        values, columns, combination = self._arm.base_parameters(
+            samples=int(samples), seed=int(seed), tolerance=float(tolerance)
         )
-        _, R, pivots = qr(W, mode="economic", pivoting=True)
-        diagonal = np.abs(np.diag(R))
-        rank = int(np.sum(diagonal > tolerance * diagonal[0]))
-        independent, dependent = pivots[:rank], pivots[rank:]
-        K = solve_triangular(R[:rank, :rank], R[:rank, rank:])
-        combination = np.zeros((rank, p))
-        combination[:, independent] = np.eye(rank)
-        combination[:, dependent] = K
-        columns = np.asarray(independent, dtype=np.intp)
-        return combination @ self.inertial_parameters, columns, combination
+        return values, np.asarray(columns, dtype=np.intp), combination
+
+    def _structured(self) -> _core.UrdfStructuredBasis:
+        basis = getattr(self, "_structured_basis", None)
+        if basis is None:
+            basis = self._structured_basis = _core.UrdfStructuredBasis(self._arm)
+        return basis
+
+    def structured_names(self) -> list[str]:
+        """Names of the structured basis' functions: "e1_1^2", "e1_1 e1_2", ..., "e1_n^2", then
+        "e2'M_b e2 (m link2)", ... (one per base parameter, ``base_parameters()``)."""
+        return list(self._structured().names)
+
+    def structured_weights(
+        self, K: ArrayLike, inertial_parameters: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """The structured basis' exact weights W* for V* = e1^T K e1 + e2^T M(q) e2:
+        [K_ii on squares, K_ij + K_ji on cross terms; the base parameters' values].
+
+        With ``inertial_parameters`` (10 n,) of another arm of the same kinematics (the plant,
+        when this arm is the believed model), its base parameters combination @ pi instead:
+        W* of that arm in this arm's basis (exact when the arms differ in their inertias only).
+        """
+        n = self.dof
+        K = np.asarray(K, dtype=float)
+        if K.shape != (n, n):
+            raise ValueError(f"K: expected shape ({n}, {n}), got {K.shape}")
+        if inertial_parameters is None:
+            return self._structured().optimal_weights(K)
+        pi = _vector(inertial_parameters, 10 * n, "inertial_parameters")
+        return self._structured().optimal_weights(K, pi)
+
+    def structured_basis(
+        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The structured basis of this arm at error states x (..., 2n) = [e1; e2] with desired
+        positions qd and velocities dqd (n,) or (..., n); dqd defaults to 0.
+
+        phi = [e1_i e1_j (i <= j); e2^T M_b(q) e2 per base parameter b], q = qd - e1. Returns
+        phi (..., N), its exact Jacobian d phi / dx (..., N, 2n) and the desired rate
+        (d phi / d qd) dqd (..., N), computed by the C++ core from Pinocchio's kinematics
+        derivatives (no finite difference).
+        """
+        n = self.dof
+        x = np.asarray(x, dtype=float)
+        if x.ndim == 0 or x.shape[-1] != 2 * n:
+            raise ValueError(f"x: expected shape (..., {2 * n}), got {x.shape}")
+        batch = x.shape[:-1]
+
+        def rows(value: ArrayLike | None, name: str) -> NDArray[np.float64]:
+            array = np.zeros(n) if value is None else np.asarray(value, dtype=float)
+            if array.ndim == 0 or array.shape[-1] != n:
+                raise ValueError(f"{name}: expected shape (..., {n}), got {array.shape}")
+            try:
+                array = np.broadcast_to(array, batch + (n,))
+            except ValueError:
+                raise ValueError(
+                    f"{name}: shape {array.shape} does not broadcast to x's {batch + (n,)}"
+                ) from None
+            return np.ascontiguousarray(array.reshape(-1, n))
+
+        flat_qd, flat_dqd = rows(qd, "qd"), rows(dqd, "dqd")
+        phi, jacobian, rate = self._structured().evaluate_rows(
+            np.ascontiguousarray(x.reshape(-1, 2 * n)), flat_qd, flat_dqd
+        )
+        size = phi.shape[-1]
+        return (
+            phi.reshape(batch + (size,)),
+            jacobian.reshape(batch + (size, 2 * n)),
+            rate.reshape(batch + (size,)),
+        )
 
 
 def _example_robot_data_root() -> Path | None:

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
 #include <type_traits>
 #include <variant>
 
@@ -14,6 +15,7 @@
 #include "adparm/hjb.hpp"
 #include "adparm/open_loop.hpp"
 #include "adparm/pinocchio_arm.hpp"
+#include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/simulation.hpp"
 
 namespace py = pybind11;
@@ -287,7 +289,80 @@ void bind_urdf_arm(py::module_& m) {
           },
           py::arg("q"),
           "M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns "
-          "[k n, (k + 1) n).");
+          "[k n, (k + 1) n).")
+      .def_property_readonly("inertial_parameter_names", &inertial_parameter_names)
+      .def(
+          "base_parameters",
+          [](const PinocchioArm& arm, int samples, std::uint64_t seed, double tolerance) {
+            BaseParameters base;
+            {
+              py::gil_scoped_release release;
+              base = adparm::base_parameters(arm, samples, seed, tolerance);
+            }
+            return py::make_tuple(base.values, base.columns, base.combination);
+          },
+          py::arg("samples") = 100, py::arg("seed") = 0, py::arg("tolerance") = 1e-9,
+          "(values (r,), columns (r,), combination (r, 10 n)): the base inertial parameters "
+          "(pinocchio_structured_basis.hpp).");
+}
+
+void bind_urdf_structured_basis(py::module_& m) {
+  using RowsX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  py::class_<PinocchioStructuredBasis>(
+      m, "UrdfStructuredBasis",
+      "The structured basis of a URDF arm: [e1_i e1_j (i <= j); e2^T M_b(q) e2 per base "
+      "inertial parameter b] (pinocchio_structured_basis.hpp).")
+      .def(py::init<const PinocchioArm&>(), py::arg("arm"))
+      .def_property_readonly("size", &PinocchioStructuredBasis::size)
+      .def_property_readonly("joints", &PinocchioStructuredBasis::joints)
+      .def_property_readonly("names", &PinocchioStructuredBasis::names)
+      .def_property_readonly("base_parameters",
+                             [](const PinocchioStructuredBasis& basis) {
+                               const BaseParameters& base = basis.base_parameters();
+                               return py::make_tuple(base.values, base.columns, base.combination);
+                             })
+      .def(
+          "optimal_weights",
+          [](const PinocchioStructuredBasis& basis, const Eigen::MatrixXd& K,
+             const std::optional<Eigen::VectorXd>& inertial_parameters) {
+            return inertial_parameters ? basis.optimal_weights(K, *inertial_parameters)
+                                       : basis.optimal_weights(K);
+          },
+          py::arg("K"), py::arg("inertial_parameters") = py::none(),
+          "W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n); "
+          "the base parameters of inertial_parameters (10 n) of an arm of the same kinematics "
+          "if given.")
+      .def(
+          "evaluate_rows",
+          [](const PinocchioStructuredBasis& basis, const RowsX& x, const RowsX& qd,
+             const RowsX& dqd) {
+            const Eigen::Index rows = x.rows(), N = basis.size(), n = basis.joints();
+            check_size(x, rows, 2 * n, "x");
+            check_size(qd, rows, n, "qd");
+            check_size(dqd, rows, n, "dqd");
+            py::array_t<double> phi({rows, N}), jacobian({rows, N, 2 * n}), rate({rows, N});
+            double* phi_out = phi.mutable_data();
+            double* jacobian_out = jacobian.mutable_data();
+            double* rate_out = rate.mutable_data();
+            {
+              py::gil_scoped_release release;
+              Eigen::VectorXd p(N), r(N), row_x(2 * n), row_qd(n), row_dqd(n);
+              Eigen::MatrixXd j(N, 2 * n);
+              for (Eigen::Index i = 0; i < rows; ++i) {
+                row_x = x.row(i).transpose();
+                row_qd = qd.row(i).transpose();
+                row_dqd = dqd.row(i).transpose();
+                basis.evaluate_at(row_x, row_qd, row_dqd, p, j, r);
+                Eigen::Map<Eigen::VectorXd>(phi_out + i * N, N) = p;
+                Eigen::Map<Eigen::VectorXd>(rate_out + i * N, N) = r;
+                Eigen::Map<RowsX>(jacobian_out + i * N * 2 * n, N, 2 * n) = j;
+              }
+            }
+            return py::make_tuple(phi, jacobian, rate);
+          },
+          py::arg("x"), py::arg("qd"), py::arg("dqd"),
+          "At rows x (m, 2n), qd (m, n), dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and "
+          "(d phi / d qd) dqd (m, N).");
 }
 
 void bind_trajectory(py::module_& m) {
@@ -601,6 +676,7 @@ PYBIND11_MODULE(_core, m) {
   bind_settings(m);
   bind_arm(m);
   bind_urdf_arm(m);
+  bind_urdf_structured_basis(m);
   bind_trajectory(m);
   bind_basis(m);
   bind_expression_basis(m);

@@ -10,8 +10,8 @@
 // joint's q is its angle (Pinocchio stores it as cos, sin; the conversion is done here).
 //
 // Same members as TwoLinkArm (kDof, Terms, compute, acceleration) with dynamic sizes. This header
-// does not include Pinocchio (pimpl): everything that does is compiled once, in
-// cpp/src/pinocchio_arm.cpp (the static library adparm_pinocchio).
+// does not include Pinocchio (pimpl): everything that does is compiled once, in cpp/src/ (the
+// static library adparm_pinocchio).
 //
 // Not thread-safe: compute() works in buffers (pinocchio::Data) that the arm owns, allocated at
 // construction, so that it never allocates; give each thread its own copy of the arm.
@@ -106,7 +106,9 @@ class PinocchioArm {
   void mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
                       Eigen::Ref<Eigen::MatrixXd> out) const;
 
-  struct Impl;  // opaque: Pinocchio's model and data (pinocchio_arm.cpp)
+  struct Impl;  // opaque: Pinocchio's model and data (cpp/src/pinocchio_arm_impl.hpp)
+  // For the other Pinocchio translation units of the core (pinocchio_structured_basis.cpp).
+  const Impl& impl() const { return *impl_; }
 
  private:
   explicit PinocchioArm(std::unique_ptr<Impl> impl);

@@ -1,0 +1,137 @@
+// The structured basis of any URDF arm (issue 14): the critic basis whose exact weights are the
+// cost's K and the arm's base inertial parameters.
+//   phi(x, qd) = [e1_i e1_j (i <= j, row by row: e1_1^2, e1_1 e1_2, ..., e1_n^2);
+//                 e2^T M_b(q) e2 for each base inertial parameter b],   q = qd - e1,
+// with M(q) = sum_b beta_b M_b(q) over a minimal (identifiable) set of inertial parameters. Under
+// the exact-solution conditions (Q11 = K alpha1 + alpha1^T K, Q12 = -K, Q22 = R^-1) the optimal
+// value V* = e1^T K e1 + e2^T M(q) e2 is W*^T phi with
+//   W* = [K_ii on squares, K_ij + K_ji on cross terms; beta]            (optimal_weights(K)).
+//
+// Base parameters (base_parameters()): the upper-triangle entries of M_k(q) = dM/dpi_k
+// (PinocchioArm::mass_regressor) for the 10 n standard parameters, stacked over `samples` poses
+// drawn uniformly within the joint limits clipped to [-pi, pi] (a fixed, seeded generator: the
+// same poses on every platform), reduced by a QR decomposition with column pivoting: the r
+// columns whose |R_ii| > tolerance |R_00| are independent (kept in increasing order, so M_b is
+// M_{column b}) and every other column is a fixed combination of them, folded into
+// beta = combination pi.
+//
+// Exact Jacobians from the kinetic-energy regressor: e2^T M_k(q) e2 = 2 T_k(q, v = e2), where for
+// the body of joint i with local spatial velocity (v, w) (pinocchio data.v) and parameters
+// (m, m c, I) about the joint frame's origin
+//   T = 1/2 m |v|^2 + m c . (v x w) + 1/2 w^T I w   (Pinocchio's computeKineticEnergyRegressor).
+// Each T_k is a quadratic form in (v, w), so 2 T_k = g_k . (v, w) with g_k its gradient (1 x 6),
+// and d(2 T_k)/d(q, e2) = 2 g_k [dv_i/dq, dv_i/dv] from Pinocchio's kinematics derivatives
+// (computeForwardKinematicsDerivatives, getJointVelocityDerivatives, LOCAL frame). Then
+//   d phi_b / d e1 = -2 g_b dv_i/dq,   d phi_b / d e2 = 2 g_b dv_i/dv,
+//   desired rate (d phi_b / d qd) dqd = 2 g_b dv_i/dq dqd,
+// O(n^2) per evaluation, no finite difference.
+//
+// The basis has the dynamic-size basis members the loop expects (basis.hpp, dynamic_size.hpp):
+// kSize = kStateDim = Dynamic, Vector, Jacobian, size(), evaluate(x, desired, [terms,] phi,
+// jacobian, desired_rate). The arm's terms are not used (the basis runs its own kinematics).
+// It has no paper e2 block (positive_block.hpp's HasPaperE2Block is false): its e2 block,
+// e2^T (sum_b W_b M_b(q)) e2, is not affine in one cos q2, so positivity at every q cannot be
+// checked at two end points, and the projection leaves its weights alone.
+//
+// This header does not include Pinocchio (pimpl, as pinocchio_arm.hpp); the implementation is in
+// cpp/src/pinocchio_structured_basis.cpp. Not thread-safe: evaluate() works in buffers the basis
+// owns (its own pinocchio::Data, allocated at construction) and allocates nothing; give each
+// thread its own copy (a copy builds a fresh work space).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "adparm/pinocchio_arm.hpp"
+#include "adparm/types.hpp"
+
+namespace adparm {
+
+// A minimal set of inertial parameters of M(q): M(q) = sum_b values[b] M_{columns[b]}(q) for
+// every q, values = combination pi (combination: r x 10 n, the identity on `columns`).
+struct BaseParameters {
+  Eigen::VectorXd values;
+  std::vector<int> columns;  // increasing indices into PinocchioArm::inertial_parameters()
+  Eigen::MatrixXd combination;
+};
+
+// The base parameters of `arm` from `samples` seeded poses (see above). Throws
+// std::invalid_argument for samples < 1 or a tolerance outside (0, 1).
+BaseParameters base_parameters(const PinocchioArm& arm, int samples = 100, std::uint64_t seed = 0,
+                               double tolerance = 1e-9);
+
+// "m", "mc_x", "mc_y", "mc_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz" and the body's
+// name, for each of the 10 n inertial parameters (e.g. "m link2").
+std::vector<std::string> inertial_parameter_names(const PinocchioArm& arm);
+
+class PinocchioStructuredBasis {
+ public:
+  static constexpr int kSize = Dynamic;
+  static constexpr int kStateDim = Dynamic;
+  using Vector = BasisVector<Dynamic>;
+  using Jacobian = BasisMatrix<Dynamic, Dynamic>;
+
+  // The basis of `arm`, whose inertial parameters give beta (the believed model's arm, in a
+  // run). Throws std::invalid_argument (naming controller.basis) when the arm has more than
+  // kMaxDof joints or the basis more than kMaxBasisSize functions.
+  explicit PinocchioStructuredBasis(const PinocchioArm& arm);
+
+  PinocchioStructuredBasis(const PinocchioStructuredBasis& other);
+  PinocchioStructuredBasis& operator=(const PinocchioStructuredBasis& other);
+  PinocchioStructuredBasis(PinocchioStructuredBasis&&) noexcept;
+  PinocchioStructuredBasis& operator=(PinocchioStructuredBasis&&) noexcept;
+  ~PinocchioStructuredBasis();
+
+  int size() const { return size_; }
+  int joints() const { return joints_; }
+  // n (n + 1) / 2, the e1 block's size; the e2 block follows, one function per base parameter.
+  int e1_size() const { return joints_ * (joints_ + 1) / 2; }
+  const BaseParameters& base_parameters() const;
+  // "e1_1^2", "e1_1 e1_2", ..., then "e2'M_b e2 (m link2)", ... (size()).
+  const std::vector<std::string>& names() const;
+  // W* = [K_ii on squares, K_ij + K_ji on cross terms; beta] for a K (n x n). Throws
+  // std::invalid_argument for a K of the wrong size or not finite.
+  Eigen::VectorXd optimal_weights(const Eigen::Ref<const Eigen::MatrixXd>& K) const;
+  // The same for another arm of the same kinematics (the plant, when this basis is the believed
+  // model's): beta = combination pi for its inertial parameters pi (10 n). The combination
+  // depends on the kinematics only, so this is exact when the two arms differ in their inertias
+  // alone (not checked here). Throws std::invalid_argument for a pi of the wrong size.
+  Eigen::VectorXd optimal_weights(
+      const Eigen::Ref<const Eigen::MatrixXd>& K,
+      const Eigen::Ref<const Eigen::VectorXd>& inertial_parameters) const;
+
+  // phi (size()), d phi / dx (size() x 2n) and (d phi / d qd) dqd (size()) at x = [e1; e2] (2n)
+  // and the desired qd, dqd (n); no heap allocation. Sizes are checked.
+  void evaluate_at(const Eigen::Ref<const Eigen::VectorXd>& x,
+                   const Eigen::Ref<const Eigen::VectorXd>& qd,
+                   const Eigen::Ref<const Eigen::VectorXd>& dqd, Eigen::Ref<Eigen::VectorXd> phi,
+                   Eigen::Ref<Eigen::MatrixXd> jacobian,
+                   Eigen::Ref<Eigen::VectorXd> desired_rate) const;
+
+  // The loop's seam (bounded storage: resizing allocates nothing).
+  template <class Desired>
+  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,
+                Jacobian& jacobian, Vector& desired_rate) const {
+    phi.resize(size_);
+    jacobian.resize(size_, 2 * joints_);
+    desired_rate.resize(size_);
+    evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate);
+  }
+  template <class Desired, class Terms>
+  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,
+                Jacobian& jacobian, Vector& desired_rate) const {
+    evaluate(x, desired, phi, jacobian, desired_rate);
+  }
+
+  struct Impl;  // opaque: Pinocchio's model, data and the work space
+
+ private:
+  std::unique_ptr<Impl> impl_;
+  int joints_ = 0;
+  int size_ = 0;
+};
+
+}  // namespace adparm

@@ -1,0 +1,327 @@
+// adparm::PinocchioStructuredBasis and adparm::base_parameters (pinocchio_structured_basis.hpp).
+#include "adparm/pinocchio_structured_basis.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/kinematics-derivatives.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "adparm/positive_block.hpp"
+#include "pinocchio_arm_impl.hpp"
+
+namespace adparm {
+
+static_assert(!HasPaperE2Block<PinocchioStructuredBasis>::value,
+              "the e2-block projection assumes the paper's layout; this basis has none");
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// SplitMix64: a fixed generator, so that the sampled poses (and the base parameters) are the same
+// with every standard library.
+struct SplitMix64 {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+};
+
+const char* const kParameterNames[10] = {"m",    "mc_x", "mc_y", "mc_z", "I_xx",
+                                         "I_xy", "I_yy", "I_xz", "I_yz", "I_zz"};
+
+// The name of the body joint `joint` moves: its first body frame (the URDF's child link; links
+// merged through fixed joints come after it), else the joint's name.
+std::string body_name(const pinocchio::Model& model, pinocchio::JointIndex joint) {
+  for (const auto& frame : model.frames)
+    if (frame.type == pinocchio::BODY && frame.parentJoint == joint) return frame.name;
+  return model.names[joint];
+}
+
+// The gradient g of 2 T_k with respect to the body's local spatial velocity (v, w), for its
+// parameter k (0..9, Pinocchio's order); 2 T_k = g . (v, w) / 2, since T_k is a quadratic form.
+//   m:     T = 1/2 |v|^2
+//   mc_a:  T = (v x w)_a, with d/dv = w x e_a and d/dw = e_a x v
+//   I_ab:  T = 1/2 w_a^2 (a = b) or w_a w_b (a != b)
+Eigen::Matrix<double, 1, 6> energy_gradient(int k, const Eigen::Vector3d& v,
+                                            const Eigen::Vector3d& w) {
+  Eigen::Matrix<double, 1, 6> g = Eigen::Matrix<double, 1, 6>::Zero();
+  switch (k) {
+    case 0:  // 2 T = |v|^2
+      g.head<3>() = 2.0 * v.transpose();
+      break;
+    case 1:
+    case 2:
+    case 3: {  // 2 T = 2 (v x w)_a
+      const Eigen::Vector3d e = Eigen::Vector3d::Unit(k - 1);
+      g.head<3>() = 2.0 * w.cross(e).transpose();
+      g.tail<3>() = 2.0 * e.cross(v).transpose();
+      break;
+    }
+    case 4:  // 2 T = w_x^2
+      g[3] = 2.0 * w[0];
+      break;
+    case 5:  // 2 T = 2 w_x w_y
+      g[3] = 2.0 * w[1];
+      g[4] = 2.0 * w[0];
+      break;
+    case 6:  // 2 T = w_y^2
+      g[4] = 2.0 * w[1];
+      break;
+    case 7:  // 2 T = 2 w_x w_z
+      g[3] = 2.0 * w[2];
+      g[5] = 2.0 * w[0];
+      break;
+    case 8:  // 2 T = 2 w_y w_z
+      g[4] = 2.0 * w[2];
+      g[5] = 2.0 * w[1];
+      break;
+    default:  // 2 T = w_z^2
+      g[5] = 2.0 * w[2];
+      break;
+  }
+  return g;
+}
+
+}  // namespace
+
+BaseParameters base_parameters(const PinocchioArm& arm, int samples, std::uint64_t seed,
+                               double tolerance) {
+  if (samples < 1) throw std::invalid_argument("samples: must be at least 1");
+  if (!(tolerance > 0.0 && tolerance < 1.0))
+    throw std::invalid_argument("tolerance: must be in (0, 1)");
+  const Eigen::Index n = arm.dof(), p = arm.parameter_count();
+  const Eigen::Index entries = n * (n + 1) / 2;
+  const PinocchioArm::Limits& limits = arm.limits();
+  Eigen::VectorXd lower(n), upper(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    lower[j] = std::max(limits.lower[j], -kPi);
+    upper[j] = std::min(limits.upper[j], kPi);
+    if (!(upper[j] > lower[j])) {  // no usable range in the URDF
+      lower[j] = -kPi;
+      upper[j] = kPi;
+    }
+  }
+  // the upper-triangle entries of every M_k at each pose, one column per parameter
+  Eigen::MatrixXd stacked(samples * entries, p);
+  Eigen::MatrixXd regressor(n, n * p);
+  Eigen::VectorXd q(n);
+  SplitMix64 random{seed};
+  for (Eigen::Index s = 0; s < samples; ++s) {
+    for (Eigen::Index j = 0; j < n; ++j) q[j] = lower[j] + (upper[j] - lower[j]) * random.uniform();
+    arm.mass_regressor(q, regressor);
+    Eigen::Index row = s * entries;
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = i; j < n; ++j, ++row)
+        for (Eigen::Index k = 0; k < p; ++k) stacked(row, k) = regressor(i, k * n + j);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(stacked);
+  const Eigen::MatrixXd& packed = qr.matrixQR();
+  const Eigen::Index diagonal = std::min(stacked.rows(), p);
+  const double largest = diagonal > 0 ? std::abs(packed(0, 0)) : 0.0;
+  Eigen::Index rank = 0;
+  while (rank < diagonal && std::abs(packed(rank, rank)) > tolerance * largest) ++rank;
+  if (rank == 0)
+    throw std::invalid_argument("URDF " + arm.source() +
+                                ": M(q) does not depend on any inertial parameter");
+  const auto& pivots = qr.colsPermutation().indices();  // column pivots[i] went to place i
+  // dependent columns = R11^-1 R12 in terms of the independent ones
+  const Eigen::MatrixXd dependent = packed.topLeftCorner(rank, rank)
+                                        .triangularView<Eigen::Upper>()
+                                        .solve(packed.block(0, rank, rank, p - rank));
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(rank));
+  std::iota(order.begin(), order.end(), Eigen::Index(0));
+  std::sort(order.begin(), order.end(),
+            [&](Eigen::Index a, Eigen::Index b) { return pivots[a] < pivots[b]; });
+  BaseParameters base;
+  base.combination = Eigen::MatrixXd::Zero(rank, p);
+  for (Eigen::Index b = 0; b < rank; ++b) {
+    const Eigen::Index place = order[static_cast<std::size_t>(b)];
+    base.columns.push_back(static_cast<int>(pivots[place]));
+    base.combination(b, pivots[place]) = 1.0;
+    for (Eigen::Index d = 0; d < p - rank; ++d)
+      base.combination(b, pivots[rank + d]) = dependent(place, d);
+  }
+  base.values = base.combination * arm.inertial_parameters();
+  return base;
+}
+
+std::vector<std::string> inertial_parameter_names(const PinocchioArm& arm) {
+  const pinocchio::Model& model = arm.impl().model;
+  std::vector<std::string> names;
+  for (int i = 0; i < arm.dof(); ++i) {
+    const std::string body = body_name(model, static_cast<pinocchio::JointIndex>(i + 1));
+    for (const char* parameter : kParameterNames) names.push_back(parameter + (" " + body));
+  }
+  return names;
+}
+
+// The base parameters of one body: rows [begin, end) of the e2 block.
+struct Group {
+  pinocchio::JointIndex joint;
+  Eigen::Index begin, end;
+};
+
+// Everything but Pinocchio's work space (in `arm`, which a copy builds afresh).
+struct PinocchioStructuredBasis::Impl {
+  PinocchioArm::Impl arm;  // model, configuration buffer, set_configuration
+  BaseParameters base;
+  std::vector<std::string> names;
+  std::vector<pinocchio::JointIndex> joint;  // per base parameter: the joint whose body it is
+  std::vector<int> local;                    // per base parameter: its index 0..9 in that body
+  std::vector<Group> groups;                 // the base parameters body by body
+  mutable Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6> gradients;
+  mutable Eigen::VectorXd position;      // q = qd - e1
+  mutable Eigen::VectorXd acceleration;  // zero (computeForwardKinematicsDerivatives needs one)
+  mutable pinocchio::Data::Matrix6x dv_dq, dv_dv;
+
+  explicit Impl(const PinocchioArm::Impl& arm_impl) : arm(arm_impl) {}
+};
+
+PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
+    : impl_(std::make_unique<Impl>(arm.impl())), joints_(arm.dof()) {
+  const int n = joints_;
+  if (n > kMaxDof)
+    throw std::invalid_argument("controller.basis: the structured basis of " + arm.source() +
+                                " has " + std::to_string(n) + " joints; the core supports 1 to " +
+                                std::to_string(kMaxDof));
+  Impl& s = *impl_;
+  s.base = adparm::base_parameters(arm);
+  const int r = static_cast<int>(s.base.columns.size());
+  size_ = e1_size() + r;
+  if (size_ > kMaxBasisSize)
+    throw std::invalid_argument("controller.basis: the structured basis of " + arm.source() +
+                                " has " + std::to_string(size_) + " functions (" +
+                                std::to_string(e1_size()) + " for e1 and " + std::to_string(r) +
+                                " base inertial parameters); the core supports at most " +
+                                std::to_string(kMaxBasisSize));
+  for (int i = 0; i < n; ++i)
+    for (int j = i; j < n; ++j)
+      s.names.push_back(i == j ? "e1_" + std::to_string(i + 1) + "^2"
+                               : "e1_" + std::to_string(i + 1) + " e1_" + std::to_string(j + 1));
+  const std::vector<std::string> parameters = inertial_parameter_names(arm);
+  for (const int column : s.base.columns) {
+    s.joint.push_back(static_cast<pinocchio::JointIndex>(column / 10 + 1));
+    s.local.push_back(column % 10);
+    s.names.push_back("e2'M_b e2 (" + parameters[static_cast<std::size_t>(column)] + ")");
+  }
+  for (std::size_t b = 0; b < s.joint.size(); ++b) {
+    const Eigen::Index index = static_cast<Eigen::Index>(b);
+    if (s.groups.empty() || s.groups.back().joint != s.joint[b])
+      s.groups.push_back({s.joint[b], index, index});
+    s.groups.back().end = index + 1;
+  }
+  s.gradients.setZero(10, 6);
+  s.position = Eigen::VectorXd::Zero(n);
+  s.acceleration = Eigen::VectorXd::Zero(n);
+  s.dv_dq = pinocchio::Data::Matrix6x::Zero(6, n);
+  s.dv_dv = pinocchio::Data::Matrix6x::Zero(6, n);
+}
+
+PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioStructuredBasis& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)), joints_(other.joints_), size_(other.size_) {}
+
+PinocchioStructuredBasis& PinocchioStructuredBasis::operator=(
+    const PinocchioStructuredBasis& other) {
+  if (this != &other) {
+    impl_ = std::make_unique<Impl>(*other.impl_);
+    joints_ = other.joints_;
+    size_ = other.size_;
+  }
+  return *this;
+}
+
+PinocchioStructuredBasis::PinocchioStructuredBasis(PinocchioStructuredBasis&&) noexcept = default;
+PinocchioStructuredBasis& PinocchioStructuredBasis::operator=(PinocchioStructuredBasis&&) noexcept =
+    default;
+PinocchioStructuredBasis::~PinocchioStructuredBasis() = default;
+
+const BaseParameters& PinocchioStructuredBasis::base_parameters() const { return impl_->base; }
+const std::vector<std::string>& PinocchioStructuredBasis::names() const { return impl_->names; }
+
+Eigen::VectorXd PinocchioStructuredBasis::optimal_weights(
+    const Eigen::Ref<const Eigen::MatrixXd>& K) const {
+  Eigen::VectorXd W = optimal_weights(K, Eigen::VectorXd::Zero(10 * joints_));
+  W.tail(size_ - e1_size()) = impl_->base.values;
+  return W;
+}
+
+Eigen::VectorXd PinocchioStructuredBasis::optimal_weights(
+    const Eigen::Ref<const Eigen::MatrixXd>& K,
+    const Eigen::Ref<const Eigen::VectorXd>& inertial_parameters) const {
+  check_size(K, joints_, joints_, "K");
+  check_finite(K, "K");
+  check_size(inertial_parameters, 10 * joints_, 1, "inertial_parameters");
+  check_finite(inertial_parameters, "inertial_parameters");
+  Eigen::VectorXd W(size_);
+  int k = 0;
+  for (int i = 0; i < joints_; ++i)
+    for (int j = i; j < joints_; ++j) W[k++] = i == j ? K(i, i) : K(i, j) + K(j, i);
+  W.tail(size_ - k) = impl_->base.combination * inertial_parameters;
+  return W;
+}
+
+void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                           const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                           const Eigen::Ref<const Eigen::VectorXd>& dqd,
+                                           Eigen::Ref<Eigen::VectorXd> phi,
+                                           Eigen::Ref<Eigen::MatrixXd> jacobian,
+                                           Eigen::Ref<Eigen::VectorXd> desired_rate) const {
+  const Eigen::Index n = joints_;
+  check_size(x, 2 * n, 1, "x");
+  check_size(qd, n, 1, "qd");
+  check_size(dqd, n, 1, "dqd");
+  check_size(phi, size_, 1, "phi");
+  check_size(jacobian, size_, 2 * n, "jacobian");
+  check_size(desired_rate, size_, 1, "desired_rate");
+  const Impl& s = *impl_;
+  const PinocchioArm::Impl& arm = s.arm;  // its buffers (mutable) and Data are this basis' own
+  pinocchio::Data& data = *arm.data;
+  jacobian.setZero();
+  desired_rate.setZero();
+
+  // e1 block: e1_i e1_j, i <= j
+  Eigen::Index k = 0;
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = i; j < n; ++j, ++k) {
+      phi[k] = x[i] * x[j];
+      jacobian(k, i) += x[j];
+      jacobian(k, j) += x[i];
+    }
+
+  // e2 block: 2 T_b(q, e2) at q = qd - e1, with the kinematics derivatives of each body
+  s.position = qd - x.head(n);
+  arm.set_configuration(s.position);
+  arm.velocity = x.tail(n);
+  pinocchio::computeForwardKinematicsDerivatives(arm.model, data, arm.configuration, arm.velocity,
+                                                 s.acceleration);
+  // per body: its rows' gradients G (rows x 6), then d phi / d(q, v) = G [dv/dq, dv/dv]
+  for (const Group& group : s.groups) {
+    s.dv_dq.setZero();
+    s.dv_dv.setZero();
+    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, s.dv_dq,
+                                           s.dv_dv);
+    const auto& velocity = data.v[group.joint];
+    const Eigen::Index rows = group.end - group.begin;
+    for (Eigen::Index b = 0; b < rows; ++b)
+      s.gradients.row(b) = energy_gradient(s.local[static_cast<std::size_t>(group.begin + b)],
+                                           velocity.linear(), velocity.angular());
+    const auto G = s.gradients.topRows(rows);
+    phi.segment(k, rows).noalias() = 0.5 * G.lazyProduct(velocity.toVector());
+    // q = qd - e1: d phi / d e1 = -G dv/dq, and the desired rate is G dv/dq dqd
+    jacobian.block(k, 0, rows, n).noalias() = -G.lazyProduct(s.dv_dq);
+    jacobian.block(k, n, rows, n).noalias() = G.lazyProduct(s.dv_dv);
+    desired_rate.segment(k, rows).noalias() = -jacobian.block(k, 0, rows, n).lazyProduct(dqd);
+    k += rows;
+  }
+}
+
+}  // namespace adparm
