@@ -395,6 +395,10 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         return ["1", None, True, NAN, INF, HUGE, [1.0, 2.0], [[1.0, 2.0, 3.0]] * 2] + [
             with_bad_element([[1.0, 0.0], [0.0, 1.0]], element) for element in BAD_ELEMENTS
         ]
+    if key == "urdf":
+        return [1, True, "", "/nonexistent/arm.urdf", "bad\0path", ["arm.urdf"]]
+    if key == "gravity":  # gravity is a URDF arm's: refused with the two-link arm too
+        return ["1", True, [0.0, 0.0], [0.0, 0.0, NAN], [0.0, 0.0, -9.81]]
     if key in ("kind", "basis", "mode", "boundary"):
         return [str(value) + "x", "", str(value).upper(), 1, None, True, [value]]
     if key in ("rise", "positive_e2"):

@@ -27,6 +27,11 @@ def _planar(changes: dict | None = None, T: float = 2.0) -> adparm.Config:
     return config.updated({"sim": {"T": T}, **(changes or {})})
 
 
+def _planar_quadratic(changes: dict | None = None, T: float = 2.0) -> adparm.Config:
+    """The example with the quadratic basis (21 functions; no known W* on this arm)."""
+    return _planar({"controller": {"basis": "quadratic"}, **(changes or {})}, T)
+
+
 def test_two_link_urdf_gives_the_built_in_arm_s_recording() -> None:
     """The two-link arm written as a URDF (gravity 9.8, the paper's friction) runs the same loop
     as the built-in arm with the same quadratic basis, to round-off, over 3 s with probing."""
@@ -119,7 +124,9 @@ def test_wrong_sizes_name_the_field_and_n(section: str, key: str, value: object)
 
 def test_wrong_initial_weights_name_the_basis_size() -> None:
     with pytest.raises(ValueError, match=r"init\.critic_weights: expected shape \(21,\)"):
-        _planar({"init": {"critic_weights": [1.0] * 8}})
+        _planar_quadratic({"init": {"critic_weights": [1.0] * 8}})
+    with pytest.raises(ValueError, match=r"init\.critic_weights: expected shape \(13,\)"):
+        _planar({"init": {"critic_weights": [1.0] * 8}})  # the structured basis
 
 
 def test_per_joint_friction_reaches_the_plant() -> None:
@@ -141,9 +148,9 @@ def test_two_link_keys_with_a_urdf_are_refused(key: str) -> None:
         adparm.Config.from_dict({"plant": {"urdf": str(PLANAR)}, "model": {key: 2.0}})
 
 
-@pytest.mark.parametrize("basis", ["paper", "augmented", "structured"])
+@pytest.mark.parametrize("basis", ["paper", "augmented"])
 def test_two_link_bases_with_a_urdf_are_refused(basis: str) -> None:
-    with pytest.raises(ValueError, match=r"controller\.basis: .*two-link.*'quadratic'"):
+    with pytest.raises(ValueError, match=r"controller\.basis: .*two-link.*'structured'"):
         adparm.Config.from_dict({"plant": {"urdf": str(PLANAR)}, "controller": {"basis": basis}})
 
 
@@ -242,7 +249,7 @@ def test_arm_terms_equal_pinocchio_s_python_bindings(rng) -> None:
 
 
 def test_basis_and_names_of_an_n_joint_expression_basis(rng) -> None:
-    config = _planar()
+    config = _planar_quadratic()
     names = adparm.basis_names(config)
     assert len(names) == 21 and "x6^2" in names
     x = rng.uniform(-1.0, 1.0, (5, 6))
@@ -262,7 +269,7 @@ def test_basis_and_names_of_an_n_joint_expression_basis(rng) -> None:
 def test_diagnostics_say_the_optimum_is_not_known() -> None:
     with warnings.catch_warnings():  # a quadratic basis cannot represent V* on this arm
         warnings.simplefilter("ignore", adparm.ApproximationWarning)
-        result = adparm.simulate(_planar(T=3.0))
+        result = adparm.simulate(_planar_quadratic(T=3.0))
     diagnostics = result.diagnostics
     assert diagnostics["critic_relative_error"] is None
     assert "optimum is not known" in diagnostics["verdict"]
@@ -279,6 +286,7 @@ def test_cli_runs_a_urdf_config_and_writes_its_outputs(tmp_path: Path, capsys) -
     text = EXAMPLE.read_text().replace(
         'urdf = "arms/planar_3link.urdf"', f"urdf = {json.dumps(str(PLANAR))}"
     )
+    text = text.replace("[task]", '[controller]\nbasis = "quadratic"\n\n[task]')
     config.write_text(text.replace("T = 20.0", "T = 1.0"))
     out = tmp_path / "out"
     assert main(["run", str(config), "--out", str(out), "--no-progress"]) == 0
@@ -303,7 +311,7 @@ def test_batch_of_urdf_runs_equals_single_runs() -> None:
 
 
 def test_compare_and_sweep_run_a_urdf_config() -> None:
-    config = _planar(T=1.0)
+    config = _planar_quadratic(T=1.0)
     with warnings.catch_warnings():  # the quadratic basis on this arm (diagnosed in the rows)
         warnings.simplefilter("ignore", adparm.ApproximationWarning)
         comparison = adparm.compare(config, ["adp", "rise", "optimal"])
@@ -363,6 +371,7 @@ def test_a_six_joint_arm_runs_and_plots_one_line_per_joint() -> None:
                 "q0": [0.1, -1.2, 1.0, -0.5, 0.3, 0.2],
                 "qd": [0.3, -1.0, 0.8, -0.3, 0.5, 0.0],
             },
+            "controller": {"basis": "quadratic"},
             "sim": {"T": 0.3},
         }
     )

@@ -380,6 +380,25 @@ def urdf_info(path: str, name: str = "plant.urdf") -> tuple[int, tuple[str, ...]
         raise ValueError(f"{name}: {error}") from None
 
 
+@functools.lru_cache(maxsize=64)
+def _urdf_structured_size(path: str, mtime_ns: int, size: int) -> int:
+    from . import _core
+
+    return int(_core.UrdfStructuredBasis(_core.UrdfArm(path)).size)
+
+
+def urdf_structured_size(path: str, name: str = "plant.urdf") -> int:
+    """The number of functions of the structured basis of the URDF arm at ``path`` (it depends
+    on the kinematics only: n (n + 1) / 2 + the number of base inertial parameters)."""
+    import os
+
+    try:
+        stat = os.stat(path)
+        return _urdf_structured_size(path, stat.st_mtime_ns, stat.st_size)
+    except (OSError, ValueError) as error:
+        raise ValueError(f"{name}: {error}") from None
+
+
 def _check_urdf_arm(arm: Any, section: str) -> None:
     """With a URDF: the two-link keys stay unset, gravity has 3 entries; without: gravity and
     per-joint friction are refused (the two-link arm has g1, g2 and one coefficient)."""
@@ -924,9 +943,9 @@ class ProbeConfig:
 CONTROLLER_KINDS = ("adp", "rise", "pd", "optimal")
 BASIS_KINDS = ("augmented", "paper", "structured")
 #: The basis of a URDF arm (plant.urdf) when controller.basis is left out.
-URDF_DEFAULT_BASIS = "quadratic"
+URDF_DEFAULT_BASIS = "structured"
 #: Built-in bases that a URDF arm refuses (written for the two-link arm).
-URDF_REFUSED_BASES = ("augmented", "paper", "structured")
+URDF_REFUSED_BASES = ("augmented", "paper")
 #: The number of functions of each built-in basis (the length of init.critic_weights and
 #: actor_weights); an expression basis has one per term (ControllerConfig.basis_size).
 BASIS_SIZES = {"augmented": 8, "paper": 8, "structured": 6}
@@ -1240,7 +1259,7 @@ class Config:
         if self.plant.urdf is None:
             model = self.model.resolve(self.plant)
             _check_arm(model["p1"], model["p2"], model["p3"], "model")
-        size = self.controller.basis_size(self.dof)
+        size = self.basis_size
         for key in ("critic_weights", "actor_weights"):
             value = getattr(self.init, key)
             if value is not None and len(value) != size:
@@ -1359,9 +1378,24 @@ class Config:
         if self.controller.is_expression:
             return self._expression_initial_weights(key)
         if self.controller.basis == "structured":
+            if self.plant.urdf is not None:
+                # K = I and the believed model's base parameters: u_hat = -R^-1 e2 at first
+                from .urdf import config_arm
+
+                return config_arm(self, model=True).structured_weights(np.eye(self.dof))
             p = self.model.resolve(self.plant)
             return np.array([1.0, 0.0, 1.0, p["p1"], p["p2"], p["p3"]])
         return np.ones(BASIS_SIZES[self.controller.basis])
+
+    @property
+    def basis_size(self) -> int:
+        """The number of functions of controller.basis on this arm (the length of the weights):
+        the structured basis of a URDF arm has n (n + 1) / 2 + one per base inertial parameter
+        of the believed model's URDF."""
+        if self.plant.urdf is not None and self.controller.basis == "structured":
+            urdf = self.model.resolve_urdf(self.plant)["urdf"]
+            return urdf_structured_size(urdf, "model.urdf" if self.model.urdf else "plant.urdf")
+        return self.controller.basis_size(self.dof)
 
     def _expression_initial_weights(self, key: str) -> np.ndarray:
         """The weights of x^T blockdiag(I, M(qd(0))) x (the believed model's inertia at the

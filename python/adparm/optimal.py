@@ -9,6 +9,7 @@ import numpy as np
 from . import _core
 from .config import Config
 from .simulation import core_settings, desired_state
+from .urdf import config_arm
 
 __all__ = [
     "BASIS_NAMES",
@@ -58,7 +59,14 @@ def basis_names(config: Config) -> tuple[str, ...]:
     _check_config(config)
     if config.controller.is_expression:  # the terms' text, after expansion of the families
         return config.controller.expression_basis(config.dof).terms
+    if _urdf_structured(config):
+        return tuple(config_arm(config, model=True).structured_names())
     return STRUCTURED_BASIS_NAMES if config.controller.basis == "structured" else BASIS_NAMES
+
+
+def _urdf_structured(config: Config) -> bool:
+    """Whether the config runs the structured basis of a URDF arm (the believed model's)."""
+    return config.plant.urdf is not None and config.controller.basis == "structured"
 
 
 def _states(x: Any, size: int, name: str = "x") -> np.ndarray:
@@ -75,9 +83,10 @@ def _states(x: Any, size: int, name: str = "x") -> np.ndarray:
 
 def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """The basis of ``config.controller.basis`` and its exact Jacobian at error states x of shape
-    (..., 2n) (n = 2 joints): phi (..., K) and d phi / dx (..., K, 2n), computed by the C++ core.
+    (..., 2n) (n joints): phi (..., K) and d phi / dx (..., K, 2n), computed by the C++ core.
     ``qd`` is the desired position (n,) or (..., n) the basis may depend on (augmented and
-    structured bases: through q = qd - e1); default the config's qd at t = 0."""
+    structured bases: through q = qd - e1); default the config's qd at t = 0. The structured
+    basis of a URDF arm is the believed model's (``UrdfArm.structured_basis``)."""
     _check_config(config)
     n = config.dof
     states = _states(x, 2 * n)
@@ -85,6 +94,9 @@ def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarra
     desired = np.broadcast_to(desired, states.shape[:-1] + (n,))
     if config.controller.is_expression:
         phi, jacobian, _ = config.controller.expression_basis(n).evaluate(states, desired)
+        return phi, jacobian
+    if _urdf_structured(config):
+        phi, jacobian, _ = config_arm(config, model=True).structured_basis(states, desired)
         return phi, jacobian
     kind = getattr(_core.BasisKind, config.controller.basis)
     rows = states.reshape(-1, 2 * n)
@@ -113,23 +125,7 @@ def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[s
             f"q, dq: expected shape ({n},) each, got {q_array.shape}, {dq_array.shape}"
         )
     if config.plant.urdf is not None:  # Pinocchio, through the core's URDF arm
-        arm = (
-            config.model.resolve_urdf(config.plant)
-            if model
-            else {
-                "urdf": config.plant.urdf,
-                "gravity": config.plant.resolved_gravity,
-                "coulomb": config.plant.coulomb,
-                "viscous": config.plant.viscous,
-            }
-        )
-        urdf_arm = _core.UrdfArm(
-            arm["urdf"],
-            gravity=np.array(arm["gravity"], dtype=float),
-            coulomb=np.atleast_1d(np.array(arm["coulomb"], dtype=float)),
-            viscous=np.atleast_1d(np.array(arm["viscous"], dtype=float)),
-        )
-        terms = urdf_arm.terms(q_array, dq_array)
+        terms = config_arm(config, model=model).terms(q_array, dq_array)
         return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
     parameters = _core.ArmParameters()
     values = (
@@ -185,10 +181,11 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     if config.controller.is_expression:
         return _expression_optimal_weights(config)
+    n = config.dof
     Q = np.array(config.cost.Q)
     R = np.array(config.cost.R)
     alpha1 = np.array(config.control.alpha1)
-    Q11, Q12, Q22 = Q[:2, :2], Q[:2, 2:], Q[2:, 2:]
+    Q11, Q12, Q22 = Q[:n, :n], Q[:n, n:], Q[n:, n:]
     K = -Q12
 
     def close(a: np.ndarray, b: np.ndarray) -> bool:
@@ -218,6 +215,10 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
             "task.qd: the paper basis represents V* only for a set-point with qd2 = 0 "
             "(controller.basis = 'augmented' represents it for any qd)"
         )
+    if _urdf_structured(config):  # [K entries; s beta] of the believed model's base parameters
+        weights = config_arm(config, model=True).structured_weights(0.5 * (K + K.T))
+        weights[n * (n + 1) // 2 :] *= scale
+        return weights
     p = config.model.resolve(config.plant)
     if config.controller.basis == "structured":
         return np.array([K[0, 0], 2.0 * K[0, 1], K[1, 1], p["p1"], p["p2"], p["p3"]])
@@ -266,11 +267,12 @@ def value_scale(config: Config, *, rtol: float = 1e-9) -> float | None:
 
     In the exact family V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2 (s = 1: the paper's
     corrected example)."""
-    Q22 = np.array(config.cost.Q)[2:, 2:]
+    n = config.dof
+    Q22 = np.array(config.cost.Q)[n:, n:]
     R = np.array(config.cost.R)
     product = Q22 @ R  # = s^2 I
-    s2 = 0.5 * np.trace(product)
-    if not s2 > 0.0 or np.abs(product - s2 * np.eye(2)).max() > rtol * max(s2, 1.0):
+    s2 = np.trace(product) / n
+    if not s2 > 0.0 or np.abs(product - s2 * np.eye(n)).max() > rtol * max(s2, 1.0):
         return None
     return float(np.sqrt(s2))
 
@@ -423,11 +425,14 @@ def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
     """
     weights = optimal_weights(config)
     x = initial_error_state(config) if x is None else x
-    # V* = W*^T phi(x, qd) in the augmented basis, exactly
+    n = config.dof
     states = np.asarray(x, dtype=float)
-    if states.shape != (4,) or not np.all(np.isfinite(states)):
-        raise ValueError(f"x: expected 4 finite numbers, got {x!r}")
+    if states.shape != (2 * n,) or not np.all(np.isfinite(states)):
+        raise ValueError(f"x: expected {2 * n} finite numbers, got {x!r}")
     qd = desired_state(config, t)[0]
-    kind = "structured" if config.controller.basis == "structured" else "augmented"
-    phi, _, _ = _core.basis(getattr(_core.BasisKind, kind), states, qd, np.zeros(2))
+    if config.controller.is_expression or _urdf_structured(config):
+        phi = basis(config, states, qd)[0]
+    else:  # V* = W*^T phi(x, qd) in the augmented basis, exactly
+        kind = "structured" if config.controller.basis == "structured" else "augmented"
+        phi, _, _ = _core.basis(getattr(_core.BasisKind, kind), states, qd, np.zeros(2))
     return float(weights @ np.asarray(phi))

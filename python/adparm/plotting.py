@@ -18,6 +18,7 @@ Design choices, the same in every figure:
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -122,6 +123,16 @@ def _known_optimum(result: SimulationResult) -> np.ndarray | None:
         return None
 
 
+def _label(name: str) -> str:
+    """A basis function's legend label: mathtext for the symbols, plain text for the names of a
+    URDF arm's inertial parameters (which have underscores of their own)."""
+    if name.startswith("e2'M_b e2"):  # URDF structured basis: e2'M_b e2 (I_yy link1)
+        return r"$e_2^T M_b(q)\, e_2$" + name[len("e2'M_b e2") :]
+    if name.startswith("e1_"):  # URDF structured basis: e1_i e1_j, e1_i^2
+        return "$" + re.sub(r"e1_(\d+)", r"e_{1,\1}", name).replace(" ", r"\,") + "$"
+    return f"${_tex(name)}$"
+
+
 def _tex(name: str) -> str:
     if name.startswith("e2^T M"):  # structured basis: e2^T M_k(q) e2
         k = name[len("e2^T M")]
@@ -193,9 +204,10 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
             rank = int(np.flatnonzero(equal == i)[0])
             offsets.append(min(rank * every // len(equal), max(t.size - 1, 0)))
         for i, name in enumerate(basis_names(result.config)):
-            label = f"${_tex(name)}$"
-            if target is not None:
-                label += f"  (W* = {target[i]:g})"
+            label = _label(name)
+            if target is not None:  # a value at round-off of 0 (a symmetric link's c) is 0
+                value = 0.0 if abs(target[i]) < 1e-12 * np.abs(target).max() else target[i]
+                label += f"  (W* = {value + 0.0:.4g})"
             axes.plot(
                 t,
                 weights[:, i],

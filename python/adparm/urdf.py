@@ -12,6 +12,7 @@ import os
 import sys
 import sysconfig
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -229,6 +230,25 @@ class UrdfArm:
             jacobian.reshape(batch + (size, 2 * n)),
             rate.reshape(batch + (size,)),
         )
+
+
+def config_arm(config: Any, *, model: bool = False) -> UrdfArm:
+    """The URDF arm of ``config``'s plant (``model=True``: the arm the controller believes,
+    [model] with the plant's values where it leaves them out). Only for a URDF plant."""
+    plant = config.plant
+    if plant.urdf is None:
+        raise ValueError("plant.urdf: the config's arm is the built-in two-link arm, not a URDF")
+    arm = (
+        config.model.resolve_urdf(plant)
+        if model
+        else {
+            "urdf": plant.urdf,
+            "gravity": plant.resolved_gravity,
+            "coulomb": plant.coulomb,
+            "viscous": plant.viscous,
+        }
+    )
+    return UrdfArm(arm["urdf"], arm["gravity"], arm["coulomb"], arm["viscous"])
 
 
 def _example_robot_data_root() -> Path | None:

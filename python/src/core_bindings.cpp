@@ -26,6 +26,7 @@ namespace {
 using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using ExpressionLoop = ClosedLoop<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>;
 using UrdfLoop = ClosedLoop<UrdfLoopArm, ExpressionLoopBasis>;
+using UrdfStructuredLoop = ClosedLoop<UrdfLoopArm, PinocchioStructuredBasis>;
 
 // Calls f(Loop*) (a null pointer of the loop type) for the loop of the settings: a URDF arm's
 // (expression basis), or the two-link loop of settings.basis: the fixed-size loop of a built-in
@@ -33,8 +34,11 @@ using UrdfLoop = ClosedLoop<UrdfLoopArm, ExpressionLoopBasis>;
 template <class F>
 decltype(auto) with_loop(const Settings& settings, F&& f) {
   if (!settings.plant_urdf.urdf.empty()) {
+    if (settings.basis == BasisKind::structured)
+      return f(static_cast<UrdfStructuredLoop*>(nullptr));
     if (settings.basis != BasisKind::expression)
-      throw std::invalid_argument("controller.basis: a URDF arm takes an expression basis");
+      throw std::invalid_argument(
+          "controller.basis: a URDF arm takes the structured basis or an expression basis");
     return f(static_cast<UrdfLoop*>(nullptr));
   }
   if (settings.basis == BasisKind::expression) return f(static_cast<ExpressionLoop*>(nullptr));

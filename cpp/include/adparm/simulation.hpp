@@ -241,9 +241,11 @@ class Simulation {
 
 using PaperSimulation = Simulation<TwoLinkArm, PaperBasis>;
 
-// The run of a URDF arm (settings.plant_urdf.urdf not empty): an expression basis on the
-// dynamic-size loop. Other bases of a URDF arm are refused, naming controller.basis.
+// The runs of a URDF arm (settings.plant_urdf.urdf not empty): the structured basis of the
+// believed model (pinocchio_structured_basis.hpp) or an expression basis, on the dynamic-size
+// loop. The two-link bases (paper, augmented) are refused, naming controller.basis.
 using UrdfSimulation = Simulation<UrdfLoopArm, ExpressionLoopBasis>;
+using UrdfStructuredSimulation = Simulation<UrdfLoopArm, PinocchioStructuredBasis>;
 
 // A simulation picked at run time: the two-link arm with the basis of settings.basis, or a URDF
 // arm (settings.plant_urdf) with an expression basis.
@@ -284,13 +286,17 @@ class AnySimulation {
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
                    Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>, UrdfSimulation>;
+                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>, UrdfSimulation,
+                   UrdfStructuredSimulation>;
   static Variant make(const Settings& settings) {
     if (!settings.plant_urdf.urdf.empty()) {
+      if (settings.basis == BasisKind::structured)
+        return Variant(std::in_place_type<UrdfStructuredSimulation>, settings);
       if (settings.basis != BasisKind::expression)
         throw std::invalid_argument(
-            "controller.basis: the paper, augmented and structured bases are the two-link arm's; "
-            "a URDF arm (plant.urdf) takes an expression basis (quadratic, polynomial, terms)");
+            "controller.basis: the paper and augmented bases are the two-link arm's; a URDF arm "
+            "(plant.urdf) takes the structured basis or an expression basis (quadratic, "
+            "polynomial, terms)");
       return Variant(std::in_place_type<UrdfSimulation>, settings);
     }
     if (settings.basis == BasisKind::expression)  // dynamic sizes only

@@ -16,6 +16,7 @@
 
 #include "adparm/closed_loop.hpp"
 #include "adparm/pinocchio_arm.hpp"
+#include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/settings.hpp"
 #include "adparm/types.hpp"
 
@@ -105,6 +106,14 @@ inline UrdfLoopArm settings_arm(ArmTag<UrdfLoopArm>, const Settings& settings, b
 
 inline bool settings_model_is_plant(ArmTag<UrdfLoopArm>, const Settings& settings) {
   return settings.model_urdf.urdf.empty() || settings.model_urdf == settings.plant_urdf;
+}
+
+// The structured basis of a URDF run is the believed model's (model.urdf, or the plant's): its
+// base parameters are those the controller can know.
+template <>
+inline PinocchioStructuredBasis settings_basis<PinocchioStructuredBasis>(const Settings& settings,
+                                                                         Eigen::Index) {
+  return PinocchioStructuredBasis(settings_arm(ArmTag<UrdfLoopArm>(), settings, true).arm());
 }
 
 }  // namespace adparm
