@@ -35,8 +35,10 @@ DESCRIPTIONS = {
     "the two-link arm: relative to the TOML file (in a config built from a dict, to the current "
     "directory), stored absolute. The actuated joints are its revolute, continuous and prismatic "
     "joints in model order; n follows from it and every sized setting takes the n-joint default. "
-    "p1 ... g2 may not be set with it; the bases ``paper``, ``augmented`` and ``structured`` are "
-    "refused. See :doc:`/guide/urdf-arms`.",
+    '``"example-robot-data:ur5"`` names a robot of the example-robot-data package. '
+    "p1 ... g2 may not be set with it; its default basis is ``structured`` (the arm's own: "
+    "W* = [K; base inertial parameters]); the bases ``paper`` and ``augmented`` are refused. "
+    "See :doc:`/guide/urdf-arms`.",
     ("plant", "gravity"): "Acceleration of gravity [gx, gy, gz] in the URDF's root frame "
     "(m/s^2); only with ``urdf``.",
     ("model", "urdf"): "Another URDF of the same joint count as the controller's believed arm "
@@ -107,8 +109,9 @@ DESCRIPTIONS = {
     "exact for any qd), ``paper`` (the printed phi(x)), ``structured`` (e1 monomials and "
     "e2^T M_k(q) e2, :doc:`/guide/structured-basis`), ``quadratic``, ``polynomial`` (with "
     '``degree``), or a list of terms and families such as ``["quadratic", "x3^2*cos(q2)"]`` '
-    "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`. A URDF arm takes ``quadratic`` "
-    "by default and refuses the two-link bases.",
+    "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`. A URDF arm takes its own "
+    "``structured`` basis by default (e1 products and e2^T M_b(q) e2 per base inertial "
+    "parameter, :doc:`/guide/urdf-arms`) and refuses ``paper`` and ``augmented``.",
     ("controller", "degree"): "The highest (even) degree of the ``polynomial`` basis; only with "
     '``basis = "polynomial"``.',
     ("controller", "rise"): "Add the RISE term mu (eqs. 27-28); must be true with "
@@ -142,7 +145,8 @@ RESOLVED_DEFAULTS = {
     ("task.qd samples", "file"): "none",
     ("controller", "degree"): "none (only with the polynomial basis, where it must be set)",
     ("init", "*"): "the basis' default: all ones (paper, augmented); [1, 0, 1, p1, p2, p3] "
-    "(structured: K = I and the believed model's inertia)",
+    "(structured: K = I and the believed model's inertia; on a URDF arm the model's base "
+    "inertial parameters)",
 }
 
 

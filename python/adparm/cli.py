@@ -289,11 +289,16 @@ def _interrupted(command: str, signals: _Signals, what: str, kept: str) -> int:
 
 
 def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str:
+    from .truth import divergence_causes
+
     config = result.config
+    causes = divergence_causes(config)
     return (
         f"the run diverged at t = {error.time:.6g} s (the state or an output became non-finite "
         f"or exceeded sim.divergence_bound = {config.sim.divergence_bound:g}); its "
-        f"{result.t.size} rows up to then are written. To change: start from nonzero weights "
+        f"{result.t.size} rows up to then are written. "
+        + (f"Likely cause: {'; '.join(causes)}. " if causes else "")
+        + "To change: start from nonzero weights "
         "(init.critic_weights, init.actor_weights), a smaller sim.dt, or smaller learning rates "
         "(critic.eta_c, actor.eta_a1, actor.eta_a2)"
     )

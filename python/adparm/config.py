@@ -346,13 +346,32 @@ def _friction(value: Any, name: str) -> float | Vector:
     return _vector(value, name, None)
 
 
+#: A URDF named "example-robot-data:ur5" is that robot of the example-robot-data package
+#: (adparm.example_robot_urdf).
+EXAMPLE_ROBOT_PREFIX = "example-robot-data:"
+
+
 def _urdf_path(value: Any, name: str) -> str:
     """An absolute path of an existing URDF file (a relative one is taken from the current
-    directory; load_config makes it relative to the TOML file first)."""
+    directory; load_config makes it relative to the TOML file first), or
+    "example-robot-data:NAME" for a robot of example-robot-data."""
     import os
 
     if not isinstance(value, (str, Path)) or not str(value):
         raise TypeError(f"{name}: expected the path of a URDF file, got {_text(value)}")
+    if isinstance(value, str) and value.startswith(EXAMPLE_ROBOT_PREFIX):
+        from .urdf import example_robot_urdf
+
+        robot = value[len(EXAMPLE_ROBOT_PREFIX) :]
+        try:
+            return str(example_robot_urdf(robot))
+        except ModuleNotFoundError:
+            raise ValueError(
+                f"{name}: {value!r} needs the example-robot-data package "
+                "(pip install example-robot-data)"
+            ) from None
+        except (ValueError, FileNotFoundError) as error:
+            raise ValueError(f"{name}: {value!r}: {error}") from None
     path = os.path.abspath(Path(value).expanduser())
     if not Path(path).is_file():
         raise ValueError(f"{name}: no URDF file {str(path)!r}")
@@ -1577,7 +1596,11 @@ def load_config(path: str | Path) -> Config:
         raise ValueError(f"{path}: {_deep_toml(text)}") from None
     for section in ("plant", "model"):  # a relative URDF path is relative to the TOML file
         values = data.get(section)
-        if isinstance(values, Mapping) and isinstance(values.get("urdf"), str):
+        if (
+            isinstance(values, Mapping)
+            and isinstance(values.get("urdf"), str)
+            and not values["urdf"].startswith(EXAMPLE_ROBOT_PREFIX)
+        ):
             data[section]["urdf"] = str(path.parent / Path(values["urdf"]).expanduser())
     qd = data.get("task", {}).get("qd") if isinstance(data.get("task"), Mapping) else None
     if isinstance(qd, Mapping) and isinstance(qd.get("file"), str):

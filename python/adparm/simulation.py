@@ -443,10 +443,14 @@ def _result(run: _core.Simulation, config: Config, wall_time: float) -> Simulati
 
 
 def _divergence_message(run: _core.Simulation, config: Config) -> str:
+    from .truth import divergence_causes
+
+    causes = divergence_causes(config)
     return (
         f"simulation diverged at t = {run.divergence_time:.6g} s (state or a recorded output "
-        f"non-finite, or beyond sim.divergence_bound = {config.sim.divergence_bound:g}); the "
-        "partial result is in the exception's .result"
+        f"non-finite, or beyond sim.divergence_bound = {config.sim.divergence_bound:g})"
+        + (f"; likely cause: {'; '.join(causes)}" if causes else "")
+        + "; the partial result is in the exception's .result"
     )
 
 

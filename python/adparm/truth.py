@@ -325,6 +325,7 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
             and min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"]) <= 0.0
         ):
             out["problems"].append("the e2 block of the learned V is not positive definite")
+        out["problems"].extend(divergence_causes(config))  # what the config shows beforehand
         out["verdict"] = "; ".join(out["problems"])
         return out
     try:
@@ -425,6 +426,11 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     elif target is not None and out["critic_relative_error"] > tolerance:
         out["approximation"] = "not converged"
         advice.append("run longer (sim.T) or excite more (probe.amplitude)")
+    shortfall = extrapolation_shortfall(config)
+    out["extrapolation_shortfall"] = shortfall
+    if shortfall is not None and problems:  # a likely reason why learning fell short
+        problems.append(shortfall)
+        advice.append(f"use extrapolation.points >= {config.basis_size} (several times more helps)")
     unknown = target is None and config.plant.urdf is not None
     if problems:
         out["verdict"] = "; ".join(problems)
@@ -505,6 +511,75 @@ def check_step_size(config: Config, *, transient: float = 1.0) -> dict[str, Any]
         f"{T:g} s (critic weights or e1 against a dt/2 run); try sim.dt = {dt / 2:g}"
     )
     return out
+
+
+def extrapolation_shortfall(config: Config) -> str | None:
+    """What is wrong when Bellman-error extrapolation has fewer points than the basis has
+    functions (``extrapolation.points`` < K): the points' regressors span at most N of the K
+    directions, so they cannot determine the weights alone (the issue's prototype stalled 2-6 %
+    off W* or drifted into divergence). None when N = 0 or N >= K."""
+    points, size = config.extrapolation.points, config.basis_size
+    if 0 < points < size:
+        return (
+            f"extrapolation.points = {points} is below the {size} basis functions: the points "
+            "alone cannot determine the weights"
+        )
+    return None
+
+
+#: RK4's stability limit on the negative real axis: |lambda| dt <= 2.785 (the step of a decay at
+#: rate lambda is stable only below it).
+RK4_STABILITY_LIMIT = 2.785
+
+
+def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
+    """The e2 block M_w = sum_b Wa_b M_b(qd(0)) of the initial actor weights of the structured
+    basis of a URDF arm, seen through its policy u_hat = -R^-1 M^-1 M_w e2, which makes e2 decay
+    as de2 = -A e2 with A = M^-1 R^-1 M^-1 M_w (believed model's M at qd(0)):
+    {"min_eigenvalue": lambda_min(M_w), "rate": max |eig(A)| (1/s)}; None for other bases.
+    lambda_min <= 0 pushes e2 away; rate * sim.dt above RK4_STABILITY_LIMIT makes the first steps
+    of RK4 unstable (the weights all ones on the planar 3-link arm: 4600/s)."""
+    if config.plant.urdf is None or config.controller.basis != "structured":
+        return None
+    from .urdf import config_arm
+
+    arm = config_arm(config, model=True)
+    n = config.dof
+    _, columns, _ = arm.base_parameters()
+    weights = config.initial_weights("actor_weights")[n * (n + 1) // 2 :]
+    qd = desired_state(config, 0.0)[0]
+    M_w = np.tensordot(weights, arm.mass_regressor(qd)[columns], 1)
+    M_inverse = np.linalg.inv(arm.terms(qd, np.zeros(n))["M"])
+    A = M_inverse @ np.linalg.inv(np.array(config.cost.R)) @ M_inverse @ M_w
+    return {
+        "min_eigenvalue": float(np.linalg.eigvalsh(0.5 * (M_w + M_w.T)).min()),
+        "rate": float(np.abs(np.linalg.eigvals(A)).max()),
+    }
+
+
+def divergence_causes(config: Config) -> list[str]:
+    """Likely causes of a divergence that the config shows before any run: the initial actor
+    weights of the structured basis of a URDF arm (an indefinite e2 block, or a policy too fast
+    for sim.dt), fewer extrapolation points than basis functions."""
+    causes = []
+    block = initial_actor_e2_block(config)
+    if block is not None and block["min_eigenvalue"] <= 0.0:
+        causes.append(
+            "the initial actor weights' e2 block M_w = sum_b Wa_b M_b(qd) is not positive "
+            f"definite (lambda_min = {block['min_eigenvalue']:.3g}), so u_hat = -R^-1 M^-1 M_w e2 "
+            "pushes e2 away (leave init.actor_weights out: the believed model's inertia)"
+        )
+    elif block is not None and block["rate"] * config.sim.dt > RK4_STABILITY_LIMIT:
+        causes.append(
+            f"the initial actor's policy u_hat = -R^-1 M^-1 M_w e2 makes e2 decay at up to "
+            f"{block['rate']:.3g}/s, beyond RK4's stability limit {RK4_STABILITY_LIMIT}/sim.dt = "
+            f"{RK4_STABILITY_LIMIT / config.sim.dt:.3g}/s (use a smaller sim.dt, or initial "
+            "weights nearer the model's inertia: leave init.actor_weights out)"
+        )
+    shortfall = extrapolation_shortfall(config)
+    if shortfall is not None:
+        causes.append(shortfall)
+    return causes
 
 
 def warn_if_approximate(result: SimulationResult, stacklevel: int = 3) -> None:
