@@ -16,7 +16,11 @@ import pinocchio as pin
 import pytest
 
 import adparm
-from adparm.truth import divergence_causes, extrapolation_shortfall
+from adparm.truth import (
+    divergence_causes,
+    extrapolation_shortfall,
+    structured_e2_block_min_eigenvalue,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 ARMS = ROOT / "examples" / "arms"
@@ -142,6 +146,22 @@ def test_planar_3link_learns_W_star_from_the_default_weights(rng) -> None:
     assert error[-1] < 0.01
     assert result.diagnostics["verdict"] == "ok"
     assert result.diagnostics["critic_relative_error"] < 0.01
+    assert result.diagnostics["e2_block_min_eigenvalue"] > 0.0  # a stabilising solution
+
+
+def test_the_e2_block_of_structured_weights_is_the_inertia(rng) -> None:
+    """At W* the e2 block sum_b W_b M_b(q) is M(q): its least eigenvalue over the sampled
+    positions is that of M; the negated weights give a negative one (not stabilising)."""
+    config = _config(PLANAR, _random_cost(rng, 3), task={"qd": [0.5, 0.1, -0.2]})
+    W = adparm.optimal_weights(config)
+    e1 = rng.uniform(-1.0, 1.0, (20, 3))
+    arm = adparm.UrdfArm(PLANAR)
+    expected = min(
+        np.linalg.eigvalsh(arm.terms(np.array([0.5, 0.1, -0.2]) - row, np.zeros(3))["M"]).min()
+        for row in e1
+    )
+    assert structured_e2_block_min_eigenvalue(config, W, e1) == pytest.approx(expected, rel=1e-9)
+    assert structured_e2_block_min_eigenvalue(config, -W, e1) < 0.0
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -296,7 +296,8 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
 def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, Any]:
     """The truth about a run (plain JSON-ready data; summary.json's ``diagnostics``):
 
-    - e2_block_min_eigenvalue (critic, actor): min over q of lambda_min of V's e2 block; <= 0
+    - e2_block_min_eigenvalue (critic, actor): min over q of lambda_min of V's e2 block (for
+      the structured basis of a URDF arm: over the joint positions of the explored region); <= 0
       means the run ended at a non-stabilising solution;
     - critic_relative_error: ||Wc - W*|| / ||W*|| when W* is known (else None);
     - hjb_residual_explored: rms(eps) / rms(x^T Q x) of the HJB error (eq. 21) of the final
@@ -318,7 +319,16 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     paper_basis = config.controller.basis in _PAPER_BASES  # the e2 block's layout is known
     out["e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wc) if paper_basis else None
     out["actor_e2_block_min_eigenvalue"] = e2_block_min_eigenvalue(Wa) if paper_basis else None
-    if result.status == "diverged" or not (np.all(np.isfinite(Wc)) and np.all(np.isfinite(Wa))):
+    finite = bool(np.all(np.isfinite(Wc)) and np.all(np.isfinite(Wa)))
+    urdf_structured = config.plant.urdf is not None and config.controller.basis == "structured"
+    if urdf_structured and finite and result.status != "diverged":
+        # the e2 block sum_b W_b M_b(q) depends on every joint angle: its least eigenvalue over
+        # the joint positions of the explored region (and qd)
+        e1 = _explored_states(result, np.random.default_rng(_SEED))[:, : config.dof]
+        e1 = np.vstack([np.zeros(config.dof), e1])
+        out["e2_block_min_eigenvalue"] = structured_e2_block_min_eigenvalue(config, Wc, e1)
+        out["actor_e2_block_min_eigenvalue"] = structured_e2_block_min_eigenvalue(config, Wa, e1)
+    if result.status == "diverged" or not finite:
         out["problems"].append("diverged")
         if (
             paper_basis
@@ -374,15 +384,21 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     problems, advice = out["problems"], out["advice"]
     lowest = (
         min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"])
-        if paper_basis
+        if paper_basis or urdf_structured
         else math.inf
     )
     if lowest <= 0.0:
         problems.append(
             "ended at a non-stabilising solution: the e2 block of the learned V is not positive "
-            f"definite (lambda_min = {lowest:.3g})"
+            f"definite (lambda_min = {lowest:.3g}"
+            + (" over the explored joint positions)" if urdf_structured else ")")
         )
-        advice.append("keep actor.positive_e2 = true (the default)")
+        advice.append(
+            "start from the default weights (the believed model's inertia) with more "
+            "extrapolation points"
+            if urdf_structured
+            else "keep actor.positive_e2 = true (the default)"
+        )
     if target is not None and out["critic_relative_error"] > tolerance:
         problems.append(
             f"ended away from the known W*: ||Wc - W*|| / ||W*|| = "
@@ -555,6 +571,25 @@ def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
         "min_eigenvalue": float(np.linalg.eigvalsh(0.5 * (M_w + M_w.T)).min()),
         "rate": float(np.abs(np.linalg.eigvals(A)).max()),
     }
+
+
+def structured_e2_block_min_eigenvalue(config: Config, weights: Any, e1: Any) -> float:
+    """min over the rows of e1 (m, n) of lambda_min of the e2 block sum_b W_b M_b(q),
+    q = qd(0) - e1, of weights W of the structured basis of a URDF arm (the believed model's
+    base-parameter directions M_b). At or below 0 the learned V is not positive definite in e2
+    there: not a stabilising solution."""
+    from .urdf import config_arm
+
+    arm = config_arm(config, model=True)
+    n = config.dof
+    _, columns, _ = arm.base_parameters()
+    w = np.asarray(weights, dtype=float)[n * (n + 1) // 2 :]
+    qd = desired_state(config, 0.0)[0]
+    lowest = math.inf
+    for row in np.atleast_2d(e1):
+        M_w = np.tensordot(w, arm.mass_regressor(qd - row)[columns], 1)
+        lowest = min(lowest, float(np.linalg.eigvalsh(0.5 * (M_w + M_w.T)).min()))
+    return lowest
 
 
 def divergence_causes(config: Config) -> list[str]:
