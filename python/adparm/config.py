@@ -1358,15 +1358,7 @@ class Config:
                     f"model.urdf: the model has n = {n_model} joints, the plant (plant.urdf) "
                     f"n = {n}; a model URDF must have the plant's joints"
                 )
-        basis = self.controller.basis
-        if isinstance(basis, str) and basis in URDF_REFUSED_BASES:
-            works = ", ".join(
-                repr(b) for b in (*BASIS_KINDS, *EXPRESSION_FAMILIES) if b not in URDF_REFUSED_BASES
-            )
-            raise ValueError(
-                f"controller.basis: {basis!r} is a basis of the built-in two-link arm; with "
-                f"plant.urdf use {works} or a list of terms (default {URDF_DEFAULT_BASIS!r})"
-            )
+        _refuse_two_link_basis(self.controller.basis)
 
     def _fit_to_arm(self) -> None:
         """Sized settings follow the arm's joint count n: for n != 2, a setting left at the
@@ -1468,7 +1460,11 @@ def _check_urdf_keys(data: Mapping[str, Any], plant: PlantConfig) -> None:
                     "(plant.urdf) takes its inertia and geometry from the URDF (leave "
                     f"{section}.{key} out)"
                 )
-    basis = data.get("controller", {}).get("basis")
+    _refuse_two_link_basis(data.get("controller", {}).get("basis"))
+
+
+def _refuse_two_link_basis(basis: Any) -> None:
+    """A URDF arm refuses the two-link bases (ValueError naming controller.basis)."""
     if isinstance(basis, str) and basis in URDF_REFUSED_BASES:
         works = ", ".join(
             repr(b) for b in (*BASIS_KINDS, *EXPRESSION_FAMILIES) if b not in URDF_REFUSED_BASES
