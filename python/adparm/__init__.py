@@ -4,6 +4,8 @@ A C++ core (adparm._core) integrates the closed loop of the paper; this package 
 runs it and returns NumPy arrays.
 """
 
+# first: finds Pinocchio's libraries where the extension's run path cannot (_libraries.py)
+from . import _libraries  # noqa: F401  # isort: skip
 from .bases import ExpressionBasis, basis_terms
 from .comparison import Comparison, compare
 from .config import (
