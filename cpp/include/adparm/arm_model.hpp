@@ -126,6 +126,29 @@ class TwoLinkArm {
   Parameters parameters_{};
 };
 
+// The terms of a dynamic-size arm (bounded types: no heap) and what every such arm does with them
+// the same way: size them once, and eq. (1).
+struct DynamicTerms {
+  JointMatrix<Dynamic> mass, mass_inverse, coriolis;
+  JointVector<Dynamic> gravity, friction;
+};
+
+inline void init_dynamic_terms(DynamicTerms& terms, Eigen::Index n) {
+  terms.mass.setZero(n, n);
+  terms.mass_inverse.setZero(n, n);
+  terms.coriolis.setZero(n, n);
+  terms.gravity.setZero(n);
+  terms.friction.setZero(n);
+}
+
+// ddq of eq. (1): M^-1 (tau - C dq - G - F - tau_d)
+inline JointVector<Dynamic> dynamic_acceleration(const DynamicTerms& terms,
+                                                 const JointVector<Dynamic>& dq,
+                                                 const JointVector<Dynamic>& tau,
+                                                 const JointVector<Dynamic>& tau_d) {
+  return terms.mass_inverse * (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+}
+
 // tau_d(t) = [a1 sin t, a2 cos t] (Section 4, with a = (0.1, 0.1)); for n joints, joint j
 // (from 1) has a_j sin t for odd j and a_j cos t for even j.
 template <int N = 2>

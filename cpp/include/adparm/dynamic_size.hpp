@@ -20,9 +20,7 @@ class DynamicArm {
   using Parameters = typename FixedArm::Parameters;
   using Joint = JointVector<Dynamic>;
 
-  struct Terms {
-    JointMatrix<Dynamic> mass, mass_inverse, coriolis;
-    JointVector<Dynamic> gravity, friction;
+  struct Terms : DynamicTerms {
     typename FixedArm::Terms fixed;  // the wrapped arm's own terms (cos q2, sin q2 for its bases)
   };
 
@@ -33,14 +31,7 @@ class DynamicArm {
   const FixedArm& fixed() const { return arm_; }
   int dof() const { return kFixedDof; }
 
-  void init_terms(Terms& terms) const {
-    const int n = kFixedDof;
-    terms.mass.setZero(n, n);
-    terms.mass_inverse.setZero(n, n);
-    terms.coriolis.setZero(n, n);
-    terms.gravity.setZero(n);
-    terms.friction.setZero(n);
-  }
+  void init_terms(Terms& terms) const { init_dynamic_terms(terms, kFixedDof); }
 
   void compute(const Joint& q, const Joint& dq, Terms& terms) const {
     using Fixed = JointVector<kFixedDof>;
@@ -55,8 +46,7 @@ class DynamicArm {
   // eq. (1), with the dynamic terms
   Joint acceleration(const Terms& terms, const Joint& dq, const Joint& tau,
                      const Joint& tau_d) const {
-    return terms.mass_inverse *
-           (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+    return dynamic_acceleration(terms, dq, tau, tau_d);
   }
 
  private:

@@ -27,10 +27,7 @@ class UrdfLoopArm {
   static constexpr int kDof = Dynamic;
   using Joint = JointVector<Dynamic>;
 
-  struct Terms {
-    JointMatrix<Dynamic> mass, mass_inverse, coriolis;
-    JointVector<Dynamic> gravity, friction;
-  };
+  using Terms = DynamicTerms;
 
   // Reads the URDF of `arm`; errors name `field` (plant.urdf or model.urdf).
   UrdfLoopArm(const UrdfArmSettings& arm, const std::string& field)
@@ -50,14 +47,7 @@ class UrdfLoopArm {
   int dof() const { return arm_.dof(); }
   const PinocchioArm& arm() const { return arm_; }
 
-  void init_terms(Terms& terms) const {
-    const Eigen::Index n = dof();
-    terms.mass.setZero(n, n);
-    terms.mass_inverse.setZero(n, n);
-    terms.coriolis.setZero(n, n);
-    terms.gravity.setZero(n);
-    terms.friction.setZero(n);
-  }
+  void init_terms(Terms& terms) const { init_dynamic_terms(terms, dof()); }
 
   // No heap allocation: Pinocchio fills the arm's buffers, copied into the bounded terms.
   void compute(const Joint& q, const Joint& dq, Terms& terms) const {
@@ -72,8 +62,7 @@ class UrdfLoopArm {
   // eq. (1)
   Joint acceleration(const Terms& terms, const Joint& dq, const Joint& tau,
                      const Joint& tau_d) const {
-    return terms.mass_inverse *
-           (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+    return dynamic_acceleration(terms, dq, tau, tau_d);
   }
 
  private:
