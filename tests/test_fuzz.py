@@ -399,7 +399,11 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         return [1, True, "", "/nonexistent/arm.urdf", "bad\0path", ["arm.urdf"]]
     if key == "gravity":  # gravity is a URDF arm's: refused with the two-link arm too
         return ["1", True, [0.0, 0.0], [0.0, 0.0, NAN], [0.0, 0.0, -9.81]]
-    if key in ("kind", "basis", "mode", "boundary"):
+    if key == "basis":  # a list of one built-in name is a valid (expression) basis
+        return [str(value) + "x", "", str(value).upper(), 1, None, True, [str(value) + "x"], []]
+    if key == "degree":  # only with the polynomial basis, and even
+        return [2, 4, "2", 3, -2, True, 1.5]
+    if key in ("kind", "mode", "boundary"):
         return [str(value) + "x", "", str(value).upper(), 1, None, True, [value]]
     if key in ("rise", "positive_e2"):
         return ["true", 1, 0, 1.0, None, [True]]
