@@ -260,13 +260,17 @@ class ClosedLoop {
       const Weights difference = actor_weights - critic_weights;
       Weights actor_gradient = Weights::Zero(k);
       const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
-        critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);  // (23)-(24)
+        if constexpr (kBasisSize == Dynamic)  // gathered in blocks (critic.hpp)
+          critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);  // (23)-(24)
+        else
+          critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         actor_.add_gradient(p.input_gradient, cost_.R_inverse(), e.omega, e.error, difference,
                             weight, actor_gradient);  // (26)
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
                               learn);
+      if constexpr (kBasisSize == Dynamic) critic_.flush(gamma, critic_rate, gamma_rate);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
         critic_rate = keep_e2_block_positive<Basis>(critic_weights, critic_rate,
                                                     actor_.settings().e2_margin, gamma);
