@@ -21,13 +21,14 @@
 //     PinocchioArm::compute (M, C, G, M^-1, F through Pinocchio) on examples/arms/planar_3link.urdf
 //     and example-robot-data's UR5 (skipped=... when that package is not found at build time);
 //     any heap allocation inside compute fails the bench.
-//   bench=urdf_loop arm=NAME dof=n basis=quadratic functions=K points=N steps=s repeats=3
+//   bench=urdf_loop arm=NAME dof=n basis=B functions=K points=N steps=s repeats=3
 //     ns_per_step=x heap_allocations=0 status=finished
 //     the closed loop of a URDF arm (PinocchioArm, dynamic sizes) with the quadratic expression
-//     basis, a set-point and N fixed extrapolation points (urdf_settings below): the planar 3-link
-//     arm and the UR5, N = 0 and 50, over min(simulated_seconds, 2 s); a run that does not finish
-//     or allocates in its steps fails the bench. bench/urdf_speed.py times the same 3-link case
-//     in NumPy + Pinocchio's Python bindings against this line.
+//     basis (B = quadratic) and the structured basis (B = structured, PinocchioStructuredBasis),
+//     a set-point and N fixed extrapolation points (urdf_settings below): the planar 3-link arm
+//     and the UR5, N = 0 and 50, over min(simulated_seconds, 2 s); a run that does not finish or
+//     allocates in its steps fails the bench. bench/urdf_speed.py times the same 3-link cases in
+//     NumPy + Pinocchio's Python bindings against these lines.
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (glibc only; -1 elsewhere or under
 // AddressSanitizer, which owns malloc).
@@ -62,6 +63,7 @@
 
 #include "adparm/batch.hpp"
 #include "adparm/pinocchio_arm.hpp"
+#include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/urdf_loop_arm.hpp"
 
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
@@ -270,8 +272,7 @@ adparm::ExpressionProgram quadratic_program(int joints) {
 // A basis of the URDF loop cases: its name, the basis for an arm, and the weights of
 // x^T blockdiag(I, M(qd)) x (qd = 0), the default initial value of Python's expression bases
 // (the actor then starts at u_hat = -R^-1 e2, which stabilises). Another basis is another such
-// struct and one line in run_urdf_loops() (e.g. a structured basis: weights [entries of K = I;
-// the arm's base inertial parameters]).
+// struct and one line in run_urdf_loops() (StructuredCase below).
 struct QuadraticCase {
   using Basis = adparm::ExpressionLoopBasis;
   static const char* name() { return "quadratic"; }
@@ -289,6 +290,19 @@ struct QuadraticCase {
     for (int i = 0; i < 2 * n; ++i)
       for (int j = i; j < 2 * n; ++j) weights[k++] = i == j ? P(i, i) : P(i, j) + P(j, i);
     return weights;
+  }
+};
+
+// The structured basis of the arm (pinocchio_structured_basis.hpp: e1_i e1_j and e2^T M_b(q) e2
+// per base inertial parameter; 13 functions on the planar 3-link arm, 55 on the UR5), from
+// Python's default initial weights, W* = [entries of K = I; the arm's base parameters]
+// (optimal_weights(I)), exact under urdf_settings' cost.
+struct StructuredCase {
+  using Basis = adparm::PinocchioStructuredBasis;
+  static const char* name() { return "structured"; }
+  static Basis basis(const adparm::PinocchioArm& arm) { return Basis(arm); }
+  static Eigen::VectorXd initial_weights(const adparm::PinocchioArm& arm) {
+    return Basis(arm).optimal_weights(Eigen::MatrixXd::Identity(arm.dof(), arm.dof()));
   }
 };
 
@@ -383,7 +397,7 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
                                    Eigen::VectorXd::Constant(1, 0.1));
     for (const long points : point_counts) {
       ok = time_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
-      // a structured basis: the same call with its Case
+      ok = time_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
     }
   }
   return ok;

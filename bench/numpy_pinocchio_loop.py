@@ -23,7 +23,10 @@ The laws are the core's (closed_loop.hpp), for a constant set-point qd:
   dJ = x^T Q x + u^T R u; classical RK4 with step dt. The believed model is the plant.
 
 A basis is a small object with ``size``, ``phi(x)`` and ``jacobian(x)`` (d phi / dx, size x 2n);
-``QuadraticBasis`` is every x_i x_j (i <= j) in the order of ``adparm.bases.quadratic_terms``.
+``QuadraticBasis`` is every x_i x_j (i <= j) in the order of ``adparm.bases.quadratic_terms``;
+``StructuredBasis`` is the structured basis of a URDF arm (e1_i e1_j, then e2^T M_b(q) e2 per base
+inertial parameter b: cpp/src/pinocchio_structured_basis.cpp) from Pinocchio's kinetic-energy
+regressor and kinematics derivatives, for a constant set-point qd.
 
 State layout (the core's): [q (n), dq (n), Wc (K), Wa (K), Gamma (K x K, column-major), nu (n,
 zero without RISE), J (1)]. ``NumpyPinocchioLoop(...).run(steps)`` returns the states at
@@ -56,6 +59,91 @@ class QuadraticBasis:
         J = np.zeros((self.size, self.state_dim))
         J[self.rows, self.i] = x[self.j]
         J[self.rows, self.j] += x[self.i]  # x_i^2: 2 x_i
+        return J
+
+
+def _cross(a: np.ndarray) -> np.ndarray:
+    """[a]x, the matrix of a x . (3 x 3)."""
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def energy_gradient_matrices() -> np.ndarray:
+    """A_k (10, 6, 6): the gradient of 2 T_k with respect to a body's local spatial velocity
+    (v, w) is A_k (v, w), for Pinocchio's parameter order m, mc_x, mc_y, mc_z, I_xx, I_xy, I_yy,
+    I_xz, I_yz, I_zz (2 T_k is a quadratic form: 2 T_k = 1/2 (v, w) . A_k (v, w))."""
+    A = np.zeros((10, 6, 6))
+    A[0, :3, :3] = 2.0 * np.eye(3)  # 2 T = |v|^2
+    for a in range(3):  # 2 T = 2 (v x w)_a: d/dv = 2 w x e_a, d/dw = 2 e_a x v
+        e = np.eye(3)[a]
+        A[1 + a, :3, 3:] = -2.0 * _cross(e)
+        A[1 + a, 3:, :3] = 2.0 * _cross(e)
+    pairs = [(0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2)]
+    for k, (a, b) in enumerate(pairs, start=4):
+        A[k, 3 + a, 3 + b] = A[k, 3 + b, 3 + a] = 2.0  # 2 T = w_a^2 or 2 w_a w_b
+    return A
+
+
+class StructuredBasis:
+    """phi(x) = [e1_i e1_j (i <= j, row by row); e2^T M_b(q) e2 for each base inertial parameter
+    b], q = qd - e1, with its exact Jacobian, at a constant set-point qd (the desired rate is
+    zero). ``values``, ``columns``: the base parameters and their indices into the arm's 10 n
+    inertial parameters (``adparm.UrdfArm(path).base_parameters()[:2]``, the core's choice).
+
+    e2^T M_k(q) e2 = 2 T_k(q, v = e2), T_k the kinetic-energy regressor's column k
+    (``pin.computeKineticEnergyRegressor``); its gradient with respect to the body's local
+    velocity V = (v, w) is A_k V, and d phi_b / d e1 = -A_k V dV/dq, d phi_b / d e2 = A_k V dV/dv
+    with dV/dq, dV/dv from ``pin.computeForwardKinematicsDerivatives`` and
+    ``pin.getJointVelocityDerivatives`` (LOCAL frame)."""
+
+    def __init__(self, arm: PinocchioArm, values, columns, qd) -> None:
+        n = arm.dof
+        self.arm, self.n = arm, n
+        self.qd = np.asarray(qd, dtype=float)
+        self.values = np.asarray(values, dtype=float)
+        self.columns = np.asarray(columns, dtype=int)
+        self.i, self.j = np.triu_indices(n)
+        self.e1_size = len(self.i)
+        self.size = self.e1_size + len(self.columns)
+        self.rows = np.arange(self.e1_size)
+        self.bodies = self.columns // 10 + 1  # Pinocchio's joint index of each base parameter
+        self.joints = sorted(set(self.bodies.tolist()))
+        self.A = energy_gradient_matrices()[self.columns % 10]  # (r, 6, 6)
+        self.zero = np.zeros(n)
+
+    def optimal_weights(self, K: np.ndarray) -> np.ndarray:
+        """W* = [K_ii on squares, K_ij + K_ji on cross terms; the base parameters]."""
+        K = np.asarray(K, dtype=float)
+        e1 = np.where(self.i == self.j, K[self.i, self.j], K[self.i, self.j] + K[self.j, self.i])
+        return np.concatenate([e1, self.values])
+
+    def _kinematics(self, x: np.ndarray):
+        e1, e2 = x[: self.n], x[self.n :]
+        c = self.arm.configuration(self.qd - e1)
+        return c, e2
+
+    def phi(self, x: np.ndarray) -> np.ndarray:
+        c, e2 = self._kinematics(x)
+        e1 = x[: self.n]
+        T = pin.computeKineticEnergyRegressor(self.arm.model, self.arm.data, c, e2)
+        return np.concatenate([e1[self.i] * e1[self.j], 2.0 * np.asarray(T).ravel()[self.columns]])
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        n = self.n
+        model, data = self.arm.model, self.arm.data
+        c, e2 = self._kinematics(x)
+        pin.computeForwardKinematicsDerivatives(model, data, c, e2, self.zero)
+        V = np.zeros((model.njoints, 6))
+        dV = np.zeros((model.njoints, 6, 2 * n))  # [d V / d e1, d V / d e2] = [-dV/dq, dV/dv]
+        for joint in self.joints:
+            V[joint] = data.v[joint].vector
+            dq, dv = pin.getJointVelocityDerivatives(model, data, joint, pin.LOCAL)
+            dV[joint, :, :n] = -dq
+            dV[joint, :, n:] = dv
+        gradients = np.einsum("bkl,bl->bk", self.A, V[self.bodies])  # (r, 6)
+        J = np.zeros((self.size, 2 * n))
+        J[self.rows, self.i] = x[self.j]
+        J[self.rows, self.j] += x[self.i]
+        J[self.e1_size :] = np.einsum("bk,bkm->bm", gradients, dV[self.bodies])
         return J
 
 
@@ -125,16 +213,20 @@ class LoopSettings:
     dt: float = 1e-3
 
 
-def bench_settings(arm: PinocchioArm, basis: QuadraticBasis, points: int) -> LoopSettings:
+def bench_settings(arm: PinocchioArm, basis, points: int) -> LoopSettings:
     """The C++ bench's URDF loop case (bench_closed_loop.cpp, urdf_settings): qd = 0 from
     q0 = 0.2 rad at rest, K = I, alpha1 = 2 I, R = I, Q = [[K alpha1 + alpha1^T K, -K],
     [-K, R^-1]], no disturbance, eta_c = 1 (the quadratic basis diverges with the paper's 800),
-    initial weights of x^T blockdiag(I, M(0)) x (quadratic basis)."""
+    initial weights of x^T blockdiag(I, M(0)) x (quadratic basis) or W* = [entries of K = I; the
+    base parameters] (structured basis, Python's default)."""
     n = arm.dof
     identity = np.eye(n)
-    M0 = arm.terms(np.zeros(n), np.zeros(n))[0]
-    P = np.block([[identity, np.zeros((n, n))], [np.zeros((n, n)), M0]])
-    weights = np.where(basis.i == basis.j, P[basis.i, basis.j], 2.0 * P[basis.i, basis.j])
+    if isinstance(basis, StructuredBasis):
+        weights = basis.optimal_weights(identity)
+    else:
+        M0 = arm.terms(np.zeros(n), np.zeros(n))[0]
+        P = np.block([[identity, np.zeros((n, n))], [np.zeros((n, n)), M0]])
+        weights = np.where(basis.i == basis.j, P[basis.i, basis.j], 2.0 * P[basis.i, basis.j])
     return LoopSettings(
         q0=np.full(n, 0.2),
         qd=np.zeros(n),

@@ -3,10 +3,12 @@
 # and libstdc++'s assertions on: builds only the bench in build-sanitize/ (-DADPARM_SANITIZE=ON, see
 # CMakeLists.txt) and runs it briefly with --checks: the paper loop, fixed extrapolation points, the
 # 16-run batch on 1 and 2 threads, the URDF arms in the closed loop (50 steps of the planar 3-link
-# arm and the UR5, N = 0 and 10), then local/grid points, tracking, the other controllers, a
-# diverging run, chunked and threaded runs, a streamed batch (window 2) stopped part-way and resumed,
-# and invalid settings that must throw; then the expression basis bench (adparm_bench_basis
-# --checks: exactness, no heap allocation per evaluation, invalid programs and sizes).
+# arm and the UR5, quadratic and structured bases, N = 0 and 10), then local/grid points,
+# tracking, the other controllers, a diverging run, chunked and threaded runs, a streamed batch
+# (window 2) stopped part-way and resumed, and invalid settings that must throw; then the expression basis bench (adparm_bench_basis
+# --checks: exactness, no heap allocation per evaluation, invalid programs and sizes) and the
+# structured basis bench (adparm_bench_structured_basis, 2000 evaluations per arm: the HJB error at
+# W* at round-off, copies evaluate alike, no heap allocation).
 # Any finding stops the bench and makes this script exit non-zero.
 #
 # Usage: bench/sanitize.sh [simulated_seconds [points ...]]   (default: 1 s, N = 0 and 10)
@@ -22,7 +24,7 @@ if [ ! -f "$build/CMakeCache.txt" ] && command -v ninja >/dev/null; then
   generator=(-G Ninja)
 fi
 cmake -S "$root" -B "$build" ${generator[@]+"${generator[@]}"} -DADPARM_SANITIZE=ON -DADPARM_BUILD_BENCH=ON
-cmake --build "$build" --target adparm_bench adparm_bench_basis
+cmake --build "$build" --target adparm_bench adparm_bench_basis adparm_bench_structured_basis
 built=$SECONDS
 
 # LeakSanitizer works in this container (it needs to stop the threads with ptrace; where it cannot,
@@ -37,6 +39,8 @@ status=0
 # The expression basis: bit for bit against the hand-written bases, no allocation (ASan's hook
 # counts), then invalid programs and sizes.
 "$build/adparm_bench_basis" --checks 20000 || status=$?
+# The structured basis of URDF arms: HJB error at W*, copies, no allocation (ASan's hook counts).
+"$build/adparm_bench_structured_basis" 2000 || status=$?
 
 echo "sanitize: build $((built - start)) s, run $((SECONDS - built)) s, exit status $status" >&2
 exit "$status"

@@ -3,13 +3,14 @@ NumPy + Pinocchio's Python bindings (bench/numpy_pinocchio_loop.py)?
 
 Runs, in one invocation:
 - the C++ bench's URDF loop cases (``adparm_bench --urdf SECONDS N...``: the planar 3-link arm of
-  examples/arms and example-robot-data's UR5, quadratic expression basis, N fixed extrapolation
-  points; best of 3), and prints its lines;
-- the NumPy + Pinocchio loop of the same planar 3-link case (same settings, basis and N: see
-  ``numpy_pinocchio_loop.bench_settings``) over --steps steps, one wall time;
-and prints one machine-readable line per N:
-bench=urdf_speed arm=planar_3link points=N functions=21 ns_per_step_core=... ns_per_step_numpy=...
-ratio=...   (ratio = NumPy ns/step / core ns/step, measured in this run)
+  examples/arms and example-robot-data's UR5, the quadratic expression basis and the structured
+  basis, N fixed extrapolation points; best of 3), and prints its lines;
+- the NumPy + Pinocchio loop of the same planar 3-link cases (same settings, basis and N: see
+  ``numpy_pinocchio_loop.bench_settings``; the structured basis with the core's base parameters)
+  over --steps steps, one wall time each;
+and prints one machine-readable line per basis and N:
+bench=urdf_speed arm=planar_3link basis=B points=N functions=K ns_per_step_core=...
+ns_per_step_numpy=... ratio=...   (ratio = NumPy ns/step / core ns/step, measured in this run)
 
     python bench/urdf_speed.py [--bench build/adparm_bench] [--points 0 50] [--steps 300]
         [--seconds 2]
@@ -53,11 +54,17 @@ def field(line: str, key: str) -> str:
     return match.group(1)
 
 
-def numpy_ns_per_step(points: int, steps: int) -> tuple[float, int, bool]:
-    """ns per RK4 step of the NumPy + Pinocchio loop on the planar 3-link case, the basis size,
-    and whether the states stayed finite."""
+def numpy_ns_per_step(basis_name: str, points: int, steps: int) -> tuple[float, int, bool]:
+    """ns per RK4 step of the NumPy + Pinocchio loop on the planar 3-link case with the basis
+    ("quadratic" or "structured"), the basis size, and whether the states stayed finite."""
     arm = npl.PinocchioArm(PLANAR_3LINK, [0.0, 0.0, -9.81], coulomb=0.0, viscous=0.1)
-    basis = npl.QuadraticBasis(arm.dof)
+    if basis_name == "structured":
+        import adparm  # the core's base parameters (the same functions in the same order)
+
+        values, columns, _ = adparm.UrdfArm(PLANAR_3LINK).base_parameters()
+        basis = npl.StructuredBasis(arm, values, columns, np.zeros(arm.dof))
+    else:
+        basis = npl.QuadraticBasis(arm.dof)
     loop = npl.NumpyPinocchioLoop(arm, basis, npl.bench_settings(arm, basis, points))
     start = time.perf_counter()
     states = loop.run(steps)
@@ -81,27 +88,32 @@ def main(argv: list[str] | None = None) -> int:
     for line in lines:
         print(line)
     status = 0
-    for points in args.points:
-        core = [
-            line
-            for line in lines
-            if field(line, "arm") == "planar_3link" and int(field(line, "points")) == points
-        ]
-        if len(core) != 1:
-            raise SystemExit(f"no planar_3link line with points={points} from the bench")
-        ns_core = float(field(core[0], "ns_per_step"))
-        ns_numpy, size, finite = numpy_ns_per_step(points, args.steps)
-        if size != int(field(core[0], "functions")):
-            raise SystemExit("the NumPy loop's basis size differs from the bench's")
-        ratio = ns_numpy / ns_core
-        print(
-            f"bench=urdf_speed arm=planar_3link points={points} functions={size} "
-            f"ns_per_step_core={ns_core:.1f} ns_per_step_numpy={ns_numpy:.1f} "
-            f"ratio={ratio:.1f} numpy_finite={int(finite)}"
-        )
-        sys.stdout.flush()
-        if not finite:
-            status = 1
+    for basis in ("quadratic", "structured"):
+        for points in args.points:
+            core = [
+                line
+                for line in lines
+                if field(line, "arm") == "planar_3link"
+                and field(line, "basis") == basis
+                and int(field(line, "points")) == points
+            ]
+            if len(core) != 1:
+                raise SystemExit(
+                    f"no planar_3link {basis} line with points={points} from the bench"
+                )
+            ns_core = float(field(core[0], "ns_per_step"))
+            ns_numpy, size, finite = numpy_ns_per_step(basis, points, args.steps)
+            if size != int(field(core[0], "functions")):
+                raise SystemExit("the NumPy loop's basis size differs from the bench's")
+            ratio = ns_numpy / ns_core
+            print(
+                f"bench=urdf_speed arm=planar_3link basis={basis} points={points} "
+                f"functions={size} ns_per_step_core={ns_core:.1f} "
+                f"ns_per_step_numpy={ns_numpy:.1f} ratio={ratio:.1f} numpy_finite={int(finite)}"
+            )
+            sys.stdout.flush()
+            if not finite:
+                status = 1
     return status
 
 

@@ -192,3 +192,101 @@ def test_numpy_pinocchio_arm_matches_the_core_urdf_arm(name: str, rng) -> None:
         terms = core.terms(q, dq)
         for key, value in zip("MCGF", ours.terms(q, dq), strict=True):
             np.testing.assert_allclose(value, terms[key], rtol=1e-12, atol=1e-12, err_msg=key)
+
+
+# --- the structured basis in the NumPy + Pinocchio loop ---------------------------------------
+
+PLANAR_EXAMPLE = TWO_LINK_URDF.parents[1] / "planar_3link.toml"
+
+
+@pytest.mark.parametrize("name", ["planar_3link", "spatial_3dof", "ur5"])
+def test_numpy_structured_basis_matches_the_core(name: str, rng) -> None:
+    # phi from Pinocchio's kinetic-energy regressor, the Jacobian from its kinematics derivatives
+    # (Python bindings) against the core's structured basis, with the core's base parameters
+    path = (
+        adparm.example_robot_urdf("ur5") if name == "ur5" else TWO_LINK_URDF.parent / f"{name}.urdf"
+    )
+    core = adparm.UrdfArm(path)
+    values, columns, _ = core.base_parameters()
+    arm = numpy_pinocchio_loop.PinocchioArm(path, [0.0, 0.0, -9.81])
+    qd = rng.uniform(-1.0, 1.0, arm.dof)
+    ours = numpy_pinocchio_loop.StructuredBasis(arm, values, columns, qd)
+    assert ours.size == len(core.structured_names())
+    np.testing.assert_array_equal(
+        ours.optimal_weights(np.eye(arm.dof)), core.structured_weights(np.eye(arm.dof))
+    )
+    for x in rng.uniform(-1.0, 1.0, (5, 2 * arm.dof)):
+        phi, jacobian, _ = core.structured_basis(x, qd)
+        np.testing.assert_allclose(ours.phi(x), phi, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(ours.jacobian(x), jacobian, rtol=1e-12, atol=1e-12)
+
+
+def structured_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinocchioLoop:
+    """The NumPy + Pinocchio loop of a URDF ``config`` (constant set-point, no RISE, no probing)
+    with the structured basis of the core's base parameters."""
+    p, c, a, e = config.plant, config.critic, config.actor, config.extrapolation
+    n = config.dof
+    arm = numpy_pinocchio_loop.PinocchioArm(
+        p.urdf, p.resolved_gravity, coulomb=p.coulomb, viscous=p.viscous
+    )
+    values, columns, _ = adparm.UrdfArm(p.urdf).base_parameters()
+    qd = np.broadcast_to(np.asarray(config.task.qd, dtype=float), (n,))
+    basis = numpy_pinocchio_loop.StructuredBasis(arm, values, columns, qd)
+    settings = numpy_pinocchio_loop.LoopSettings(
+        q0=np.array(config.task.q0, dtype=float),
+        dq0=np.broadcast_to(np.asarray(config.task.dq0, dtype=float), (n,)).copy(),
+        qd=qd.copy(),
+        critic_weights=config.initial_weights("critic_weights"),
+        actor_weights=config.initial_weights("actor_weights"),
+        Q=np.array(config.cost.Q, dtype=float),
+        R=np.array(config.cost.R, dtype=float),
+        alpha1=np.array(config.control.alpha1, dtype=float),
+        disturbance=np.broadcast_to(np.asarray(p.disturbance, dtype=float), (n,)).copy(),
+        eta_c=c.eta_c,
+        nu=c.nu,
+        gamma0=c.gamma0,
+        epsilon_T=config.resolved_epsilon_T,
+        eta_a1=a.eta_a1,
+        eta_a2=a.eta_a2,
+        weight_bound=a.weight_bound,
+        points=e.points,
+        box=np.broadcast_to(np.asarray(e.box, dtype=float), (2 * n,)).copy(),
+        seed=e.seed,
+        dt=config.sim.dt,
+    )
+    return numpy_pinocchio_loop.NumpyPinocchioLoop(arm, basis, settings)
+
+
+@pytest.mark.parametrize("points", [0, 10])
+def test_numpy_pinocchio_loop_matches_core_with_the_structured_basis(points: int) -> None:
+    # examples/planar_3link.toml (structured basis, default weights K = I and the arm's base
+    # parameters; W* has K = diag(2, 1, 0.5)) without RISE, through the NumPy loop and the core
+    steps = 400
+    config = adparm.load_config(PLANAR_EXAMPLE).updated(
+        {
+            "controller": {"basis": "structured", "rise": False},
+            "extrapolation": {"points": points},
+            "sim": {"T": steps * 1e-3},
+        }
+    )
+    n = config.dof
+    states = structured_loop_of(config).run(steps)
+    result = adparm.simulate(config)
+    index = np.rint(np.asarray(result.t) / config.sim.dt).astype(int)
+    assert index[-1] == steps
+    K = len(adparm.basis_names(config))
+    assert K == 13
+    fields = {
+        "q": slice(0, n),
+        "dq": slice(n, 2 * n),
+        "critic_weights": slice(2 * n, 2 * n + K),
+        "actor_weights": slice(2 * n + K, 2 * n + 2 * K),
+        "cost": -1,
+    }
+    for name, entries in fields.items():
+        ours, core = states[index][..., entries], np.asarray(getattr(result, name))
+        scale = max(1.0, float(np.abs(core).max()))
+        difference = float(np.abs(ours - core).max())
+        assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
+    # the critic learns (its e1 block moves towards K = diag(2, 1, 0.5))
+    assert np.abs(states[-1, 2 * n : 2 * n + 6] - states[0, 2 * n : 2 * n + 6]).max() > 0.01

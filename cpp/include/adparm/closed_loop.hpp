@@ -155,7 +155,8 @@ class ClosedLoop {
         controller_(settings.controller, dof_),
         trajectory_(settings.task.qd, dof_),
         extrapolation_(settings.extrapolation, trajectory_.is_constant(), model),
-        probe_(settings.probe, dof_) {
+        probe_(settings.probe, dof_),
+        gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -260,13 +261,21 @@ class ClosedLoop {
       const Weights difference = actor_weights - critic_weights;
       Weights actor_gradient = Weights::Zero(k);
       const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
-        critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);  // (23)-(24)
+        if constexpr (kBasisSize == Dynamic) {  // (23)-(24), gathered in blocks (critic.hpp)
+          if (gathers_)
+            critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
+          else
+            critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
+        } else {
+          critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
+        }
         actor_.add_gradient(p.input_gradient, cost_.R_inverse(), e.omega, e.error, difference,
                             weight, actor_gradient);  // (26)
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
                               learn);
+      if constexpr (kBasisSize == Dynamic) critic_.flush(gamma, critic_rate, gamma_rate);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
         critic_rate = keep_e2_block_positive<Basis>(critic_weights, critic_rate,
                                                     actor_.settings().e2_margin, gamma);
@@ -343,6 +352,10 @@ class ClosedLoop {
   RiseT<kDof> rise_;
   SinusoidalDisturbanceT<kDof> disturbance_;
   ProbingSignalT<kDof> probe_;
+  // Dynamic sizes: the critic gathers the samples of an evaluation (critic.hpp) when there are
+  // extrapolation points or more than 24 functions; one small sample goes through add_rates,
+  // whose coefficient-wise products beat a call of Eigen's matrix-vector kernel.
+  bool gathers_;
   State initial_state_;
   mutable Terms plant_terms_, believed_terms_;  // dynamic sizes: the terms' buffers
 };

@@ -7,8 +7,13 @@
 // Gamma is reset to gamma0 I when its smallest eigenvalue falls below epsilon_T. The test needs no
 // eigen-decomposition: lambda_min(Gamma) >= epsilon_T exactly when Gamma - epsilon_T I has a
 // Cholesky factor.
+// Dynamic sizes (K = Eigen::Dynamic, the URDF arms) gather the samples (trajectory and points) in
+// blocks (gather/flush): Gamma [omega_1 ... omega_s] is then one matrix product and the s rank-one
+// terms of dGamma one rank-s product, instead of s matrix-vector and s outer products (the same
+// sums up to round-off; the fixed-size path keeps add_rates).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "adparm/types.hpp"
@@ -30,10 +35,22 @@ class Critic {
   // Gamma lives in the loop's state vector (a Map of this type); plain, not bounded.
   using Covariance = Eigen::Matrix<double, kSize, kSize>;
 
+  // Samples per gathered block (dynamic sizes): Gamma times a block is a K x K x kBlock product,
+  // whose packing buffers stay on the stack (Eigen's GEMM) for every K <= kMaxBasisSize.
+  static constexpr Eigen::Index kBlock = 64;
+  using Block = Eigen::Matrix<double, kSize, Eigen::Dynamic>;  // K x kBlock, sized once
+
   Critic() = default;
   // `size`: the basis size K (== kSize when it is fixed).
   Critic(const CriticSettings& settings, Eigen::Index size)
       : settings_(settings), factor_(size, size) {
+    if constexpr (kSize == Dynamic) {
+      omegas_.setZero(size, kBlock);
+      gamma_omegas_.setZero(size, kBlock);
+      scaled_.setZero(size, kBlock);
+      coefficients_.setZero(kBlock);
+      weights_.setZero(kBlock);
+    }
     check_non_negative(settings.eta_c, "critic.eta_c");
     check_non_negative(settings.nu, "critic.nu");
     check_positive(settings.gamma0, "critic.gamma0");
@@ -58,15 +75,71 @@ class Critic {
     gamma_rate.noalias() -= (gain * gamma_omega).lazyProduct(gamma_omega.transpose());
   }
 
+  // Dynamic sizes: the same shares as add_rates, gathered (omega, eps and w of one sample) and
+  // added to the rates by flush(), which gather calls when a block is full. Call flush() after
+  // the last sample of an evaluation, with the same gamma and rates.
+  template <class CovarianceIn, class CovarianceOut>
+  void gather(const Vector& omega, double hjb_error, const CovarianceIn& gamma, double weight,
+              Vector& weight_rate, CovarianceOut&& gamma_rate) const {
+    static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
+    omegas_.col(gathered_) = omega;
+    coefficients_[gathered_] = hjb_error;
+    weights_[gathered_] = weight;
+    if (++gathered_ == kBlock) flush(gamma, weight_rate, gamma_rate);
+  }
+
+  // Adds the gathered samples' shares (eqs. 23-24) to the rates, then empties the block:
+  //   G = Gamma [omega_1 ... omega_s]                            (one product)
+  //   g_i = w_i eta_c / (1 + nu omega_i^T G_i)
+  //   weight_rate -= G [g_i eps_i],  gamma_rate -= [g_i G_i] G^T   (rank s)
+  template <class CovarianceIn, class CovarianceOut>
+  void flush(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut&& gamma_rate) const {
+    static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
+    const Eigen::Index s = gathered_;
+    if (s == 0) return;
+    gathered_ = 0;
+    const auto omegas = omegas_.leftCols(s);
+    auto gamma_omegas = gamma_omegas_.leftCols(s);
+    auto scaled = scaled_.leftCols(s);
+    gamma_omegas.noalias() = gamma * omegas;
+    for (Eigen::Index i = 0; i < s; ++i) {
+      const double gain = weights_[i] * settings_.eta_c /
+                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
+      coefficients_[i] *= gain;
+      scaled.col(i) = gain * gamma_omegas.col(i);
+    }
+    weight_rate.noalias() -= gamma_omegas * coefficients_.head(s);
+    if (s == 1)  // an outer product (no GEMM for one column)
+      gamma_rate.noalias() -= scaled.col(0).lazyProduct(gamma_omegas.col(0).transpose());
+    else
+      gamma_rate.noalias() -= scaled * gamma_omegas.transpose();
+  }
+
   // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): an in-place Cholesky
   // factorisation of Gamma - epsilon_T I (lower triangle; Gamma is symmetric), fixed size, that
   // stops at the first pivot that is not positive: about N^3 / 6 multiply-adds, no
   // eigen-decomposition. A NaN or infinity reaches a pivot and fails the test.
+  // Dynamic sizes above 24 functions factor column by column (left-looking: column j is updated
+  // by one matrix-vector product with the columns before it, contiguous in the column-major
+  // buffer); smaller ones use the loop below, whose short rows stay in cache.
   template <class CovarianceIn>
   bool needs_reset(const CovarianceIn& gamma) const {
     const Eigen::Index n = factor_.rows();
     Covariance& factor = factor_;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
     factor = gamma;                // (a buffer sized once: no allocation)
+    if constexpr (kSize == Dynamic) {
+      if (n > 24) {
+        for (Eigen::Index j = 0; j < n; ++j) {
+          if (j > 0)
+            factor.col(j).tail(n - j).noalias() -=
+                factor.block(j, 0, n - j, j) * factor.row(j).head(j).transpose();
+          const double pivot = factor(j, j) - settings_.epsilon_T;
+          if (!(pivot > 0.0)) return true;  // also catches NaN
+          factor.col(j).tail(n - j - 1) *= 1.0 / std::sqrt(pivot);
+        }
+        return false;
+      }
+    }
     for (Eigen::Index j = 0; j < n; ++j) {
       double pivot = factor(j, j) - settings_.epsilon_T;
       for (Eigen::Index k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
@@ -93,6 +166,11 @@ class Critic {
  private:
   CriticSettings settings_{};
   mutable Covariance factor_;  // needs_reset's work buffer
+  // gather/flush (dynamic sizes): omega_i, Gamma omega_i, g_i Gamma omega_i, eps_i (then
+  // g_i eps_i), w_i; gathered_ samples so far. Work buffers of one evaluation.
+  mutable Block omegas_, gamma_omegas_, scaled_;
+  mutable Eigen::VectorXd coefficients_, weights_;
+  mutable Eigen::Index gathered_ = 0;
 };
 
 }  // namespace adparm
