@@ -269,7 +269,7 @@ class SimulationResult:
         shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
         joints = self.config.dof if isinstance(self.config, Config) else 2
         shapes.update({name: (n, joints) for name in _ARRAYS_2})
-        size = len(self.config.initial_weights()) if isinstance(self.config, Config) else 8
+        size = self.config.basis_size if isinstance(self.config, Config) else 8
         shapes.update({name: (n, size) for name in _ARRAYS_N})
         for name, shape in shapes.items():
             array = _read_only_float(getattr(self, name))
@@ -525,7 +525,7 @@ def _recording_bytes(config: Config) -> int:
     """Bytes of one copy of the recording of ``config`` (all its rows)."""
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
-    width = _ROW_VALUES + 2 * len(config.initial_weights())
+    width = _ROW_VALUES + 2 * config.basis_size
     return 8 * rows * width
 
 
