@@ -161,10 +161,12 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (8,) or (6,)
+    ndarray, shape (8,), (6,) or (config.basis_size,)
         In the order of ``adparm.basis_names(config)``: W* = [K11, K22, 2 K12, s p1, 2 s p3,
         s p2, 2 s p2, 2 s p3] for the paper and augmented bases (the paper's example:
-        [4, 6, -8, 5, 2, 1, 2, 2]), [K11, 2 K12, K22, s p1, s p2, s p3] for the structured basis.
+        [4, 6, -8, 5, 2, 1, 2, 2]), [K11, 2 K12, K22, s p1, s p2, s p3] for the structured basis;
+        for the structured basis of a URDF arm [K_ii on squares, 2 K_ij on cross terms; s beta]
+        with beta the believed model's base inertial parameters (``UrdfArm.base_parameters``).
 
     Raises
     ------
