@@ -30,8 +30,8 @@
 //     allocates in its steps fails the bench. bench/urdf_speed.py times the same 3-link cases in
 //     NumPy + Pinocchio's Python bindings against these lines.
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
-// heap_allocations counts malloc calls during the timed loop (glibc only; -1 elsewhere or under
-// AddressSanitizer, which owns malloc).
+// heap_allocations counts malloc calls during the timed loop (bench/heap_counter.hpp: glibc's
+// malloc interposed, or AddressSanitizer's allocation hook; -1 elsewhere).
 //
 // --checks (for bench/sanitize.sh, untimed) then also runs what the measurements leave out, over
 // the same horizon, and exits 1 if any check fails:
@@ -65,20 +65,7 @@
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/urdf_loop_arm.hpp"
-
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
-#define ADPARM_COUNT_MALLOC 1
-extern "C" void* __libc_malloc(std::size_t size);
-namespace {
-bool counting = false;
-long allocations = 0;
-}  // namespace
-// Interposes malloc for this executable (operator new and Eigen both end here).
-extern "C" void* malloc(std::size_t size) {
-  if (counting) ++allocations;
-  return __libc_malloc(size);
-}
-#endif
+#include "heap_counter.hpp"
 
 namespace {
 
@@ -148,17 +135,11 @@ void use_quadratic_expression_basis(adparm::Settings& s) {
 LoopTiming time_loop(const adparm::Settings& settings) {
   adparm::AnySimulation simulation(settings);
   LoopTiming timing;
-#ifdef ADPARM_COUNT_MALLOC
-  allocations = 0;
-  counting = true;
-#endif
+  start_counting();
   const auto start = Clock::now();
   timing.steps = simulation.advance(simulation.steps());
   timing.seconds = seconds_since(start);
-#ifdef ADPARM_COUNT_MALLOC
-  counting = false;
-  timing.heap_allocations = allocations;
-#endif
+  timing.heap_allocations = stop_counting();
   timing.critic_error = critic_error(simulation);
   timing.status = simulation.status();
   return timing;
@@ -189,10 +170,7 @@ bool time_pinocchio_arm(const char* name, const std::string& path) {
   long heap_allocations = -1;
   double checksum = 0.0;
   for (int r = 0; r < 3; ++r) {
-#ifdef ADPARM_COUNT_MALLOC
-    allocations = 0;
-    counting = true;
-#endif
+    start_counting();
     const auto start = Clock::now();
     for (long i = 0; i < computes; ++i) {
       q.array() += 1e-4;
@@ -201,10 +179,7 @@ bool time_pinocchio_arm(const char* name, const std::string& path) {
       checksum += ddq[0];
     }
     const double seconds = seconds_since(start);
-#ifdef ADPARM_COUNT_MALLOC
-    counting = false;
-    heap_allocations = std::max(heap_allocations, allocations);
-#endif
+    heap_allocations = std::max(heap_allocations, stop_counting());
     if (r == 0 || seconds < best) best = seconds;
   }
   // A copy has its own work space and gives the same terms.
@@ -356,17 +331,11 @@ bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long 
   for (int r = 0; r < repeats; ++r) {
     Simulation simulation(settings, loop_arm, loop_arm, true, basis);
     LoopTiming timing;
-#ifdef ADPARM_COUNT_MALLOC
-    allocations = 0;
-    counting = true;
-#endif
+    start_counting();
     const auto start = Clock::now();
     timing.steps = simulation.advance(simulation.steps());
     timing.seconds = seconds_since(start);
-#ifdef ADPARM_COUNT_MALLOC
-    counting = false;
-    timing.heap_allocations = allocations;
-#endif
+    timing.heap_allocations = stop_counting();
     timing.status = simulation.status();
     if (r == 0 || timing.seconds < best.seconds) best = timing;
   }

@@ -28,53 +28,11 @@
 #include "adparm/hjb.hpp"
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
-
-#if defined(__SANITIZE_ADDRESS__)
-#define ADPARM_COUNT_MALLOC 1
-extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*,
-                                                                             std::size_t),
-                                                         void (*free_hook)(const volatile void*));
-namespace {
-bool counting = false;
-long allocations = 0;
-void count_malloc(const volatile void*, std::size_t) {
-  if (counting) ++allocations;
-}
-void ignore_free(const volatile void*) {}
-const int hooks_installed = __sanitizer_install_malloc_and_free_hooks(count_malloc, ignore_free);
-}  // namespace
-#elif defined(__GLIBC__)
-#define ADPARM_COUNT_MALLOC 1
-extern "C" void* __libc_malloc(std::size_t size);
-namespace {
-bool counting = false;
-long allocations = 0;
-}  // namespace
-// Interposes malloc for this executable and the libraries it loads (libpinocchio too).
-extern "C" void* malloc(std::size_t size) {
-  if (counting) ++allocations;
-  return __libc_malloc(size);
-}
-#endif
+#include "heap_counter.hpp"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-void start_counting() {
-#ifdef ADPARM_COUNT_MALLOC
-  allocations = 0;
-  counting = true;
-#endif
-}
-long stop_counting() {
-#ifdef ADPARM_COUNT_MALLOC
-  counting = false;
-  return allocations;
-#else
-  return -1;
-#endif
-}
 
 using Basis = adparm::PinocchioStructuredBasis;
 using Points = std::vector<adparm::ErrorVector<adparm::Dynamic>>;
