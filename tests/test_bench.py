@@ -90,25 +90,24 @@ PINOCCHIO_FIELDS = {
 }
 
 
-def pinocchio_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinocchioLoop:
-    """The NumPy + Pinocchio loop of the built-in two-link arm of ``config``: the same arm from
-    examples/arms/two_link.urdf with gravity [0, 0, -9.8] and the config's friction."""
-    p = config.plant
-    arm = numpy_pinocchio_loop.PinocchioArm(
-        TWO_LINK_URDF, [0.0, 0.0, -9.8], coulomb=p.coulomb, viscous=p.viscous
-    )
-    basis = numpy_pinocchio_loop.QuadraticBasis(arm.dof)
-    c, a, e = config.critic, config.actor, config.extrapolation
-    settings = numpy_pinocchio_loop.LoopSettings(
-        q0=np.array(config.task.q0),
-        dq0=np.array(config.task.dq0),
-        qd=np.array(config.task.qd, dtype=float),
+def loop_settings(config: adparm.Config) -> numpy_pinocchio_loop.LoopSettings:
+    """The NumPy + Pinocchio loop's settings of ``config`` (n joints; sized settings broadcast)."""
+    p, c, a, e = config.plant, config.critic, config.actor, config.extrapolation
+    n = config.dof
+
+    def sized(value: object, size: int) -> np.ndarray:
+        return np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy()
+
+    return numpy_pinocchio_loop.LoopSettings(
+        q0=sized(config.task.q0, n),
+        dq0=sized(config.task.dq0, n),
+        qd=sized(config.task.qd, n),
         critic_weights=config.initial_weights("critic_weights"),
         actor_weights=config.initial_weights("actor_weights"),
-        Q=np.array(config.cost.Q),
-        R=np.array(config.cost.R),
-        alpha1=np.array(config.control.alpha1),
-        disturbance=np.array(p.disturbance),
+        Q=np.array(config.cost.Q, dtype=float),
+        R=np.array(config.cost.R, dtype=float),
+        alpha1=np.array(config.control.alpha1, dtype=float),
+        disturbance=sized(p.disturbance, n),
         eta_c=c.eta_c,
         nu=c.nu,
         gamma0=c.gamma0,
@@ -117,11 +116,21 @@ def pinocchio_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinocc
         eta_a2=a.eta_a2,
         weight_bound=a.weight_bound,
         points=e.points,
-        box=np.broadcast_to(np.asarray(e.box, dtype=float), (4,)).copy(),
+        box=sized(e.box, 2 * n),
         seed=e.seed,
         dt=config.sim.dt,
     )
-    return numpy_pinocchio_loop.NumpyPinocchioLoop(arm, basis, settings)
+
+
+def pinocchio_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinocchioLoop:
+    """The NumPy + Pinocchio loop of the built-in two-link arm of ``config``: the same arm from
+    examples/arms/two_link.urdf with gravity [0, 0, -9.8] and the config's friction."""
+    p = config.plant
+    arm = numpy_pinocchio_loop.PinocchioArm(
+        TWO_LINK_URDF, [0.0, 0.0, -9.8], coulomb=p.coulomb, viscous=p.viscous
+    )
+    basis = numpy_pinocchio_loop.QuadraticBasis(arm.dof)
+    return numpy_pinocchio_loop.NumpyPinocchioLoop(arm, basis, loop_settings(config))
 
 
 def pinocchio_config(**changes) -> adparm.Config:
@@ -224,36 +233,13 @@ def test_numpy_structured_basis_matches_the_core(name: str, rng) -> None:
 def structured_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinocchioLoop:
     """The NumPy + Pinocchio loop of a URDF ``config`` (constant set-point, no RISE, no probing)
     with the structured basis of the core's base parameters."""
-    p, c, a, e = config.plant, config.critic, config.actor, config.extrapolation
-    n = config.dof
+    p = config.plant
     arm = numpy_pinocchio_loop.PinocchioArm(
         p.urdf, p.resolved_gravity, coulomb=p.coulomb, viscous=p.viscous
     )
     values, columns, _ = adparm.UrdfArm(p.urdf).base_parameters()
-    qd = np.broadcast_to(np.asarray(config.task.qd, dtype=float), (n,))
-    basis = numpy_pinocchio_loop.StructuredBasis(arm, values, columns, qd)
-    settings = numpy_pinocchio_loop.LoopSettings(
-        q0=np.array(config.task.q0, dtype=float),
-        dq0=np.broadcast_to(np.asarray(config.task.dq0, dtype=float), (n,)).copy(),
-        qd=qd.copy(),
-        critic_weights=config.initial_weights("critic_weights"),
-        actor_weights=config.initial_weights("actor_weights"),
-        Q=np.array(config.cost.Q, dtype=float),
-        R=np.array(config.cost.R, dtype=float),
-        alpha1=np.array(config.control.alpha1, dtype=float),
-        disturbance=np.broadcast_to(np.asarray(p.disturbance, dtype=float), (n,)).copy(),
-        eta_c=c.eta_c,
-        nu=c.nu,
-        gamma0=c.gamma0,
-        epsilon_T=config.resolved_epsilon_T,
-        eta_a1=a.eta_a1,
-        eta_a2=a.eta_a2,
-        weight_bound=a.weight_bound,
-        points=e.points,
-        box=np.broadcast_to(np.asarray(e.box, dtype=float), (2 * n,)).copy(),
-        seed=e.seed,
-        dt=config.sim.dt,
-    )
+    settings = loop_settings(config)
+    basis = numpy_pinocchio_loop.StructuredBasis(arm, values, columns, settings.qd)
     return numpy_pinocchio_loop.NumpyPinocchioLoop(arm, basis, settings)
 
 
