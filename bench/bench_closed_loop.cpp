@@ -132,16 +132,23 @@ void use_quadratic_expression_basis(adparm::Settings& s) {
   s.actor_weights = s.critic_weights;
 }
 
-LoopTiming time_loop(const adparm::Settings& settings) {
-  adparm::AnySimulation simulation(settings);
+// One whole run of `simulation`, timed, its heap allocations counted.
+template <class Simulation>
+LoopTiming time_run(Simulation& simulation) {
   LoopTiming timing;
   start_counting();
   const auto start = Clock::now();
   timing.steps = simulation.advance(simulation.steps());
   timing.seconds = seconds_since(start);
   timing.heap_allocations = stop_counting();
-  timing.critic_error = critic_error(simulation);
   timing.status = simulation.status();
+  return timing;
+}
+
+LoopTiming time_loop(const adparm::Settings& settings) {
+  adparm::AnySimulation simulation(settings);
+  LoopTiming timing = time_run(simulation);
+  timing.critic_error = critic_error(simulation);
   return timing;
 }
 
@@ -330,13 +337,7 @@ bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long 
   LoopTiming best;
   for (int r = 0; r < repeats; ++r) {
     Simulation simulation(settings, loop_arm, loop_arm, true, basis);
-    LoopTiming timing;
-    start_counting();
-    const auto start = Clock::now();
-    timing.steps = simulation.advance(simulation.steps());
-    timing.seconds = seconds_since(start);
-    timing.heap_allocations = stop_counting();
-    timing.status = simulation.status();
+    const LoopTiming timing = time_run(simulation);
     if (r == 0 || timing.seconds < best.seconds) best = timing;
   }
   std::printf(
