@@ -326,8 +326,9 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
         # the joint positions of the explored region (and qd)
         e1 = _explored_states(result, np.random.default_rng(_SEED))[:, : config.dof]
         e1 = np.vstack([np.zeros(config.dof), e1])
-        out["e2_block_min_eigenvalue"] = structured_e2_block_min_eigenvalue(config, Wc, e1)
-        out["actor_e2_block_min_eigenvalue"] = structured_e2_block_min_eigenvalue(config, Wa, e1)
+        out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"] = (
+            _e2_block_min_eigenvalues(config, [Wc, Wa], e1)
+        )
     if result.status == "diverged" or not finite:
         out["problems"].append("diverged")
         if (
@@ -557,14 +558,10 @@ def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
     of RK4 unstable (the weights all ones on the planar 3-link arm: 4600/s)."""
     if config.plant.urdf is None or config.controller.basis != "structured":
         return None
-    from .urdf import config_arm
-
-    arm = config_arm(config, model=True)
     n = config.dof
-    _, columns, _ = arm.base_parameters()
-    weights = config.initial_weights("actor_weights")[n * (n + 1) // 2 :]
     qd = desired_state(config, 0.0)[0]
-    M_w = np.tensordot(weights, arm.mass_regressor(qd)[columns], 1)
+    arm, blocks = _structured_e2_blocks(config, [config.initial_weights("actor_weights")], [qd])
+    M_w = blocks[0, 0]
     M_inverse = np.linalg.inv(arm.terms(qd, np.zeros(n))["M"])
     A = M_inverse @ np.linalg.inv(np.array(config.cost.R)) @ M_inverse @ M_w
     return {
@@ -573,23 +570,36 @@ def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
     }
 
 
-def structured_e2_block_min_eigenvalue(config: Config, weights: Any, e1: Any) -> float:
-    """min over the rows of e1 (m, n) of lambda_min of the e2 block sum_b W_b M_b(q),
-    q = qd(0) - e1, of weights W of the structured basis of a URDF arm (the believed model's
-    base-parameter directions M_b). At or below 0 the learned V is not positive definite in e2
-    there: not a stabilising solution."""
+def _structured_e2_blocks(config: Config, weight_sets: Any, positions: Any) -> tuple[Any, Any]:
+    """The believed model's arm and the e2 blocks M_w(q) = sum_b W_b M_b(q) of each set of
+    weights of the structured basis of a URDF arm (rows of weight_sets) at each joint position
+    (rows of positions): an array (sets, positions, n, n). M_b are the arm's base-parameter
+    directions (UrdfArm.base_parameters), computed once per position."""
     from .urdf import config_arm
 
     arm = config_arm(config, model=True)
     n = config.dof
     _, columns, _ = arm.base_parameters()
-    w = np.asarray(weights, dtype=float)[n * (n + 1) // 2 :]
-    qd = desired_state(config, 0.0)[0]
-    lowest = math.inf
-    for row in np.atleast_2d(e1):
-        M_w = np.tensordot(w, arm.mass_regressor(qd - row)[columns], 1)
-        lowest = min(lowest, float(np.linalg.eigvalsh(0.5 * (M_w + M_w.T)).min()))
-    return lowest
+    W = np.atleast_2d(np.asarray(weight_sets, dtype=float))[:, n * (n + 1) // 2 :]
+    M_b = np.array([arm.mass_regressor(q)[columns] for q in np.atleast_2d(positions)])
+    return arm, np.einsum("wb,mbij->wmij", W, M_b)
+
+
+def _e2_block_min_eigenvalues(config: Config, weight_sets: Any, e1: Any) -> list[float]:
+    """For each set of weights, min over the rows of e1 of lambda_min of its e2 block at
+    q = qd(0) - e1 (structured_e2_block_min_eigenvalue)."""
+    positions = desired_state(config, 0.0)[0] - np.atleast_2d(e1)
+    _, blocks = _structured_e2_blocks(config, weight_sets, positions)
+    symmetric = 0.5 * (blocks + np.swapaxes(blocks, -1, -2))
+    return [float(value) for value in np.linalg.eigvalsh(symmetric).min(axis=(1, 2))]
+
+
+def structured_e2_block_min_eigenvalue(config: Config, weights: Any, e1: Any) -> float:
+    """min over the rows of e1 (m, n) of lambda_min of the e2 block sum_b W_b M_b(q),
+    q = qd(0) - e1, of weights W of the structured basis of a URDF arm (the believed model's
+    base-parameter directions M_b). At or below 0 the learned V is not positive definite in e2
+    there: not a stabilising solution."""
+    return _e2_block_min_eigenvalues(config, [weights], e1)[0]
 
 
 def divergence_causes(config: Config) -> list[str]:
