@@ -205,8 +205,9 @@ def test_check_step_size_sees_the_integration_error_of_the_transient(tmp_path, c
 
 
 def test_diagnostics_cover_the_extrapolation_box() -> None:
-    config = adparm.paper_config().updated({"sim": {"T": 2.0}, "extrapolation": {"points": 10}})
-    d = adparm.simulate(config).diagnostics  # extrapolation learns W* within 2 s: no warning
+    config = adparm.paper_config().updated({"sim": {"T": 6.0}, "extrapolation": {"points": 10}})
+    # extrapolation learns W* (critic, actor and policy within 1 %) within 6 s: no warning
+    d = adparm.simulate(config).diagnostics
     assert d["verdict"] == "ok"
     assert d["hjb_residual_box"] is not None and d["hjb_residual_box"] < 0.05
     assert (

@@ -41,7 +41,15 @@ def test_two_link_urdf_gives_the_built_in_arm_s_recording() -> None:
     weights = built_in.initial_weights().tolist()
     init = {"critic_weights": weights, "actor_weights": weights}
     built_in = built_in.updated({"init": init})
-    urdf = built_in.updated({"plant": {"urdf": str(TWO_LINK), "gravity": [0.0, 0.0, -9.8]}})
+    # every setting given, so that the URDF arm derives none of its own (rates.urdf_defaults)
+    settings = built_in.to_dict()
+    settings["plant"] = {
+        key: value
+        for key, value in settings["plant"].items()
+        if key not in ("p1", "p2", "p3", "g1", "g2")
+    }
+    settings["plant"].update({"urdf": str(TWO_LINK), "gravity": [0.0, 0.0, -9.8]})
+    urdf = adparm.Config.from_dict(settings)
     assert urdf.plant.urdf == str(TWO_LINK) and urdf.dof == 2
     a = adparm.simulate(built_in, diagnose=False)
     b = adparm.simulate(urdf, diagnose=False)

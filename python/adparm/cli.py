@@ -297,10 +297,7 @@ def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str
         f"the run diverged at t = {error.time:.6g} s (the state or an output became non-finite "
         f"or exceeded sim.divergence_bound = {config.sim.divergence_bound:g}); its "
         f"{result.t.size} rows up to then are written. "
-        + (f"Likely cause: {'; '.join(causes)}. " if causes else "")
-        + "To change: start from nonzero weights "
-        "(init.critic_weights, init.actor_weights), a smaller sim.dt, or smaller learning rates "
-        "(critic.eta_c, actor.eta_a1, actor.eta_a2)"
+        + f"What the config shows: {'; '.join(causes)}"
     )
 
 

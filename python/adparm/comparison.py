@@ -25,7 +25,12 @@ import numpy as np
 
 from ._files import write_text
 from .config import CONTROLLER_KINDS, Config, _check_known
-from .simulation import SimulationInterrupted, SimulationResult, _simulate_keeping_divergence
+from .simulation import (
+    SimulationInterrupted,
+    SimulationResult,
+    _check_steps,
+    _simulate_keeping_divergence,
+)
 from .table import rows_dataframe, rows_json, rows_markdown, write_csv
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -286,6 +291,7 @@ def compare(
         status "interrupted").
     """
     configs = _controller_configs(config, kinds)
+    _check_steps(list(configs.values()))  # every run's step, before the first one runs
     results: dict[str, SimulationResult] = {}
     label = ""
     try:
@@ -294,7 +300,9 @@ def compare(
             results[label] = _run(kind_config, progress)
             if kind == "adp":
                 label = LEARNED_LABEL
-                results[label] = _run(_learned_config(kind_config, results[kind]), progress)
+                # from the learning run's final weights: not the user's step to check
+                learned = _learned_config(kind_config, results[kind])
+                results[label] = _simulate_keeping_divergence(learned, progress, check=False)[0]
     except KeyboardInterrupt as interrupt:
         if isinstance(interrupt, SimulationInterrupted):
             results[label] = interrupt.result

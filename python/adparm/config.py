@@ -34,6 +34,7 @@ __all__ = [
     "ControllerConfig",
     "CostConfig",
     "CriticConfig",
+    "DiagnosticsConfig",
     "ExtrapolationConfig",
     "InitConfig",
     "ModelConfig",
@@ -49,6 +50,9 @@ __all__ = [
 
 Vector = tuple[float, ...]
 Matrix = tuple[tuple[float, ...], ...]
+
+#: The value of a setting that is derived for the run (sim.dt = "auto").
+AUTO = "auto"
 
 
 # --- field checks: each names the field ("section.key") and what it expects -------------------
@@ -1162,16 +1166,23 @@ class SimConfig:
     bound on ``|q|``, ``|dq|``, ``|Wc|``, ``|Wa|`` beyond which a run stops as diverged. The paper
     prints no step; dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T
     is not a multiple of dt, the last step is shortened to end exactly at T. At most 1e10 steps (T /
-    dt); 1 <= record_every <= MAX_RECORD_EVERY = 10^10."""
+    dt); 1 <= record_every <= MAX_RECORD_EVERY = 10^10.
+
+    ``dt = "auto"`` (the default of a URDF arm) picks the largest 1, 2 or 5 x 10^k s, at most 1 ms,
+    at which every fast rate of the closed loop (RISE through M^-1, the initial policy, the error
+    dynamics, the critic) times dt is at most 0.6 of RK4's stability limit 2.785; the config then
+    holds that number. simulate() refuses an explicit dt beyond the limit, naming the term, its
+    rate and a dt that works. A URDF arm's T defaults to 10 s."""
 
     T: float = 150.0
-    dt: float = 1e-3
+    dt: float | str = 1e-3
     record_every: int = 10
     divergence_bound: float = 1e6
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "T", _scalar(self.T, "sim.T", minimum=0.0, strict=True))
-        object.__setattr__(self, "dt", _scalar(self.dt, "sim.dt", minimum=0.0, strict=True))
+        if not (isinstance(self.dt, str) and self.dt == AUTO):  # "auto": Config resolves it
+            object.__setattr__(self, "dt", _scalar(self.dt, "sim.dt", minimum=0.0, strict=True))
         object.__setattr__(
             self,
             "record_every",
@@ -1182,12 +1193,30 @@ class SimConfig:
             "divergence_bound",
             _scalar(self.divergence_bound, "sim.divergence_bound", minimum=0.0, strict=True),
         )
+        if self.dt == AUTO:
+            return
         if self.dt > self.T:
             raise ValueError(f"sim.dt: must be <= sim.T = {self.T:g}, got {self.dt:g}")
         if self.T / self.dt > 1e10:
             raise ValueError(
                 f"sim.dt: sim.T / sim.dt = {self.T / self.dt:.3g} steps is more than 1e10"
             )
+
+
+@dataclass(frozen=True)
+class DiagnosticsConfig:
+    """What a run's verdict holds it to (adparm.truth.diagnose). ``tolerance``: "ok" needs the
+    critic weights, the actor weights and the applied policy (rms |u_hat - u*| / rms |u*| over
+    the last 10 % of the run) each within this relative distance of the known optimum; also the
+    band of the summary's "time within tolerance". 0 < tolerance < 1; default 1 %."""
+
+    tolerance: float = 0.01
+
+    def __post_init__(self) -> None:
+        tolerance = _scalar(self.tolerance, "diagnostics.tolerance", minimum=0.0, strict=True)
+        if tolerance >= 1.0:
+            raise ValueError(f"diagnostics.tolerance: must be < 1, got {tolerance:g}")
+        object.__setattr__(self, "tolerance", tolerance)
 
 
 _SECTIONS: dict[str, type] = {
@@ -1203,6 +1232,7 @@ _SECTIONS: dict[str, type] = {
     "controller": ControllerConfig,
     "extrapolation": ExtrapolationConfig,
     "sim": SimConfig,
+    "diagnostics": DiagnosticsConfig,
 }
 
 
@@ -1240,6 +1270,8 @@ class Config:
         Bellman-error extrapolation points.
     sim : SimConfig
         Horizon, step, recording and divergence bound.
+    diagnostics : DiagnosticsConfig
+        The tolerance of the verdict.
 
     Examples
     --------
@@ -1261,6 +1293,10 @@ class Config:
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     extrapolation: ExtrapolationConfig = field(default_factory=ExtrapolationConfig)
     sim: SimConfig = field(default_factory=SimConfig)
+    diagnostics: DiagnosticsConfig = field(default_factory=DiagnosticsConfig)
+    #: "section.key" of every setting given explicitly through from_dict/updated/load_config (a
+    #: value "auto" is not explicit): a URDF arm derives the others (rates.urdf_defaults).
+    _explicit: frozenset[str] = field(default=frozenset(), repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name, cls in _SECTIONS.items():
@@ -1296,6 +1332,32 @@ class Config:
             raise ValueError(
                 f"task.qd: the samples end at t = {qd.t[-1]:g} s, before sim.T = {self.sim.T:g} s"
             )
+        self._resolve_step()
+
+    def _resolve_step(self) -> None:
+        """sim.dt = "auto" (a URDF arm's default, or given so): the largest 1, 2 or 5 x 10^k s
+        with every fast rate of the closed loop inside RK4's stable region with margin
+        (rates.auto_step), at most 1 ms."""
+        auto = self.sim.dt == AUTO or (
+            self.plant.urdf is not None and "sim.dt" not in self._explicit
+        )
+        if not auto:
+            return
+        from .rates import auto_step, closed_loop_rates
+
+        dt = auto_step(closed_loop_rates(self), self.sim.T)
+        object.__setattr__(self, "sim", dataclasses.replace(self.sim, dt=dt))
+        self._derived["sim.dt"] = "auto: every fast rate of the closed loop * dt <= 0.6 * 2.785"
+
+    @property
+    def explicit_keys(self) -> frozenset[str]:
+        """The settings ("section.key") given explicitly; a URDF arm derives the others."""
+        return self._explicit
+
+    @property
+    def derived(self) -> dict[str, str]:
+        """The settings derived for this arm (left out of the config), each with its reason."""
+        return dict(self._derived)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], base: Config | None = None) -> Config:
@@ -1307,6 +1369,7 @@ class Config:
             raise TypeError(f"base: expected adparm.Config or None, got {type(base).__name__}")
         base = cls() if base is None else base
         sections = {}
+        explicit = set(base._explicit)
         for section, values in data.items():
             _check_known(
                 section,
@@ -1322,9 +1385,14 @@ class Config:
             _check_keys(values, [f.name for f in dataclasses.fields(_SECTIONS[section])], section)
             for key, value in values.items():
                 _check_depth(value, f"{section}.{key}")
+                name = f"{section}.{key}"
+                if isinstance(value, str) and value == AUTO:
+                    explicit.discard(name)
+                else:
+                    explicit.add(name)
             sections[section] = dataclasses.replace(getattr(base, section), **values)
         _check_urdf_keys(data, sections.get("plant", base.plant))
-        return dataclasses.replace(base, **sections)
+        return dataclasses.replace(base, **sections, _explicit=frozenset(explicit))
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """Nested plain dict (lists for arrays, model keys left at the plant's value omitted)."""
@@ -1361,11 +1429,27 @@ class Config:
         _refuse_two_link_basis(self.controller.basis)
 
     def _fit_to_arm(self) -> None:
-        """Sized settings follow the arm's joint count n: for n != 2, a setting left at the
-        two-link default takes the n-joint default (_joint_defaults); then every size is checked
-        against n, naming the field and the expected shape."""
+        """A URDF arm (any joint count, two included) derives every setting the config leaves
+        out from its believed model's inertia (rates.urdf_defaults; the two-link arm keeps the
+        paper's); then every size is checked against n, naming the field and the expected
+        shape."""
+        object.__setattr__(self, "_derived", {})
         n = self.dof
-        if n != 2:
+        if self.plant.urdf is not None:
+            # the sizes first (the derivation evaluates the arm at q0 and qd)
+            for (section, key), value in _joint_defaults(n).items():
+                if f"{section}.{key}" not in self._explicit:
+                    current = getattr(self, section)
+                    object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+            _check_sizes(self, n)
+            from .rates import urdf_defaults
+
+            values, reasons = urdf_defaults(self)
+            for (section, key), value in values.items():
+                current = getattr(self, section)
+                object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+            self._derived.update(reasons)
+        elif n != 2:  # an n-joint stand-in without a URDF (tests): the n-joint defaults
             for (section, key), value in _joint_defaults(n).items():
                 current = getattr(self, section)
                 if getattr(current, key) == getattr(_SECTIONS[section](), key):

@@ -21,6 +21,7 @@ __all__ = [
     "initial_error_state",
     "optimal_value",
     "optimal_weights",
+    "policy",
     "solvable_cost",
     "value_scale",
 ]
@@ -140,6 +141,32 @@ def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[s
         setattr(parameters, key, value)
     terms = _core.arm_terms(parameters, q_array, dq_array)
     return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
+
+
+def policy(config: Config, x: Any, t: Any, weights: Any) -> np.ndarray:
+    """The actor's input u = -1/2 R^-1 g(x)^T (d phi / dx)^T W (eq. 20) at error states x (m, 2n)
+    and times t (m,) (qd(t) enters the basis and q = qd - e1 the inertia of g = [0; M^-1]), with
+    weights W (K,) or one row per state (m, K); the believed model's M. With W = W* it is the
+    optimal input u* = -R^-1 e2 of the exact family. Returns (m, n)."""
+    _check_config(config)
+    n = config.dof
+    states = np.atleast_2d(_states(x, 2 * n))
+    times = np.broadcast_to(np.asarray(t, dtype=float), (len(states),))
+    desired = desired_state(config, times)[:, 0, :]
+    _, jacobian = basis(config, states, desired)
+    W = np.broadcast_to(np.asarray(weights, dtype=float), (len(states), jacobian.shape[1]))
+    gradient_e2 = np.einsum("mkx,mk->mx", jacobian, W)[:, n:]
+    if config.plant.urdf is not None:
+        arm = config_arm(config, model=True)
+        masses = np.array([arm.terms(q, np.zeros(n))["M"] for q in desired - states[:, :n]])
+    else:
+        masses = np.array(
+            [arm_terms(config, q, np.zeros(n), model=True)["M"] for q in desired - states[:, :n]]
+        )
+    R_inverse = np.linalg.inv(np.array(config.cost.R))
+    return -0.5 * np.einsum(
+        "ij,mj->mi", R_inverse, np.linalg.solve(masses, gradient_e2[..., None])[..., 0]
+    )
 
 
 def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:

@@ -361,7 +361,7 @@ class SimulationResult:
 
         return diagnose(self)
 
-    def summary(self, tolerance: float = 0.02) -> dict[str, Any]:
+    def summary(self, tolerance: float | None = None) -> dict[str, Any]:
         """The metrics of summary.json (adparm.summary.summarize)."""
         from .summary import summarize
 
@@ -597,6 +597,20 @@ def _check_memory(
         )
 
 
+def _check_steps(configs: list[Config]) -> None:
+    """Refuse a run whose sim.dt puts a fast rate of its closed loop beyond RK4's stability limit
+    (rates.check_step: the message names the term, its rate and a dt that works)."""
+    from .rates import check_step
+
+    for i, config in enumerate(configs):
+        try:
+            check_step(config)
+        except ValueError as error:
+            if len(configs) == 1:
+                raise
+            raise ValueError(f"configs[{i}]: {error}") from None
+
+
 def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -> SimulationResult:
     """Simulate the closed loop of ``config`` in the C++ core (fixed-step RK4).
 
@@ -633,6 +647,14 @@ def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -
     >>> result.status, result.t[-1]
     ('finished', np.float64(1.0))
     """
+    if not isinstance(config, Config):
+        raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
+    _check_steps([config])
+    return _simulate(config, progress, diagnose)
+
+
+def _simulate(config: Config, progress: bool, diagnose: bool) -> SimulationResult:
+    """simulate() without the step check (a run that starts from another run's weights)."""
     settings = core_settings(config)
     _check_memory([config])
     batch = _core.Batch([settings])
@@ -670,11 +692,14 @@ def simulate(config: Config, *, progress: bool = False, diagnose: bool = True) -
 
 
 def _simulate_keeping_divergence(
-    config: Config, progress: bool = False
+    config: Config, progress: bool = False, check: bool = True
 ) -> tuple[SimulationResult, str | None]:
-    """simulate(config) and None, or a diverged run's partial result and the error message."""
+    """simulate(config) and None, or a diverged run's partial result and the error message
+    (``check=False``: without the step check, for a run from another run's final weights)."""
     try:
-        return simulate(config, progress=progress), None
+        if check:
+            return simulate(config, progress=progress), None
+        return _simulate(config, progress, True), None
     except SimulationDiverged as error:
         return error.result, str(error)
 
@@ -745,6 +770,7 @@ def simulate_batch(
     if on_divergence not in ("raise", "keep"):
         raise ValueError(f"on_divergence: expected 'raise' or 'keep', got {on_divergence!r}")
     workers = min(_check_threads(threads), max(1, len(configs)))  # no idle threads
+    _check_steps(configs)
     settings = [core_settings(config) for config in configs]
     _check_memory(configs, threads=workers)
     batch = _core.Batch(settings)

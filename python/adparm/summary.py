@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .optimal import basis_names, optimal_weights
+from .truth import diagnose
 
 if TYPE_CHECKING:  # pragma: no cover
     from .config import Config
@@ -201,10 +202,13 @@ def accumulated_cost(result: SimulationResult, *, include_probe: bool = True) ->
     return float(np.sum(0.5 * (r[1:] + r[:-1]) * np.diff(result.t)))
 
 
-def summarize(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, Any]:
+def summarize(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
     """The metrics of ``summary.json``: final weights beside W*, per-weight and relative errors,
-    time to enter and stay within ``tolerance`` of W*, the error at the paper's 110 s, final
-    |e1|, accumulated cost, covariance resets, wall time and the deviations from the paper."""
+    time to enter and stay within ``tolerance`` of W* (default: the config's
+    diagnostics.tolerance, 1 %), the error at the paper's 110 s, final |e1|, accumulated cost,
+    covariance resets, wall time and the deviations from the paper."""
+    if tolerance is None:
+        tolerance = result.config.diagnostics.tolerance
     if not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
     t = result.t
@@ -229,8 +233,13 @@ def summarize(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str,
         "paper_claim_time": PAPER_CLAIM_TIME,
         "deviations": deviations(result.config),
     }
-    diagnostics = result.diagnostics
+    diagnostics = (
+        result.diagnostics
+        if tolerance == result.config.diagnostics.tolerance
+        else diagnose(result, tolerance=tolerance)
+    )
     out["verdict"] = diagnostics["verdict"]
+    out["policy_relative_error"] = diagnostics.get("policy_relative_error")
     out["e2_block_min_eigenvalue"] = diagnostics.get("e2_block_min_eigenvalue")
     out["hjb_residual_explored"] = diagnostics.get("hjb_residual_explored")
     out["diagnostics"] = diagnostics

@@ -44,6 +44,7 @@ SWEEP_METRICS = (
     "t_end",
     "critic_relative_error",
     "actor_relative_error",
+    "policy_relative_error",
     "critic_relative_error_at_claim",
     "critic_time_within_tolerance",
     "actor_time_within_tolerance",
@@ -158,12 +159,12 @@ def _point_config(base: Config, point: Mapping[str, Any]) -> Config:
         raise ValueError(f"grid point {point}: {error}") from error
 
 
-def _metrics(result: SimulationResult, tolerance: float) -> dict[str, Any]:
+def _metrics(result: SimulationResult, tolerance: float | None) -> dict[str, Any]:
     summary = result.summary(tolerance=tolerance)
     return {name: summary.get(name) for name in SWEEP_METRICS}
 
 
-def sweep_row(config: Config, tolerance: float = 0.02) -> dict[str, Any]:
+def sweep_row(config: Config, tolerance: float | None = None) -> dict[str, Any]:
     """The metrics of one run of ``config`` (the task an executor runs; a diverged run gives its
     partial result's metrics with status "diverged")."""
     return _metrics(simulate_batch([config], threads=1, on_divergence="keep")[0], tolerance)
@@ -231,7 +232,7 @@ def sweep(
     executor: Any = None,
     *,
     threads: int | None = None,
-    tolerance: float = 0.02,
+    tolerance: float | None = None,
     progress: bool = False,
 ) -> SweepResult:
     """Run ``base_config`` at every point of ``grid`` and tabulate the summary metrics.
@@ -256,7 +257,8 @@ def sweep(
     threads : int, optional
         Threads of the in-process run; default every CPU this process may use.
     tolerance : float, optional
-        Tolerance of the time-within-tolerance metrics (default 0.02).
+        Tolerance of the verdict and the time-within-tolerance metrics (default: each config's
+        diagnostics.tolerance, 1 %).
     progress : bool, optional
         Show a progress bar.
 
@@ -275,7 +277,7 @@ def sweep(
     """
     if not isinstance(base_config, Config):
         raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
-    if not 0.0 < tolerance < 1.0:
+    if tolerance is not None and not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
     workers = _check_threads(threads)
     points = grid_points(grid)
@@ -318,10 +320,11 @@ def _run_in_process(
     threads (no barrier between runs), each run summarised and freed as soon as it ends, so at
     most _RUNS_PER_THREAD runs per thread are held in memory, however many points."""
     from . import _core
-    from .simulation import _check_memory, _result, _run_batch, core_settings
+    from .simulation import _check_memory, _check_steps, _result, _run_batch, core_settings
 
     workers = min(threads, max(1, len(configs)))
     window = workers * _RUNS_PER_THREAD
+    _check_steps(configs)
     _check_memory(configs, at_once=window + workers)
     batch = _core.Batch([core_settings(config) for config in configs])
     ended: dict[int, Any] = {}  # runs handed over by the core, not yet summarised

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .optimal import basis, hjb_residual, initial_error_state, optimal_weights
+from .rates import RK4_STABILITY_LIMIT
 from .simulation import desired_state
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -293,7 +294,24 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
     return float(np.sqrt(np.mean(best.fun**2)))
 
 
-def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, Any]:
+def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
+    """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200 of
+    them): u_hat of the recorded actor weights, u* of W*, at the recorded states."""
+    from .optimal import policy
+
+    config = result.config
+    tail = np.nonzero(result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0]))[0]
+    tail = tail[np.linspace(0, tail.size - 1, min(tail.size, 200)).round().astype(int)]
+    x = np.hstack([result.e1, result.e2])[tail]
+    u_hat = policy(config, x, result.t[tail], result.actor_weights[tail])
+    u_star = policy(config, x, result.t[tail], target)
+    scale = math.sqrt(float(np.mean(u_star**2)))
+    if scale == 0.0:  # at rest exactly: u* = 0 there, compare the weights alone
+        return 0.0 if np.allclose(u_hat, 0.0) else math.inf
+    return math.sqrt(float(np.mean((u_hat - u_star) ** 2))) / scale
+
+
+def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
     """The truth about a run (plain JSON-ready data; summary.json's ``diagnostics``):
 
     - e2_block_min_eigenvalue (critic, actor): min over q of lambda_min of V's e2 block (for
@@ -309,8 +327,16 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     - value_yardstick ("W*" or "LQR") and value_error: the relative error of the learned V against
       V* (sampled states, W* known) or of its quadratic form at the set-point against the LQR P;
     - verdict: "ok", or the problems found, and advice: what to try.
+    - actor_relative_error and policy_relative_error (W* known): ||Wa - W*|| / ||W*|| and
+      rms |u_hat - u*| / rms |u*| over the last 10 % of the run. "ok" needs the critic, the actor
+      and the policy each within ``tolerance`` (default: the config's diagnostics.tolerance, 1 %).
+    The region learning fits (the extrapolation box with fixed or grid points, else the explored
+    region) is where the basis's best residual is measured: a residual the basis can reach there
+    is "not converged", one it cannot is "the basis cannot represent V*".
     Only learning (adp) runs with rows are diagnosed; others give verdict "not a learning run"."""
     config = result.config
+    if tolerance is None:
+        tolerance = config.diagnostics.tolerance
     out: dict[str, Any] = {"verdict": "ok", "problems": [], "advice": []}
     if config.controller.kind != "adp" or result.t.size < 2:
         out["verdict"] = "not a learning run" if config.controller.kind != "adp" else "no rows"
@@ -359,8 +385,12 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
     out["hjb_residual_trajectory"] = float(
         np.sqrt(np.mean(result.hjb_error[tail] ** 2)) / max(np.sqrt(np.mean(q_tail**2)), 1e-300)
     )
+    out["tolerance"] = tolerance
+    out["actor_relative_error"] = out["policy_relative_error"] = None
     if target is not None:
         out["critic_relative_error"] = float(np.linalg.norm(Wc - target) / np.linalg.norm(target))
+        out["actor_relative_error"] = float(np.linalg.norm(Wa - target) / np.linalg.norm(target))
+        out["policy_relative_error"] = _policy_error(result, target)
         out["value_yardstick"] = "W*"
         phi = basis(config, X, desired_state(config, 0.0)[0])[0]
         exact = phi @ target
@@ -400,26 +430,45 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
             if urdf_structured
             else "keep actor.positive_e2 = true (the default)"
         )
-    if target is not None and out["critic_relative_error"] > tolerance:
+    short = []  # the parts that end outside the tolerance of the known optimum
+    if target is not None:
+        for key, text in (
+            ("critic_relative_error", "critic ||Wc - W*|| / ||W*||"),
+            ("actor_relative_error", "actor ||Wa - W*|| / ||W*||"),
+            ("policy_relative_error", "policy rms|u_hat - u*| / rms|u*| over the last 10 %"),
+        ):
+            if not out[key] <= tolerance:
+                short.append(f"{text} = {out[key]:.3g}")
+    if short:
         problems.append(
-            f"ended away from the known W*: ||Wc - W*|| / ||W*|| = "
-            f"{out['critic_relative_error']:.3g} > {tolerance:g}"
+            f"ended away from the known W* (tolerance {tolerance:g}): " + ", ".join(short)
         )
-    residual = out["hjb_residual_explored"]
+    # the region learning fits: the extrapolation box (fixed or grid points), else the explored
+    fitted = config.extrapolation.points > 0 and config.extrapolation.mode != "local"
+    X_fit = X
+    if fitted:
+        box = np.array(config.extrapolation.box_vector(config.dof))
+        X_fit = np.random.default_rng(_SEED + 1).uniform(-box, box, size=(_SAMPLES, box.size))
+    residual = (
+        _relative_residual(config, X_fit, Wc, Wa, t_end)
+        if fitted
+        else (out["hjb_residual_explored"])
+    )
+    region = "the extrapolation box" if fitted else "the explored region"
     on_trajectory = out["hjb_residual_trajectory"]
     out["hjb_residual_best"] = None
     if residual > RESIDUAL_TOLERANCE:
         if target is not None:  # the basis represents V* exactly: W* reaches round-off
-            best = _relative_residual(config, X, target, target, t_end)
+            best = _relative_residual(config, X_fit, target, target, t_end)
         else:
-            best = _best_residual(config, X, Wc, t_end)
+            best = _best_residual(config, X_fit, Wc, t_end)
         out["hjb_residual_best"] = best
         if best > RESIDUAL_TOLERANCE:
             out["approximation"] = "basis"
             problems.append(
                 f"the basis cannot represent V*: the HJB residual of the final weights is "
-                f"{residual:.3g} of x^T Q x over the explored region ({on_trajectory:.3g} along "
-                f"the end of the trajectory), and no weights do better than {best:.3g}"
+                f"{residual:.3g} of x^T Q x over {region} ({on_trajectory:.3g} along "
+                f"the end of the trajectory), and no weights do better than {best:.3g} there"
             )
             advice.append(
                 "use a basis that can represent V* (controller.basis; a richer polynomial), "
@@ -433,16 +482,28 @@ def diagnose(result: SimulationResult, *, tolerance: float = 0.02) -> dict[str, 
             out["approximation"] = "not converged"
             problems.append(
                 f"learning has not converged: the HJB residual of the final weights is "
-                f"{residual:.3g} of x^T Q x over the explored region, where the basis can reach "
+                f"{residual:.3g} of x^T Q x over {region}, where the basis can reach "
                 f"{best:.3g}"
             )
             advice.append(
-                "run longer (sim.T), excite more (probe.amplitude) or add Bellman-error "
-                "extrapolation (extrapolation.points)"
+                "run longer (sim.T)"
+                + (
+                    ", excite more (probe.amplitude) or add Bellman-error extrapolation "
+                    "(extrapolation.points)"
+                    if config.extrapolation.points == 0
+                    else ""
+                )
             )
-    elif target is not None and out["critic_relative_error"] > tolerance:
+    elif short:
         out["approximation"] = "not converged"
-        advice.append("run longer (sim.T) or excite more (probe.amplitude)")
+        advice.append(
+            "run longer (sim.T)"
+            + (
+                ", or add Bellman-error extrapolation (extrapolation.points)"
+                if config.extrapolation.points == 0
+                else ""
+            )
+        )
     shortfall = extrapolation_shortfall(config)
     out["extrapolation_shortfall"] = shortfall
     if shortfall is not None and problems:  # a likely reason why learning fell short
@@ -544,11 +605,6 @@ def extrapolation_shortfall(config: Config) -> str | None:
     return None
 
 
-#: RK4's stability limit on the negative real axis: |lambda| dt <= 2.785 (the step of a decay at
-#: rate lambda is stable only below it).
-RK4_STABILITY_LIMIT = 2.785
-
-
 def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
     """The e2 block M_w = sum_b Wa_b M_b(qd(0)) of the initial actor weights of the structured
     basis of a URDF arm, seen through its policy u_hat = -R^-1 M^-1 M_w e2, which makes e2 decay
@@ -603,27 +659,50 @@ def structured_e2_block_min_eigenvalue(config: Config, weights: Any, e1: Any) ->
 
 
 def divergence_causes(config: Config) -> list[str]:
-    """Likely causes of a divergence that the config shows before any run: the initial actor
-    weights of the structured basis of a URDF arm (an indefinite e2 block, or a policy too fast
-    for sim.dt), fewer extrapolation points than basis functions."""
+    """Likely causes of a divergence that the config shows before any run, each with a change
+    that is not already in effect: the measured fast rates of the closed loop against RK4's limit
+    at sim.dt (rates.closed_loop_rates; a smaller sim.dt that keeps them inside it), initial
+    actor weights of the structured basis of a URDF arm whose e2 block is not positive definite
+    (only when init.actor_weights is set), fewer extrapolation points than basis functions."""
+    from .rates import AUTO_MARGIN, auto_step, closed_loop_rates, rates_text
+
     causes = []
+    rates = closed_loop_rates(config)
+    dt = config.sim.dt
+    fast = [entry for entry in rates if entry["rate"] * dt > AUTO_MARGIN * RK4_STABILITY_LIMIT]
+    if fast:
+        worst = max(fast, key=lambda entry: entry["rate"])
+        causes.append(
+            f"{worst['term']} acts at {worst['rate']:.4g}/s, near or beyond RK4's stability "
+            f"limit {RK4_STABILITY_LIMIT}/sim.dt = {RK4_STABILITY_LIMIT / dt:.4g}/s (use "
+            f'sim.dt = {auto_step(rates, config.sim.T):g}, which sim.dt = "auto" picks)'
+        )
     block = initial_actor_e2_block(config)
     if block is not None and block["min_eigenvalue"] <= 0.0:
         causes.append(
             "the initial actor weights' e2 block M_w = sum_b Wa_b M_b(qd) is not positive "
             f"definite (lambda_min = {block['min_eigenvalue']:.3g}), so u_hat = -R^-1 M^-1 M_w e2 "
-            "pushes e2 away (leave init.actor_weights out: the believed model's inertia)"
+            "pushes e2 away"
+            + (
+                " (leave init.actor_weights out: the believed model's inertia)"
+                if config.init.actor_weights is not None
+                else ""
+            )
         )
-    elif block is not None and block["rate"] * config.sim.dt > RK4_STABILITY_LIMIT:
-        causes.append(
-            f"the initial actor's policy u_hat = -R^-1 M^-1 M_w e2 makes e2 decay at up to "
-            f"{block['rate']:.3g}/s, beyond RK4's stability limit {RK4_STABILITY_LIMIT}/sim.dt = "
-            f"{RK4_STABILITY_LIMIT / config.sim.dt:.3g}/s (use a smaller sim.dt, or initial "
-            "weights nearer the model's inertia: leave init.actor_weights out)"
-        )
+    for key in ("critic_weights", "actor_weights"):
+        given = getattr(config.init, key)
+        if given is not None and not np.any(np.asarray(given)):
+            causes.append(
+                f"init.{key} are all zero: at rest omega = 0 while the HJB error is x^T Q x > 0, "
+                f"so the weights cannot settle (leave init.{key} out: the basis' default)"
+            )
     shortfall = extrapolation_shortfall(config)
     if shortfall is not None:
-        causes.append(shortfall)
+        causes.append(shortfall + f" (use extrapolation.points >= {config.basis_size})")
+    causes.append(
+        f"the closed loop's rates at the start (RK4's limit 2.785/sim.dt = "
+        f"{RK4_STABILITY_LIMIT / dt:.4g}/s): " + rates_text(rates)
+    )
     return causes
 
 

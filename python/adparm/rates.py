@@ -1,0 +1,370 @@
+"""The fast rates of the closed loop, the RK4 step they allow, and the arm-aware defaults.
+
+RK4 is stable on a decay exp(-lambda t) only while lambda dt <= RK4_STABILITY_LIMIT = 2.785. The
+closed loop of adparm has several fast terms, each a rate in 1/s:
+
+- the RISE feedback of eq. (27), (ks + 1) e2 acting through M^-1: (ks + 1) / lambda_min(M);
+- the policy: u = -(G1 e1 + G2 e2) near x = 0 acts through M^-1 (the actor's initial weights
+  for adp, u* = -R^-1 e2 for the optimal controller, kp and kd for pd);
+- the error dynamics as a whole: the eigenvalues of the linearised loop
+  [[-alpha1, I], [-M^-1 G1, -M^-1 (G2 + (ks + 1) I)]];
+- the critic of eqs. (23)-(24): eta_c Gamma omega omega^T / rho with rho = 1 + nu omega^T Gamma
+  omega has eigenvalues below eta_c / nu, and Bellman-error extrapolation adds the same bound
+  again (the average over the points): eta_c / nu (1 + [points > 0]).
+
+M is the believed model's inertia, sampled at qd(0), q(0) and (with extrapolation) at the joint
+positions of the extrapolation box. :func:`closed_loop_rates` lists them, :func:`auto_step` picks
+sim.dt = "auto" and :func:`check_step` refuses an explicit sim.dt beyond the limit.
+
+:func:`urdf_defaults` derives the settings a URDF arm's config leaves out from the believed
+model's inertia over its joint-limit box (docs: URDF arms, "Defaults derived from the arm").
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .config import Config
+
+__all__ = [
+    "AUTO_MARGIN",
+    "RK4_STABILITY_LIMIT",
+    "auto_step",
+    "check_step",
+    "closed_loop_rates",
+    "inertia_range",
+    "urdf_defaults",
+]
+
+#: RK4's stability limit on the negative real axis: |lambda| dt <= 2.785.
+RK4_STABILITY_LIMIT = 2.785
+#: sim.dt = "auto" keeps every rate * dt at or below AUTO_MARGIN * RK4_STABILITY_LIMIT.
+AUTO_MARGIN = 0.6
+#: The largest step "auto" chooses (the paper loop's step).
+AUTO_MAX_STEP = 1e-3
+
+#: The e2 rates the derived defaults aim at on the lightest direction of the arm (1/s): RISE's
+#: (ks + 1) / lambda_min(M) and the optimal policy's 1 / (r lambda_min(M)). On the paper's arm
+#: (lambda_min(M) = 0.39 kg m^2, ks = 10, R = 0.25 I) they are 28/s and 10/s.
+RISE_RATE = 30.0
+POLICY_RATE = 10.0
+#: alpha1 of a URDF arm (1/s), as the n-joint default before.
+ALPHA1 = 2.0
+
+_SAMPLES = 64
+_SEED = 20241202
+
+
+@functools.lru_cache(maxsize=64)
+def _inertia_range(urdf: str, mtime_ns: int, size: int) -> tuple[float, float]:
+    from .urdf import UrdfArm
+
+    arm = UrdfArm(urdf)
+    n = arm.dof
+    limits = arm.limits
+    low = np.clip(np.nan_to_num(limits["lower"], nan=-np.pi), -np.pi, np.pi)
+    high = np.clip(np.nan_to_num(limits["upper"], nan=np.pi), -np.pi, np.pi)
+    high = np.maximum(high, low)
+    rng = np.random.default_rng(_SEED)
+    positions = np.vstack([np.clip(np.zeros(n), low, high), rng.uniform(low, high, (_SAMPLES, n))])
+    smallest, largest = math.inf, 0.0
+    for q in positions:
+        eigenvalues = np.linalg.eigvalsh(arm.terms(q, np.zeros(n))["M"])
+        smallest, largest = min(smallest, eigenvalues[0]), max(largest, eigenvalues[-1])
+    return float(smallest), float(largest)
+
+
+def inertia_range(urdf: str) -> tuple[float, float]:
+    """(lambda_min, lambda_max) of M(q) of a URDF arm over q at 0 (clipped into the limits) and
+    64 seeded samples of its joint-limit box (limits clipped to [-pi, pi]); cached per file."""
+    from pathlib import Path
+
+    stat = Path(urdf).stat()
+    return _inertia_range(str(urdf), stat.st_mtime_ns, stat.st_size)
+
+
+def _joint_box(urdf: str) -> tuple[np.ndarray, np.ndarray]:
+    from .urdf import UrdfArm
+
+    limits = UrdfArm(urdf).limits
+    return np.asarray(limits["lower"], dtype=float), np.asarray(limits["upper"], dtype=float)
+
+
+def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
+    """The settings of a URDF arm derived from its believed model (``[model]``, by default the
+    plant), for the keys the config leaves out, and the reason for each (for the summary).
+
+    With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF:
+
+    - task: qd = 0 clipped into the joint limits, q0 = qd + 0.1 rad (- 0.1 at an upper limit),
+      dq0 = 0; plant.disturbance 0.1 N m per joint;
+    - control.alpha1 = 2 I; control.ks = max(0, RISE_RATE lambda_min - 1), so that RISE's rate
+      (ks + 1) / lambda_min is RISE_RATE = 30/s, or 1 / lambda_min where ks = 0 is still faster;
+    - cost (when neither Q nor R is given): R = r I with r = 1 / (POLICY_RATE lambda_min) (the
+      optimal policy u* = -R^-1 e2 then acts at 10/s on the lightest direction), K = k I with
+      k = alpha / (2 r) (the e1 and e2 costs balanced where e2 ~ alpha1 e1) and
+      Q = solvable_cost(K, alpha1, R): of the exact family, so W* is known. With Q given and R
+      left out, R = I (as before);
+    - learning: Bellman-error extrapolation at 2 K points (K basis functions) in a fixed box of
+      half-widths b1 = max(1, 2 |e1(0)|_max) rad on e1 and alpha b1 rad/s on e2, no probing
+      signal (probe.until = 0; the amplitude, if it is turned on, 0.1 (ks + 1 + 1 / r) N m per
+      joint, which moves e2 by about 0.1 rad/s); sim.T = 10 s; sim.dt = "auto".
+    """
+    from .optimal import solvable_cost
+
+    urdf = config.model.resolve_urdf(config.plant)["urdf"]
+    smallest, largest = inertia_range(urdf)
+    explicit = config.explicit_keys
+    n = config.dof
+    eye = np.eye(n)
+    values: dict[tuple[str, str], Any] = {}
+    inertia = (
+        f"the believed model's inertia: lambda_min(M) = {smallest:.3g}, lambda_max(M) = "
+        f"{largest:.3g} kg m^2 over the joint-limit box"
+    )
+    reasons: dict[str, str] = {}
+
+    def put(key: str, value: Any, reason: str) -> None:
+        if key not in explicit:
+            section, name = key.split(".")
+            values[(section, name)] = value
+            reasons[key] = reason
+
+    low, high = _joint_box(urdf)
+    qd = np.clip(np.zeros(n), low, high)
+    put("task.qd", tuple(qd), "0 within the joint limits")
+    if "task.qd" in explicit:
+        from .simulation import desired_state
+
+        qd = desired_state(config, 0.0)[0]
+    q0 = np.where(qd + 0.1 <= high, qd + 0.1, qd - 0.1)
+    put("task.q0", tuple(q0), "qd(0) + 0.1 rad")
+    if "task.q0" in explicit:
+        q0 = np.array(config.task.q0, dtype=float)
+    put("task.dq0", (0.0,) * n, "at rest")
+    put("plant.disturbance", (0.1,) * n, "0.1 N m per joint, as the paper's")
+    alpha1 = ALPHA1 * eye if "control.alpha1" not in explicit else np.array(config.control.alpha1)
+    put("control.alpha1", tuple(map(tuple, alpha1)), "2 I: e1 decays at 2/s")
+    ks = max(0.0, RISE_RATE * smallest - 1.0)
+    put(
+        "control.ks",
+        ks,
+        f"RISE acts at (ks + 1) / lambda_min(M) = {(ks + 1) / smallest:.3g}/s; {inertia}",
+    )
+    r = 1.0 / (POLICY_RATE * smallest)
+    if "cost.R" in explicit:
+        R = np.array(config.cost.R)
+    elif "cost.Q" in explicit:
+        R = eye
+        put("cost.R", tuple(map(tuple, R)), "I (cost.Q is given)")
+    else:
+        R = r * eye
+        put("cost.R", tuple(map(tuple, R)), "u* = -R^-1 e2 acts at 10/s on lambda_min(M)")
+    if "cost.Q" not in explicit:
+        alpha = float(np.linalg.eigvals(alpha1).real.min())
+        r_max = float(np.linalg.eigvalsh(0.5 * (R + R.T)).max())
+        K = alpha / (2.0 * r_max) * eye
+        put(
+            "cost.Q",
+            tuple(map(tuple, solvable_cost(K, alpha1, R))),
+            f"solvable_cost(K = {K[0, 0]:.3g} I, alpha1, R): W* is known",
+        )
+    r_min = float(np.linalg.eigvalsh(0.5 * (R + R.T)).min())
+    put(
+        "probe.amplitude",
+        0.1 * (ks + 1.0 + 1.0 / r_min),
+        "0.1 (ks + 1 + 1/r) N m: moves e2 by about 0.1 rad/s",
+    )
+    put("probe.until", 0.0, "no probing: Bellman-error extrapolation excites the critic")
+    put("extrapolation.points", 2 * config.basis_size, "twice the basis functions")
+    e1_0 = float(np.abs(qd - q0).max())
+    b1 = max(1.0, 2.0 * e1_0)
+    b2 = float(np.abs(np.linalg.eigvals(alpha1)).max()) * b1
+    put("extrapolation.box", (b1,) * n + (b2,) * n, "2 |e1(0)| on e1, alpha1 times that on e2")
+    put("sim.T", 10.0, "learning from extrapolation reaches W* within seconds")
+    return values, reasons
+
+
+# --- rates ----------------------------------------------------------------------------------
+
+
+def _positions(config: Config) -> np.ndarray:
+    """qd(0), q(0) and, with extrapolation, qd(0) - e1 over 32 seeded samples of its e1 box."""
+    from .simulation import desired_state
+
+    n = config.dof
+    qd = desired_state(config, 0.0)[0]
+    rows = [qd, np.array(config.task.q0, dtype=float)]
+    if config.extrapolation.points > 0:
+        box = config.extrapolation.box_vector(n)[:n]
+        rng = np.random.default_rng(_SEED)
+        rows += list(qd - rng.uniform(-box, box, size=(32, n)))
+    return np.array(rows)
+
+
+def _arm_inertia(config: Config) -> Any:
+    """M(q) of the believed model, as a function of q (one arm built for all positions)."""
+    n = config.dof
+    if config.plant.urdf is not None:
+        from .urdf import config_arm
+
+        arm = config_arm(config, model=True)
+        return lambda q: arm.terms(q, np.zeros(n))["M"]
+    from .optimal import arm_terms
+
+    return lambda q: arm_terms(config, q, np.zeros(n), model=True)["M"]
+
+
+def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:
+    """d(dV/de2)/dx (positions, n, 2n) of the actor's initial V = Wa^T phi at x = 0 with
+    qd = each position, by central differences of the basis' exact Jacobian (exact for the
+    quadratic bases)."""
+    from .optimal import basis
+
+    n = config.dof
+    config.initial_weights("critic_weights")  # a basis without a default: named as before
+    W = config.initial_weights("actor_weights")
+    h = 1e-4
+    steps = np.vstack([np.eye(2 * n) * h, -np.eye(2 * n) * h])  # (4n, 2n)
+    X = np.broadcast_to(steps, (len(positions), 4 * n, 2 * n))
+    qd = np.broadcast_to(positions[:, None, :], (len(positions), 4 * n, n))
+    _, jacobian = basis(config, X, qd)
+    gradient_e2 = np.einsum("pskx,k->psx", jacobian, W)[..., n:]  # (P, 4n, n)
+    difference = (gradient_e2[:, : 2 * n] - gradient_e2[:, 2 * n :]) / (2 * h)  # (P, 2n, n)
+    return np.swapaxes(difference, 1, 2)
+
+
+def _policy_gains(config: Config, positions: np.ndarray, masses: np.ndarray) -> np.ndarray:
+    """G (positions, n, 2n) of the policy u = -G x linearised at x = 0 at each joint position."""
+    n = config.dof
+    kind = config.controller.kind
+    count = len(positions)
+    R_inverse = np.linalg.inv(np.array(config.cost.R))
+    if kind == "pd":
+        kp, kd = (config.controller.gain_matrix(key, n) for key in ("kp", "kd"))
+        gain = np.hstack([kp - kd @ np.array(config.control.alpha1), kd])
+        return np.broadcast_to(gain, (count, n, 2 * n))
+    if kind == "optimal":
+        return np.broadcast_to(np.hstack([np.zeros((n, n)), R_inverse]), (count, n, 2 * n))
+    if kind != "adp":
+        return np.zeros((count, n, 2 * n))
+    # u_hat = -1/2 R^-1 g^T dV/dx = -1/2 R^-1 M^-1 dV/de2
+    return 0.5 * R_inverse @ np.linalg.solve(masses, _value_hessians(config, positions))
+
+
+def _spectral_radius(matrices: np.ndarray) -> float:
+    """max |eigenvalue| over a stack of matrices; inf when an entry is not finite."""
+    if not np.all(np.isfinite(matrices)):
+        return math.inf
+    return float(np.abs(np.linalg.eigvals(matrices)).max())
+
+
+def closed_loop_rates(config: Config) -> list[dict[str, Any]]:
+    """The fast rates (1/s) of the closed loop of ``config`` before it runs: a list of
+    ``{"term", "rate", "fields"}`` (fields: the settings that set the rate), the largest over the
+    sampled joint positions (module docstring)."""
+    n = config.dof
+    eye = np.eye(n)
+    alpha1 = np.array(config.control.alpha1, dtype=float)
+    rise_gain = (config.control.ks + 1.0) if config.controller.rise else 0.0
+    positions = _positions(config)
+    inertia = _arm_inertia(config)
+    masses = np.array([inertia(q) for q in positions])
+    gains = _policy_gains(config, positions, masses)
+    inverses = np.linalg.inv(masses)
+    rise = rise_gain / float(np.linalg.eigvalsh(masses)[:, 0].min())
+    policy = _spectral_radius(inverses @ gains[:, :, n:])
+    loop = 0.0
+    for M_inverse, G in zip(inverses, gains, strict=True):
+        A = np.block(
+            [[-alpha1, eye], [-M_inverse @ G[:, :n], -M_inverse @ (G[:, n:] + rise_gain * eye)]]
+        )
+        loop = max(loop, _spectral_radius(A))
+    policy_fields = {
+        "adp": "init.actor_weights, cost.R",
+        "optimal": "cost.R",
+        "pd": "controller.kp, controller.kd",
+    }.get(config.controller.kind, "")
+    out = [
+        {
+            "term": "the error dynamics (RISE, policy and alpha1 together)",
+            "rate": loop,
+            "fields": "control.ks, cost.R, control.alpha1",
+        },
+        {"term": "the RISE feedback (ks + 1) M^-1", "rate": rise, "fields": "control.ks"},
+        {"term": "the initial policy through M^-1", "rate": policy, "fields": policy_fields},
+        {
+            "term": "e1 = -alpha1 e1 + e2",
+            "rate": float(np.abs(np.linalg.eigvals(alpha1)).max()),
+            "fields": "control.alpha1",
+        },
+    ]
+    # the bound eta_c / nu of the normalised law; for nu near 0 (unnormalised) it says nothing
+    if config.controller.kind == "adp" and config.critic.nu >= 1e-6:
+        factor = 2.0 if config.extrapolation.points > 0 else 1.0
+        out.append(
+            {
+                "term": "the critic eta_c Gamma omega omega^T / rho"
+                + (" (trajectory and extrapolation points)" if factor > 1 else ""),
+                "rate": factor * config.critic.eta_c / config.critic.nu,
+                "fields": "critic.eta_c",
+            }
+        )
+    return out
+
+
+def _nice_floor(value: float) -> float:
+    """The largest 1, 2 or 5 times a power of ten at or below value."""
+    exponent = math.floor(math.log10(value))
+    for mantissa in (5.0, 2.0, 1.0):
+        candidate = mantissa * 10.0**exponent
+        if candidate <= value * (1.0 + 1e-12):
+            return float(f"{candidate:.1g}")
+    return float(f"{10.0 ** (exponent - 1) * 5:.1g}")  # pragma: no cover
+
+
+def auto_step(rates: list[dict[str, Any]], T: float = math.inf) -> float:
+    """sim.dt = "auto": the largest 1, 2 or 5 x 10^k s with every rate * dt <= AUTO_MARGIN *
+    RK4_STABILITY_LIMIT, at most AUTO_MAX_STEP (1 ms) and sim.T."""
+    fastest = max((entry["rate"] for entry in rates if math.isfinite(entry["rate"])), default=0.0)
+    step = AUTO_MAX_STEP
+    if fastest > 0.0:
+        step = min(step, _nice_floor(AUTO_MARGIN * RK4_STABILITY_LIMIT / fastest))
+    return min(step, T)
+
+
+def too_fast(rates: list[dict[str, Any]], dt: float) -> list[dict[str, Any]]:
+    """The (finite) rates beyond RK4's stability limit at step dt. A non-finite rate (weights
+    that overflow) has no step to suggest: that run diverges and says so."""
+    return [
+        entry
+        for entry in rates
+        if math.isfinite(entry["rate"]) and entry["rate"] * dt > RK4_STABILITY_LIMIT
+    ]
+
+
+def rates_text(rates: list[dict[str, Any]]) -> str:
+    return "; ".join(f"{entry['term']}: {entry['rate']:.4g}/s" for entry in rates)
+
+
+def check_step(config: Config) -> None:
+    """Refuses (ValueError naming sim.dt) a step at which a fast rate of the closed loop is beyond
+    RK4's stability limit, naming the term, its rate and a dt that works."""
+    rates = closed_loop_rates(config)
+    dt = config.sim.dt
+    fast = too_fast(rates, dt)
+    if not fast:
+        return
+    worst = max(fast, key=lambda entry: entry["rate"])
+    works = auto_step(rates, config.sim.T)
+    raise ValueError(
+        f"sim.dt: {dt:g} s is too coarse for this closed loop: {worst['term']} acts at "
+        f"{worst['rate']:.4g}/s, beyond RK4's stability limit {RK4_STABILITY_LIMIT}/sim.dt = "
+        f"{RK4_STABILITY_LIMIT / dt:.4g}/s (set by {worst['fields']}). Use sim.dt = {works:g} "
+        '(or sim.dt = "auto", which picks it). Rates: ' + rates_text(rates)
+    )
