@@ -136,7 +136,7 @@ def _parser() -> argparse.ArgumentParser:
             formatter_class=_HelpFormatter,
         )
 
-    def common(sub: argparse.ArgumentParser, default_out: str) -> None:
+    def common(sub: argparse.ArgumentParser, default_out: str, *, dt: bool = True) -> None:
         sub.add_argument(
             "--out",
             type=Path,
@@ -151,9 +151,7 @@ def _parser() -> argparse.ArgumentParser:
         )
         sub.add_argument("--no-figures", action="store_true", help="write no figures")
         sub.add_argument("--no-progress", action="store_true", help="show no progress bar")
-        sub.add_argument(
-            "--T", type=float, default=None, help="horizon sim.T in s (default: the config's)"
-        )
+        _horizon_options(sub, dt=dt)
 
     reproduce = add(
         "reproduce",
@@ -163,7 +161,7 @@ def _parser() -> argparse.ArgumentParser:
         "summary.json and summary.md (metrics and deviations from the paper) and the figures "
         "fig2_critic_weights, fig3_actor_weights, fig4_errors and torques.",
     )
-    common(reproduce, "results")
+    common(reproduce, "results", dt=False)  # the paper's step; --T shortens the run
     run = add(
         "run",
         "run a TOML configuration and write the same files",
@@ -228,10 +226,36 @@ def _parser() -> argparse.ArgumentParser:
         help="threads (default: every CPU this process can use)",
     )
     sweeping.add_argument("--no-progress", action="store_true", help="show no progress bar")
-    sweeping.add_argument(
-        "--T", type=float, default=None, help="horizon sim.T in s (default: the config's)"
-    )
+    _horizon_options(sweeping)
     return parser
+
+
+def _horizon_options(sub: argparse.ArgumentParser, *, dt: bool = True) -> None:
+    """--T (sim.T) and, unless dt is False, --dt (sim.dt): checked by Config.updated."""
+    sub.add_argument(
+        "--T",
+        type=_number_or_text,
+        default=None,
+        metavar="SECONDS",
+        help="horizon sim.T in s (default: the config's)",
+    )
+    if dt:
+        sub.add_argument(
+            "--dt",
+            type=_number_or_text,
+            default=None,
+            metavar="SECONDS",
+            help='RK4 step sim.dt in s, or "auto" (default: the config\'s)',
+        )
+
+
+def _number_or_text(text: str) -> float | str:
+    """A float if ``text`` reads as one, else ``text`` itself (e.g. "auto"), so that the
+    configuration's own check names the setting and what it accepts."""
+    try:
+        return float(text)
+    except ValueError:
+        return text.strip()
 
 
 def _grid_entry(text: str) -> tuple[str, list]:
@@ -252,9 +276,15 @@ def _say(command: str, text: str) -> None:
 
 
 def _config(args: argparse.Namespace) -> Config:
-    """The command's configuration (the paper's without a file) with --T applied."""
+    """The command's configuration (the paper's without a file) with --T and --dt applied
+    (through Config.updated: a bad value is the configuration's error, naming sim.T or sim.dt)."""
     config = paper_config() if getattr(args, "config", None) is None else load_config(args.config)
-    return config if args.T is None else config.updated({"sim": {"T": args.T}})
+    sim = {
+        key: value
+        for key, value in (("T", args.T), ("dt", getattr(args, "dt", None)))
+        if value is not None
+    }
+    return config.updated({"sim": sim}) if sim else config
 
 
 def _write_failed(command: str, folder: OutputFolder, error: OSError) -> int:
