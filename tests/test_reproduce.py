@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -11,7 +12,14 @@ import pytest
 
 import adparm
 from adparm.cli import main
-from adparm.summary import accumulated_cost, deviations, summarize, summary_markdown
+from adparm.summary import (
+    _time_to_stay_within,
+    accumulated_cost,
+    deviations,
+    relative_weight_error,
+    summarize,
+    summary_markdown,
+)
 
 from conftest import assert_same_arrays
 
@@ -22,6 +30,88 @@ pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 @pytest.fixture(scope="module")
 def short_result() -> adparm.SimulationResult:
     return adparm.simulate(adparm.paper_config().updated({"sim": {"T": 3.0}}))
+
+
+def _stiff_config() -> adparm.Config:
+    """The paper's arm starting at W* with probing off and a RISE gain too stiff for dt = 1 ms:
+    the weights stay on W* (relative error ~1e-17) up to the divergence at t = 8 ms, while e1
+    grows to tens of rad: the case a summary or figure must not show as a perfect run."""
+    w_star = adparm.optimal_weights(adparm.paper_config()).tolist()
+    return adparm.paper_config().updated(
+        {
+            "sim": {"T": 1.0},
+            "control": {"ks": 2500.0},
+            "probe": {"until": 0.0},
+            "init": {"critic_weights": w_star, "actor_weights": w_star},
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def diverged() -> adparm.SimulationDiverged:
+    with pytest.raises(adparm.SimulationDiverged) as caught:
+        adparm.simulate(_stiff_config())
+    return caught.value
+
+
+def _rows(result: adparm.SimulationResult, rows: int, status: str) -> adparm.SimulationResult:
+    """The first ``rows`` rows of ``result`` as a run that ended with ``status``."""
+    arrays = result.to_dict()
+    arrays.pop("status"), arrays.pop("wall_time")
+    resets = arrays.pop("covariance_reset_times")
+    arrays = {name: value[:rows] for name, value in arrays.items()}
+    return adparm.SimulationResult(
+        **arrays, covariance_reset_times=resets, config=result.config, status=status
+    )
+
+
+def test_summary_of_a_diverged_run_leads_with_the_divergence(diverged) -> None:
+    result = diverged.result
+    target = adparm.optimal_weights(result.config)
+    assert relative_weight_error(result.critic_weights, target)[-1] < 1e-12  # on W* ...
+    assert np.linalg.norm(result.e1[-1]) > 10.0  # ... while the arm is far away
+    s = summarize(result)
+    assert s["stopped_at"] == pytest.approx(diverged.time)
+    assert s["critic_time_within_tolerance"] is None and s["actor_time_within_tolerance"] is None
+    text = summary_markdown(s)
+    lines = [line for line in text.splitlines() if line.strip()]
+    assert lines[1].startswith(f"**diverged at t = {diverged.time:g} s**")
+    assert f"final |e1| = {s['final_e1_norm']:.6g} rad" in lines[1]
+    assert not re.search(r"within [\d.]+ % from t =", text)
+    assert "no time within 2 %: the run diverged" in text
+
+
+def test_summary_of_an_interrupted_run_leads_with_the_interruption(short_result) -> None:
+    partial = _rows(short_result, 101, "interrupted")  # up to t = 1 s of 3 s
+    s = summarize(partial)
+    assert s["stopped_at"] == pytest.approx(1.0) and s["critic_time_within_tolerance"] is None
+    lines = [line for line in summary_markdown(s).splitlines() if line.strip()]
+    assert lines[1].startswith("**interrupted at t = 1 s** of sim.T = 3 s")
+    # a finished run: no such line, and the time within needs the last row within
+    finished = [line for line in summary_markdown(summarize(short_result)).splitlines() if line]
+    assert finished[1].startswith("- status: finished")
+
+
+def test_time_within_needs_a_finished_run_that_ends_within() -> None:
+    t = np.arange(5.0)
+    assert _time_to_stay_within(t, np.array([1.0, 0.5, 0.01, 0.01, 0.01]), 0.02) == 2.0
+    assert _time_to_stay_within(t, np.zeros(5), 0.02) == 0.0
+    assert _time_to_stay_within(t, np.zeros(5), 0.02, finished=False) is None
+    assert _time_to_stay_within(t, np.array([0, 0, 0, 0, np.nan]), 0.02) is None
+    assert _time_to_stay_within(t, np.array([0, 0, 0, 0, 0.5]), 0.02) is None
+    assert _time_to_stay_within(t[:0], np.zeros(0), 0.02) is None
+
+
+def test_cli_run_prints_the_divergence_first(tmp_path, capsys) -> None:
+    config = tmp_path / "stiff.toml"
+    config.write_text(_stiff_config().to_toml())
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out), "--no-figures", "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    first = captured.err.splitlines()[0]
+    assert first.startswith("adparm run: diverged at t = 0.008 s of sim.T = 1 s: final |e1| = ")
+    assert "before the divergence" in captured.out and "within" not in captured.out
+    assert (out / "summary.md").read_text().splitlines()[2].startswith("**diverged at t = 0.008 s")
 
 
 @pytest.mark.slow

@@ -18,6 +18,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from tqdm.auto import tqdm
 
 from ._files import OutputError, OutputFolder
@@ -323,10 +324,15 @@ def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str
 
     config = result.config
     causes = divergence_causes(config)
+    if result.t.size:
+        e1 = float(np.linalg.norm(result.e1[-1]))
+        last = f"final |e1| = {e1:.3g} rad at the last finite row (t = {result.t[-1]:.6g} s); "
+    else:
+        last = "not even the first row was finite; "
     return (
-        f"the run diverged at t = {error.time:.6g} s (the state or an output became non-finite "
-        f"or exceeded sim.divergence_bound = {config.sim.divergence_bound:g}); its "
-        f"{result.t.size} rows up to then are written. "
+        f"diverged at t = {error.time:.6g} s of sim.T = {config.sim.T:g} s: {last}the state or an "
+        f"output became non-finite or exceeded sim.divergence_bound = "
+        f"{config.sim.divergence_bound:g}; the {result.t.size} rows up to then are written. "
         + (f"Likely cause: {'; '.join(causes)}. " if causes else "")
         + "To change: start from nonzero weights "
         "(init.critic_weights, init.actor_weights), a smaller sim.dt, or smaller learning rates "
@@ -360,6 +366,8 @@ def _run(args: argparse.Namespace) -> int:
             _say(command, str(error))
             return EXIT_BAD_INPUT
         signals.writing = True  # from here on a signal lets the files be finished
+        if diverged is not None:  # the divergence first: what follows is not a result
+            _say(command, _divergence_text(result, diverged))
         summary = result.summary()
         if getattr(args, "check_dt", False) and interrupt is None:
             from .truth import check_step_size
@@ -394,21 +402,21 @@ def _run(args: argparse.Namespace) -> int:
         if error_value is not None:
             claim = summary["critic_relative_error_at_claim"]
             claim_text = "-" if claim is None else f"{claim:.3g}"
+            before = " (the last finite row, before the divergence)" if diverged else ""
             print(
                 f"critic ||Wc - W*|| / ||W*||: {claim_text} at t = "
                 f"{summary['paper_claim_time']:g} s, {error_value:.3g} at t = "
-                f"{summary['t_end']:g} s; final |e1| = {summary['final_e1_norm']:.3g} rad"
+                f"{summary['t_end']:g} s{before}; final |e1| = {summary['final_e1_norm']:.3g} rad"
             )
         check = summary.get("step_size_check")
         if check is not None:
             print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
-        if summary["verdict"] not in ("ok", "not a learning run"):
+        if summary["verdict"] not in ("ok", "not a learning run", "diverged"):
             _say(command, f"verdict: {summary['verdict']}")
         if signals.received is not None:  # a signal while writing: the files are complete
             _say(command, f"{signal.Signals(signals.received).name} received while writing")
             return signals.status()
         if diverged is not None:
-            _say(command, _divergence_text(result, diverged))
             return EXIT_DIVERGED
     return 0
 
