@@ -6,6 +6,7 @@ import json
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +23,8 @@ from adparm.summary import (
 )
 
 from conftest import assert_same_arrays
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -327,6 +330,93 @@ def test_probe_end_is_marked_and_labelled() -> None:
     texts = [text.get_text() for text in figure.axes[0].texts]
     assert "probing ends" in texts
     assert any(line.get_xdata()[0] == 1.0 for line in figure.axes[1].get_lines()[2:])
+
+
+def _stop_lines(axes) -> list:
+    """The vertical lines that mark where a run stopped."""
+    return [line for line in axes.get_lines() if line.get_label() == "_stop"]
+
+
+def test_figures_of_a_diverged_run_mark_the_divergence(diverged) -> None:
+    import matplotlib.colors
+
+    from adparm.plotting import STOP_COLOR
+
+    result = diverged.result
+    label = f"diverged at t = {diverged.time:.4g} s"
+    for name, figure in result.plot().items():
+        assert label[1:] in figure.axes[0].get_title(), name  # "Diverged at t = ..."
+        for axes in figure.axes:
+            stops = _stop_lines(axes)
+            assert len(stops) == 1, name
+            assert stops[0].get_xdata()[0] == pytest.approx(diverged.time)
+            assert stops[0].get_color() == STOP_COLOR
+            red = matplotlib.colors.to_rgb(STOP_COLOR)
+            shaded = [p for p in axes.patches if p.get_facecolor()[:3] == pytest.approx(red)]
+            assert all(p.get_x() == pytest.approx(diverged.time) for p in shaded), name
+            assert shaded, name  # the time after the divergence is shaded
+        assert label in [t.get_text() for t in figure.axes[0].texts], name
+    # Figure 2's error panel: the last row's error (1e-17) is marked and said not to be a result
+    error_panel = result.plot("fig2_critic_weights").axes[-1]
+    notes = [t.get_text() for t in error_panel.texts]
+    assert any("not a result" in note and "|e1| = " in note for note in notes)
+    marks = [line for line in error_panel.get_lines() if line.get_label() == "_last row"]
+    assert len(marks) == 1 and marks[0].get_xdata()[0] == result.t[-1]
+    # a finished run: none of it
+    finished = adparm.simulate(
+        _stiff_config().updated({"control": {"ks": 10.0}, "sim": {"T": 0.05}})
+    )
+    figure = finished.plot("fig2_critic_weights")
+    assert "diverged" not in figure.axes[0].get_title()
+    assert not any(_stop_lines(axes) for axes in figure.axes)
+
+
+def test_figures_of_an_interrupted_run_mark_the_interruption(short_result) -> None:
+    partial = _rows(short_result, 101, "interrupted")
+    figure = partial.plot("fig2_critic_weights")
+    assert "Interrupted at t = 1 s" in figure.axes[0].get_title()
+    assert "interrupted at t = 1 s" in [t.get_text() for t in figure.axes[0].texts]
+    assert _stop_lines(figure.axes[-1])[0].get_xdata()[0] == pytest.approx(1.0)
+
+
+def test_many_weights_are_grouped_with_no_legend_wider_than_the_plot() -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    try:
+        ur5 = adparm.example_robot_urdf("ur5")
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    config = adparm.load_config(EXAMPLES / "ur5.toml").updated(
+        {"plant": {"urdf": str(ur5)}, "sim": {"T": 0.05}}
+    )
+    assert config.basis_size == 55
+    result = adparm.simulate(config, diagnose=False)
+    for name in ("fig2_critic_weights", "fig3_actor_weights"):
+        figure = result.plot(name)
+        k_block, inertia, errors = figure.axes
+        canvas = FigureCanvasAgg(figure)
+        canvas.draw()
+        renderer = canvas.get_renderer()
+        for axes in figure.axes:
+            legend = axes.get_legend()
+            if legend is not None:
+                width = legend.get_window_extent(renderer).width
+                assert width <= axes.get_window_extent(renderer).width, name
+                assert len(legend.get_texts()) <= 12, name
+        assert k_block.get_legend() is None and inertia.get_legend() is None
+        assert "K block, 21 weights" in k_block.texts[0].get_text()
+        assert "inertia block, 34 weights" in inertia.texts[0].get_text()
+        assert errors.get_yscale() == "log"
+        labels = [t.get_text() for t in errors.get_legend().get_texts()]
+        assert labels[1:] == ["K block", "inertia block", "2 %"]
+        # the figure's panels draw each weight relative to W*: zero at W*
+        target = adparm.optimal_weights(config)
+        weights = result.critic_weights if "critic" in name else result.actor_weights
+        drawn = [line.get_ydata() for line in k_block.get_lines() if line.get_label() == "_weight"]
+        assert len(drawn) == 21
+        k = np.arange(21)
+        expected = (weights[:, k] - target[k]) / np.abs(target[k]).max()
+        np.testing.assert_allclose(np.array(drawn).T, expected)
 
 
 def test_cli_reproduce_writes_the_artefacts(tmp_path, capsys) -> None:
