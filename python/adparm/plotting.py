@@ -588,6 +588,11 @@ def plot_critic_weights(
         markers tell apart weights whose curves coincide). If a transient would squeeze the final
         values into a thin band, the y axis is limited to the range that matters and the panel says
         how far the transient went. Bottom: the relative error on a log scale, with the 2 % line.
+        More than 12 weights (a URDF arm's structured basis) take one panel per block (the K
+        block, the inertia block; ``ax`` then takes up to three Axes), each weight drawn as
+        (W - W*) / max |W*| of its block, named in a legend only for a block of at most 12; the
+        error panel adds each block's relative error. A run that diverged or was interrupted
+        is marked where it stopped (see the module's notes).
     """
     return _weights_figure(
         result,
