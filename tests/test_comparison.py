@@ -259,6 +259,14 @@ def test_cli_compare_exit_codes(tmp_path, capsys) -> None:
     assert main(["compare", str(tmp_path / "missing.toml"), *common]) == 2
     assert main(["compare", *common, "--T", "-1"]) == 2
     assert "sim.T" in capsys.readouterr().err
+    assert main(["compare", *common, "--T", "0.1", "--dt", "0.2"]) == 2  # dt > T
+    assert "sim.dt" in capsys.readouterr().err
+    assert not out.exists()
+    args = ["compare", *common, "--kinds", "pd", "--T", "0.05", "--dt", "5e-4"]
+    assert main(args) == 0
+    capsys.readouterr()
+    written = adparm.load_config(out / "config.toml")
+    assert (written.sim.T, written.sim.dt) == (0.05, 5e-4)
 
     zero = tmp_path / "zero.toml"
     zero.write_text(_zero_weights(0.2).to_toml())

@@ -247,7 +247,7 @@ def test_divergence_message_says_what_happened_was_written_and_to_change(tmp_pat
     out = tmp_path / "out"
     assert run_cli("run", str(config), "--out", str(out), "--no-figures", "--no-progress") == 1
     err = capsys.readouterr().err
-    assert "the run diverged at t =" in err and "rows up to then are written" in err
+    assert err.startswith("adparm run: diverged at t =") and "rows up to then are written" in err
     assert "init.critic_weights" in err and "sim.dt" in err
     assert "exception" not in err and "Traceback" not in err and ".result" not in err
     assert adparm.load_result(out / "result.npz").status == "diverged"

@@ -3,17 +3,28 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import adparm
 from adparm.cli import main
-from adparm.summary import accumulated_cost, deviations, summarize, summary_markdown
+from adparm.summary import (
+    _time_to_stay_within,
+    accumulated_cost,
+    deviations,
+    relative_weight_error,
+    summarize,
+    summary_markdown,
+)
 
 from conftest import assert_same_arrays
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -22,6 +33,88 @@ pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 @pytest.fixture(scope="module")
 def short_result() -> adparm.SimulationResult:
     return adparm.simulate(adparm.paper_config().updated({"sim": {"T": 3.0}}))
+
+
+def _stiff_config() -> adparm.Config:
+    """The paper's arm starting at W* with probing off and a RISE gain too stiff for dt = 1 ms:
+    the weights stay on W* (relative error ~1e-17) up to the divergence at t = 8 ms, while e1
+    grows to tens of rad: the case a summary or figure must not show as a perfect run."""
+    w_star = adparm.optimal_weights(adparm.paper_config()).tolist()
+    return adparm.paper_config().updated(
+        {
+            "sim": {"T": 1.0},
+            "control": {"ks": 2500.0},
+            "probe": {"until": 0.0},
+            "init": {"critic_weights": w_star, "actor_weights": w_star},
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def diverged() -> adparm.SimulationDiverged:
+    with pytest.raises(adparm.SimulationDiverged) as caught:
+        adparm.simulate(_stiff_config())
+    return caught.value
+
+
+def _rows(result: adparm.SimulationResult, rows: int, status: str) -> adparm.SimulationResult:
+    """The first ``rows`` rows of ``result`` as a run that ended with ``status``."""
+    arrays = result.to_dict()
+    arrays.pop("status"), arrays.pop("wall_time")
+    resets = arrays.pop("covariance_reset_times")
+    arrays = {name: value[:rows] for name, value in arrays.items()}
+    return adparm.SimulationResult(
+        **arrays, covariance_reset_times=resets, config=result.config, status=status
+    )
+
+
+def test_summary_of_a_diverged_run_leads_with_the_divergence(diverged) -> None:
+    result = diverged.result
+    target = adparm.optimal_weights(result.config)
+    assert relative_weight_error(result.critic_weights, target)[-1] < 1e-12  # on W* ...
+    assert np.linalg.norm(result.e1[-1]) > 10.0  # ... while the arm is far away
+    s = summarize(result)
+    assert s["stopped_at"] == pytest.approx(diverged.time)
+    assert s["critic_time_within_tolerance"] is None and s["actor_time_within_tolerance"] is None
+    text = summary_markdown(s)
+    lines = [line for line in text.splitlines() if line.strip()]
+    assert lines[1].startswith(f"**diverged at t = {diverged.time:g} s**")
+    assert f"final |e1| = {s['final_e1_norm']:.6g} rad" in lines[1]
+    assert not re.search(r"within [\d.]+ % from t =", text)
+    assert "no time within 2 %: the run diverged" in text
+
+
+def test_summary_of_an_interrupted_run_leads_with_the_interruption(short_result) -> None:
+    partial = _rows(short_result, 101, "interrupted")  # up to t = 1 s of 3 s
+    s = summarize(partial)
+    assert s["stopped_at"] == pytest.approx(1.0) and s["critic_time_within_tolerance"] is None
+    lines = [line for line in summary_markdown(s).splitlines() if line.strip()]
+    assert lines[1].startswith("**interrupted at t = 1 s** of sim.T = 3 s")
+    # a finished run: no such line, and the time within needs the last row within
+    finished = [line for line in summary_markdown(summarize(short_result)).splitlines() if line]
+    assert finished[1].startswith("- status: finished")
+
+
+def test_time_within_needs_a_finished_run_that_ends_within() -> None:
+    t = np.arange(5.0)
+    assert _time_to_stay_within(t, np.array([1.0, 0.5, 0.01, 0.01, 0.01]), 0.02) == 2.0
+    assert _time_to_stay_within(t, np.zeros(5), 0.02) == 0.0
+    assert _time_to_stay_within(t, np.zeros(5), 0.02, finished=False) is None
+    assert _time_to_stay_within(t, np.array([0, 0, 0, 0, np.nan]), 0.02) is None
+    assert _time_to_stay_within(t, np.array([0, 0, 0, 0, 0.5]), 0.02) is None
+    assert _time_to_stay_within(t[:0], np.zeros(0), 0.02) is None
+
+
+def test_cli_run_prints_the_divergence_first(tmp_path, capsys) -> None:
+    config = tmp_path / "stiff.toml"
+    config.write_text(_stiff_config().to_toml())
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out), "--no-figures", "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    first = captured.err.splitlines()[0]
+    assert first.startswith("adparm run: diverged at t = 0.008 s of sim.T = 1 s: final |e1| = ")
+    assert "before the divergence" in captured.out and "within" not in captured.out
+    assert (out / "summary.md").read_text().splitlines()[2].startswith("**diverged at t = 0.008 s")
 
 
 @pytest.mark.slow
@@ -239,6 +332,93 @@ def test_probe_end_is_marked_and_labelled() -> None:
     assert any(line.get_xdata()[0] == 1.0 for line in figure.axes[1].get_lines()[2:])
 
 
+def _stop_lines(axes) -> list:
+    """The vertical lines that mark where a run stopped."""
+    return [line for line in axes.get_lines() if line.get_label() == "_stop"]
+
+
+def test_figures_of_a_diverged_run_mark_the_divergence(diverged) -> None:
+    import matplotlib.colors
+
+    from adparm.plotting import STOP_COLOR
+
+    result = diverged.result
+    label = f"diverged at t = {diverged.time:.4g} s"
+    for name, figure in result.plot().items():
+        assert label[1:] in figure.axes[0].get_title(), name  # "Diverged at t = ..."
+        for axes in figure.axes:
+            stops = _stop_lines(axes)
+            assert len(stops) == 1, name
+            assert stops[0].get_xdata()[0] == pytest.approx(diverged.time)
+            assert stops[0].get_color() == STOP_COLOR
+            red = matplotlib.colors.to_rgb(STOP_COLOR)
+            shaded = [p for p in axes.patches if p.get_facecolor()[:3] == pytest.approx(red)]
+            assert all(p.get_x() == pytest.approx(diverged.time) for p in shaded), name
+            assert shaded, name  # the time after the divergence is shaded
+        assert label in [t.get_text() for t in figure.axes[0].texts], name
+    # Figure 2's error panel: the last row's error (1e-17) is marked and said not to be a result
+    error_panel = result.plot("fig2_critic_weights").axes[-1]
+    notes = [t.get_text() for t in error_panel.texts]
+    assert any("not a result" in note and "|e1| = " in note for note in notes)
+    marks = [line for line in error_panel.get_lines() if line.get_label() == "_last row"]
+    assert len(marks) == 1 and marks[0].get_xdata()[0] == result.t[-1]
+    # a finished run: none of it
+    finished = adparm.simulate(
+        _stiff_config().updated({"control": {"ks": 10.0}, "sim": {"T": 0.05}})
+    )
+    figure = finished.plot("fig2_critic_weights")
+    assert "diverged" not in figure.axes[0].get_title()
+    assert not any(_stop_lines(axes) for axes in figure.axes)
+
+
+def test_figures_of_an_interrupted_run_mark_the_interruption(short_result) -> None:
+    partial = _rows(short_result, 101, "interrupted")
+    figure = partial.plot("fig2_critic_weights")
+    assert "Interrupted at t = 1 s" in figure.axes[0].get_title()
+    assert "interrupted at t = 1 s" in [t.get_text() for t in figure.axes[0].texts]
+    assert _stop_lines(figure.axes[-1])[0].get_xdata()[0] == pytest.approx(1.0)
+
+
+def test_many_weights_are_grouped_with_no_legend_wider_than_the_plot() -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    try:
+        ur5 = adparm.example_robot_urdf("ur5")
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    config = adparm.load_config(EXAMPLES / "ur5.toml").updated(
+        {"plant": {"urdf": str(ur5)}, "sim": {"T": 0.05}}
+    )
+    assert config.basis_size == 55
+    result = adparm.simulate(config, diagnose=False)
+    for name in ("fig2_critic_weights", "fig3_actor_weights"):
+        figure = result.plot(name)
+        k_block, inertia, errors = figure.axes
+        canvas = FigureCanvasAgg(figure)
+        canvas.draw()
+        renderer = canvas.get_renderer()
+        for axes in figure.axes:
+            legend = axes.get_legend()
+            if legend is not None:
+                width = legend.get_window_extent(renderer).width
+                assert width <= axes.get_window_extent(renderer).width, name
+                assert len(legend.get_texts()) <= 12, name
+        assert k_block.get_legend() is None and inertia.get_legend() is None
+        assert "K block, 21 weights" in k_block.texts[0].get_text()
+        assert "inertia block, 34 weights" in inertia.texts[0].get_text()
+        assert errors.get_yscale() == "log"
+        labels = [t.get_text() for t in errors.get_legend().get_texts()]
+        assert labels[1:] == ["K block", "inertia block", "2 %"]
+        # the figure's panels draw each weight relative to W*: zero at W*
+        target = adparm.optimal_weights(config)
+        weights = result.critic_weights if "critic" in name else result.actor_weights
+        drawn = [line.get_ydata() for line in k_block.get_lines() if line.get_label() == "_weight"]
+        assert len(drawn) == 21
+        k = np.arange(21)
+        expected = (weights[:, k] - target[k]) / np.abs(target[k]).max()
+        np.testing.assert_allclose(np.array(drawn).T, expected)
+
+
 def test_cli_reproduce_writes_the_artefacts(tmp_path, capsys) -> None:
     out = tmp_path / "results"
     assert main(["reproduce", "--out", str(out), "--T", "2", "--no-progress"]) == 0
@@ -271,6 +451,46 @@ def test_cli_run_reads_a_config_and_reports_divergence(tmp_path, capsys) -> None
     bad.write_text("[critic]\neta_cc = 1\n")
     assert main(["run", str(bad), "--out", str(out), "--no-progress"]) == 2
     assert "did you mean 'eta_c'" in capsys.readouterr().err
+
+
+def test_cli_run_takes_dt_and_T(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    argv = ["run", "--out", str(out), "--no-figures", "--no-progress"]
+    config = tmp_path / "paper.toml"
+    config.write_text("[sim]\nT = 20.0\n")
+    assert main([argv[0], str(config), *argv[1:], "--T", "0.1", "--dt", "5e-4"]) == 0
+    written = adparm.load_config(out / "config.toml")
+    assert (written.sim.T, written.sim.dt) == (0.1, 5e-4)
+    assert adparm.load_result(out / "result.npz").t[-1] == pytest.approx(0.1)
+    capsys.readouterr()
+    for bad in ("-1", "0", "nan", "0.5", "fast"):  # 0.5 > sim.T = 0.1
+        assert main([argv[0], str(config), *argv[1:], "--T", "0.1", "--dt", bad]) == 2, bad
+        assert "sim.dt" in capsys.readouterr().err, bad
+    assert main([argv[0], str(config), *argv[1:], "--T", "-2"]) == 2
+    assert "sim.T" in capsys.readouterr().err
+
+
+def test_cli_dt_auto_is_passed_on_as_the_string(monkeypatch, tmp_path) -> None:
+    from adparm import cli
+
+    seen = []
+    original = adparm.Config.updated
+    paper = adparm.paper_config()
+
+    def updated(self, changes):
+        seen.append(changes)
+        return original(self, changes)
+
+    monkeypatch.setattr(adparm.Config, "updated", updated)
+    args = cli._parser().parse_args(["run", "x.toml", "--dt", "auto", "--T", "3"])
+    monkeypatch.setattr(cli, "load_config", lambda path: paper)
+    try:
+        config = cli._config(args)
+    except (ValueError, TypeError) as error:  # sim.dt = "auto" not (yet) known to the config
+        assert "sim.dt" in str(error)
+    else:
+        assert config.sim.T == 3.0
+    assert seen == [{"sim": {"T": 3.0, "dt": "auto"}}]
 
 
 def test_cli_run_writes_a_run_that_diverges_before_its_first_row(tmp_path, capsys) -> None:

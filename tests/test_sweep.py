@@ -195,6 +195,17 @@ def test_cli_sweep_writes_the_table(tmp_path, capsys) -> None:
     argv = ["sweep", "--grid", "critic.eta_c=100,800", "--grid", "task.q0=[0.1,0.2],[0.5,-0.3]"]
     assert main([*argv, "--T", "0.5", "--threads", "2", "--out", str(out), "--no-progress"]) == 0
     rows = json.loads(out.read_text())["rows"]
+    assert all(r["t_end"] == 0.5 for r in rows)
+    capsys.readouterr()
+    argv_dt = [*argv, "--T", "0.2", "--dt", "2e-3", "--out", str(out), "--no-progress"]
+    assert main(argv_dt) == 0
+    rows_dt = json.loads(out.read_text())["rows"]
+    assert all(r["t_end"] == 0.2 for r in rows_dt)
+    capsys.readouterr()
+    assert main([*argv, "--dt=-1e-3", "--out", str(out), "--no-progress"]) == 2
+    assert "sim.dt" in capsys.readouterr().err
+    assert main([*argv, "--T", "0.5", "--threads", "2", "--out", str(out), "--no-progress"]) == 0
+    rows = json.loads(out.read_text())["rows"]
     assert [(r["critic.eta_c"], r["task.q0"]) for r in rows] == [
         (100, [0.1, 0.2]),
         (100, [0.5, -0.3]),

@@ -18,6 +18,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from tqdm.auto import tqdm
 
 from ._files import OutputError, OutputFolder
@@ -136,7 +137,7 @@ def _parser() -> argparse.ArgumentParser:
             formatter_class=_HelpFormatter,
         )
 
-    def common(sub: argparse.ArgumentParser, default_out: str) -> None:
+    def common(sub: argparse.ArgumentParser, default_out: str, *, dt: bool = True) -> None:
         sub.add_argument(
             "--out",
             type=Path,
@@ -151,9 +152,7 @@ def _parser() -> argparse.ArgumentParser:
         )
         sub.add_argument("--no-figures", action="store_true", help="write no figures")
         sub.add_argument("--no-progress", action="store_true", help="show no progress bar")
-        sub.add_argument(
-            "--T", type=float, default=None, help="horizon sim.T in s (default: the config's)"
-        )
+        _horizon_options(sub, dt=dt)
 
     reproduce = add(
         "reproduce",
@@ -163,7 +162,7 @@ def _parser() -> argparse.ArgumentParser:
         "summary.json and summary.md (metrics and deviations from the paper) and the figures "
         "fig2_critic_weights, fig3_actor_weights, fig4_errors and torques.",
     )
-    common(reproduce, "results")
+    common(reproduce, "results", dt=False)  # the paper's step; --T shortens the run
     run = add(
         "run",
         "run a TOML configuration and write the same files",
@@ -228,10 +227,36 @@ def _parser() -> argparse.ArgumentParser:
         help="threads (default: every CPU this process can use)",
     )
     sweeping.add_argument("--no-progress", action="store_true", help="show no progress bar")
-    sweeping.add_argument(
-        "--T", type=float, default=None, help="horizon sim.T in s (default: the config's)"
-    )
+    _horizon_options(sweeping)
     return parser
+
+
+def _horizon_options(sub: argparse.ArgumentParser, *, dt: bool = True) -> None:
+    """--T (sim.T) and, unless dt is False, --dt (sim.dt): checked by Config.updated."""
+    sub.add_argument(
+        "--T",
+        type=_number_or_text,
+        default=None,
+        metavar="SECONDS",
+        help="horizon sim.T in s (default: the config's)",
+    )
+    if dt:
+        sub.add_argument(
+            "--dt",
+            type=_number_or_text,
+            default=None,
+            metavar="SECONDS",
+            help='RK4 step sim.dt in s, or "auto" (default: the config\'s)',
+        )
+
+
+def _number_or_text(text: str) -> float | str:
+    """A float if ``text`` reads as one, else ``text`` itself (e.g. "auto"), so that the
+    configuration's own check names the setting and what it accepts."""
+    try:
+        return float(text)
+    except ValueError:
+        return text.strip()
 
 
 def _grid_entry(text: str) -> tuple[str, list]:
@@ -252,9 +277,15 @@ def _say(command: str, text: str) -> None:
 
 
 def _config(args: argparse.Namespace) -> Config:
-    """The command's configuration (the paper's without a file) with --T applied."""
+    """The command's configuration (the paper's without a file) with --T and --dt applied
+    (through Config.updated: a bad value is the configuration's error, naming sim.T or sim.dt)."""
     config = paper_config() if getattr(args, "config", None) is None else load_config(args.config)
-    return config if args.T is None else config.updated({"sim": {"T": args.T}})
+    sim = {
+        key: value
+        for key, value in (("T", args.T), ("dt", getattr(args, "dt", None)))
+        if value is not None
+    }
+    return config.updated({"sim": sim}) if sim else config
 
 
 def _write_failed(command: str, folder: OutputFolder, error: OSError) -> int:
@@ -293,10 +324,15 @@ def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str
 
     config = result.config
     causes = divergence_causes(config)
+    if result.t.size:
+        e1 = float(np.linalg.norm(result.e1[-1]))
+        last = f"final |e1| = {e1:.3g} rad at the last finite row (t = {result.t[-1]:.6g} s); "
+    else:
+        last = "not even the first row was finite; "
     return (
-        f"the run diverged at t = {error.time:.6g} s (the state or an output became non-finite "
-        f"or exceeded sim.divergence_bound = {config.sim.divergence_bound:g}); its "
-        f"{result.t.size} rows up to then are written. "
+        f"diverged at t = {error.time:.6g} s of sim.T = {config.sim.T:g} s: {last}the state or an "
+        f"output became non-finite or exceeded sim.divergence_bound = "
+        f"{config.sim.divergence_bound:g}; the {result.t.size} rows up to then are written. "
         + f"What the config shows: {'; '.join(causes)}"
     )
 
@@ -327,6 +363,8 @@ def _run(args: argparse.Namespace) -> int:
             _say(command, str(error))
             return EXIT_BAD_INPUT
         signals.writing = True  # from here on a signal lets the files be finished
+        if diverged is not None:  # the divergence first: what follows is not a result
+            _say(command, _divergence_text(result, diverged))
         summary = result.summary()
         if getattr(args, "check_dt", False) and interrupt is None:
             from .truth import check_step_size
@@ -361,21 +399,21 @@ def _run(args: argparse.Namespace) -> int:
         if error_value is not None:
             claim = summary["critic_relative_error_at_claim"]
             claim_text = "-" if claim is None else f"{claim:.3g}"
+            before = " (the last finite row, before the divergence)" if diverged else ""
             print(
                 f"critic ||Wc - W*|| / ||W*||: {claim_text} at t = "
                 f"{summary['paper_claim_time']:g} s, {error_value:.3g} at t = "
-                f"{summary['t_end']:g} s; final |e1| = {summary['final_e1_norm']:.3g} rad"
+                f"{summary['t_end']:g} s{before}; final |e1| = {summary['final_e1_norm']:.3g} rad"
             )
         check = summary.get("step_size_check")
         if check is not None:
             print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
-        if summary["verdict"] not in ("ok", "not a learning run"):
+        if summary["verdict"] not in ("ok", "not a learning run", "diverged"):
             _say(command, f"verdict: {summary['verdict']}")
         if signals.received is not None:  # a signal while writing: the files are complete
             _say(command, f"{signal.Signals(signals.received).name} received while writing")
             return signals.status()
         if diverged is not None:
-            _say(command, _divergence_text(result, diverged))
             return EXIT_DIVERGED
     return 0
 

@@ -13,7 +13,14 @@ Design choices, the same in every figure:
   thick black dashes, its values in the legend, and a log-scale panel of the relative error
   ||W - W*|| / ||W*||;
 - legends outside the data, to the right of the panels;
-- the end of probing marked and labelled.
+- the end of probing marked and labelled;
+- a run that did not finish (diverged, interrupted) says so: a red vertical line where it
+  stopped, labelled "diverged at t = ... s", the time after it shaded, the title saying so, and
+  the last recorded row marked (a value beyond the axis at its edge), so that the rows before a
+  divergence are not read as a result;
+- more than 12 weights (a URDF arm's structured basis: 30-80) are drawn in groups, the K block
+  and the inertia block, each relative to W*, without per-weight legends; the relative-error
+  panel (with each block's error) carries the story.
 """
 
 from __future__ import annotations
@@ -163,11 +170,85 @@ def _mark_probe_end(axes: Axes, result: SimulationResult, *, label: bool = True)
             )
 
 
-def _clip_transient(axes: Axes, values: np.ndarray, core: np.ndarray) -> None:
+#: The colour of a run's end when it did not finish (its divergence or interruption).
+STOP_COLOR = "#C00000"
+
+
+def _stop(result: SimulationResult) -> tuple[str, float] | None:
+    """(status, time) of a run that did not finish, None for a finished one."""
+    from .summary import stop_time
+
+    time = stop_time(result)
+    return None if time is None else (result.status, time)
+
+
+def _stop_label(result: SimulationResult) -> str:
+    """ "diverged at t = 0.008 s" (empty for a finished run)."""
+    stop = _stop(result)
+    return "" if stop is None else f"{stop[0]} at t = {stop[1]:.4g} s"
+
+
+def _title(title: str, result: SimulationResult) -> str:
+    label = _stop_label(result)
+    if not label:
+        return title
+    return f"{title}: {label.upper()[:1]}{label[1:]} (sim.T = {result.config.sim.T:g} s)"
+
+
+def _mark_stop(axes: Axes, result: SimulationResult, *, label: bool = True) -> None:
+    """A run that did not finish: a red vertical line where it stopped, the time after it shaded
+    (a band of an eighth of the run, up to sim.T) and, if ``label``, "diverged at t = ... s"."""
+    stop = _stop(result)
+    if stop is None:
+        return
+    status, time = stop
+    right = min(result.config.sim.T, time + max(0.12 * time, result.config.sim.dt))
+    if right > time:
+        axes.axvspan(time, right, color=STOP_COLOR, alpha=0.12, lw=0, zorder=0)
+    axes.axvline(time, color=STOP_COLOR, lw=1.5, zorder=6, label="_stop")
+    if label:
+        axes.annotate(
+            f"{status} at t = {time:.4g} s",
+            xy=(time, 1.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(-4, -4),
+            textcoords="offset points",
+            ha="right",
+            va="top",
+            fontsize=8,
+            fontweight="bold",
+            color=STOP_COLOR,
+            zorder=7,
+            bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": STOP_COLOR, "alpha": 0.9},
+        )
+
+
+def _mark_last_row(axes: Axes, result: SimulationResult, values: np.ndarray) -> None:
+    """A run that did not finish: its last recorded row's values marked in red at its time, a
+    value beyond the axis at the axis' edge (a triangle pointing out), so the reader sees where
+    the curves stop and what they were doing."""
+    if _stop(result) is None or not result.t.size:
+        return
+    t_last = float(result.t[-1])
+    low, high = axes.get_ylim()
+    last = np.asarray(values, dtype=float).reshape(-1)
+    style = {"color": STOP_COLOR, "ls": "none", "zorder": 8, "clip_on": False}
+    inside = last[(last >= low) & (last <= high)]
+    if inside.size:
+        axes.plot(np.full(inside.size, t_last), inside, marker="x", ms=5, mew=1.3, **style)
+    for beyond, edge, marker in ((last > high, high, "^"), (last < low, low, "v")):
+        if beyond.any():
+            axes.plot([t_last], [edge], marker=marker, ms=7, **style)
+
+
+def _clip_transient(
+    axes: Axes, values: np.ndarray, core: np.ndarray, *, least_margin: float = 1.0
+) -> None:
     """Limit the y axis to ``core`` (the values that matter: W* and the second half of the run)
-    with a margin when the transient goes far beyond it, and say so on the panel."""
+    with a margin (at least ``least_margin``) when the transient goes far beyond it, and say so
+    on the panel."""
     low, high = float(np.min(core)), float(np.max(core))
-    margin = max(0.3 * (high - low), 1.0)
+    margin = max(0.3 * (high - low), least_margin)
     low, high = low - margin, high + margin
     v_low, v_high = float(np.min(values)), float(np.max(values))
     span = high - low
@@ -234,36 +315,121 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
             core = weights[t.size // 2 :].ravel() if t.size else np.zeros(1)
         if t.size:
             _clip_transient(axes, weights, core)
+            _mark_last_row(axes, result, weights[-1])
         axes.set_ylabel(f"weight ${symbol}$ (-)")
         axes.set_xlabel("time t (s)")
         _mark_probe_end(axes, result)
-        size = weights.shape[1]
-        if size <= _MAX_LEGEND_WEIGHTS:
-            _legend_outside(axes, title="basis function", ncols=_legend_columns(size))
-        else:  # a legend of so many functions hides more than it tells
-            axes.text(
-                1.01,
-                1.0,
-                f"{size} basis functions\n(names: adparm.basis_names)",
-                transform=axes.transAxes,
-                va="top",
-                fontsize=8,
-            )
+        _mark_stop(axes, result)
+        _legend_outside(axes, title="basis function", ncols=_legend_columns(weights.shape[1]))
 
     return panel
 
 
-#: Weights named one by one in the legend of a weights figure (more: a note instead), and the
-#: legend rows per column.
-_MAX_LEGEND_WEIGHTS = 30
+#: Weights named one by one in the legend of a weights figure: more are drawn in groups
+#: (:func:`_weight_groups`) without per-weight legends. Legend rows per column.
+_MAX_LEGEND_WEIGHTS = 12
 _LEGEND_ROWS = 10
+
+
+def _weight_groups(result: SimulationResult, size: int) -> list[tuple[str, str, np.ndarray]]:
+    """The panels of a weights figure with more than _MAX_LEGEND_WEIGHTS weights, as (name,
+    description, indices): a URDF arm's structured basis in its K block (the products of e1)
+    and its inertia block (one function per base inertial parameter); any other basis in one."""
+    names = basis_names(result.config)
+    k = [i for i, name in enumerate(names) if name.startswith("e1_")]
+    m = [i for i, name in enumerate(names) if name.startswith("e2'M_b e2")]
+    if k and m and len(k) + len(m) == size:
+        return [
+            ("K block", "the products $e_{1,i}\\, e_{1,j}$", np.array(k)),
+            (
+                "inertia block",
+                "$e_2^T M_b(q)\\, e_2$, one per\nbase inertial parameter",
+                np.array(m),
+            ),
+        ]
+    return [("all weights", "", np.arange(size))]
+
+
+def _block_panel(
+    result: SimulationResult, weights: np.ndarray, symbol: str, group: tuple[str, str, np.ndarray]
+) -> Panel:
+    """One group of many weights: each weight's distance to W* relative to the group's largest
+    |W*| (W* is the zero line), or the weights themselves without a known W*; one legend entry
+    per weight only for a small group, else a label on the panel."""
+    name, description, index = group
+
+    def panel(axes: Axes) -> None:
+        target = _known_optimum(result)
+        t = result.t
+        names = basis_names(result.config)
+        block = weights[:, index]
+        if target is not None:
+            reference = target[index]
+            scale = float(np.max(np.abs(reference)))
+            scale = scale if scale > 0.0 else 1.0
+            values = (block - reference) / scale
+            ylabel = f"$({symbol} - W^*) / \\max|W^*|$"
+            axes.axhline(0.0, color="k", lw=1.6, ls=(0, (4, 3)), zorder=5, label="analytic W*")
+            core = np.concatenate([[0.0], values[t.size // 2 :].ravel()])
+        else:
+            values = block
+            ylabel = f"weight ${symbol}$ (-)"
+            core = values[t.size // 2 :].ravel() if t.size else np.zeros(1)
+        few = index.size <= _MAX_LEGEND_WEIGHTS
+        for j, i in enumerate(index):
+            style: dict[str, Any] = {"color": OKABE_ITO[j % len(OKABE_ITO)]}
+            if few:
+                every = max(1, t.size // 12)
+                style.update(marker=_MARKERS[j % len(_MARKERS)], markersize=4, markevery=every)
+            axes.plot(
+                t,
+                values[:, j],
+                lw=1.2 if few else 0.9,
+                alpha=1.0 if few else 0.75,
+                label=_label(names[i]) if few else "_weight",
+                **style,
+            )
+        if t.size:
+            _clip_transient(axes, values, core, least_margin=0.05 if target is not None else 1.0)
+            _mark_last_row(axes, result, values[-1])
+        if target is not None and values.size and np.ptp(axes.get_ylim()) < 0.02:
+            axes.set_ylim(-0.01, 0.01)  # round-off about W* is not drawn as a movement
+        axes.set_ylabel(ylabel)
+        axes.set_xlabel("time t (s)")
+        if not few:  # the panel's label where a legend would be
+            scaled = "\n(each weight minus its W*,\nover the block's largest |W*|)"
+            axes.text(
+                1.01,
+                1.0,
+                f"{name}, {index.size} weights"
+                + (f":\n{description}" if description else "")
+                + (scaled if target is not None else ""),
+                transform=axes.transAxes,
+                ha="left",
+                va="top",
+                fontsize=8,
+            )
+        _mark_probe_end(axes, result)
+        _mark_stop(axes, result)
+        if few:
+            _legend_outside(axes, title=name, ncols=_legend_columns(index.size))
+
+    return panel
 
 
 def _legend_columns(size: int) -> int:
     return max(1, -(-size // _LEGEND_ROWS))
 
 
-def _relative_error_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -> Panel:
+def _relative_error_panel(
+    result: SimulationResult,
+    weights: np.ndarray,
+    symbol: str,
+    groups: Sequence[tuple[str, str, np.ndarray]] = (),
+) -> Panel:
+    """||W - W*|| / ||W*|| on a log scale (with each group's own error for a grouped figure), or
+    without a known W* the distance to the final weights."""
+
     def panel(axes: Axes) -> None:
         target = _known_optimum(result)
         if target is None and result.t.size:
@@ -288,13 +454,75 @@ def _relative_error_panel(result: SimulationResult, weights: np.ndarray, symbol:
                 lw=1.2,
                 label=f"$\\|{symbol} - W^*\\| / \\|W^*\\|$",
             )
-            axes.axhline(0.02, color=OKABE_ITO[1], lw=0.9, ls="--", label="2 %")
+            if groups:
+                for (name, _, index), style in zip(groups, _BLOCK_STYLES, strict=False):
+                    block = np.linalg.norm(weights[:, index] - target[index], axis=1)
+                    norm = float(np.linalg.norm(target[index]))
+                    axes.semilogy(
+                        result.t,
+                        np.maximum(block / (norm if norm > 0.0 else 1.0), _FLOOR),
+                        lw=1.0,
+                        label=name,
+                        **style,
+                    )
+            tolerance = result.config.diagnostics.tolerance  # the verdict's band
+            axes.axhline(
+                tolerance, color=OKABE_ITO[1], lw=0.9, ls="--", label=f"{100 * tolerance:g} %"
+            )
+            if groups and result.t.size:  # a block starting on W* does not stretch the axis
+                least = float(np.min(np.maximum(error, _FLOOR)))
+                axes.set_ylim(bottom=max(0.3 * _FLOOR, min(0.3 * least, 1e-3)))
+            if result.t.size:
+                _mark_last_error(axes, result, float(error[-1]))
             _legend_outside(axes)
         axes.set_ylabel("relative error" if target is not None else "relative distance")
         axes.set_xlabel("time t (s)")
         _mark_probe_end(axes, result, label=False)
+        _mark_stop(axes, result, label=False)
 
     return panel
+
+
+_BLOCK_STYLES = (
+    {"color": OKABE_ITO[0], "ls": "-."},
+    {"color": OKABE_ITO[2], "ls": (0, (1, 1.2))},
+)
+
+
+def _mark_last_error(axes: Axes, result: SimulationResult, error: float) -> None:
+    """A run that did not finish: the relative error of its last row marked, and a note that it
+    is not a result (an error of 1e-16 just before a divergence is no convergence)."""
+    stop = _stop(result)
+    if stop is None:
+        return
+    t_last = float(result.t[-1])
+    axes.plot(
+        [t_last],
+        [max(error, _FLOOR)],
+        marker="x",
+        ms=6,
+        mew=1.4,
+        color=STOP_COLOR,
+        ls="none",
+        zorder=8,
+        label="_last row",
+    )
+    e1 = float(np.linalg.norm(result.e1[-1]))
+    low, high = np.log10(axes.get_ylim())
+    top = np.log10(max(error, _FLOOR)) < 0.5 * (low + high)  # the text away from the curve's end
+    axes.text(
+        0.01,
+        0.96 if top else 0.04,
+        f"last row t = {t_last:.4g} s: error {error:.2g}, |e1| = {e1:.3g} rad; then "
+        f"{stop[0]} at t = {stop[1]:.4g} s: not a result",
+        transform=axes.transAxes,
+        ha="left",
+        va="top" if top else "bottom",
+        fontsize=7.5,
+        color=STOP_COLOR,
+        zorder=9,
+        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.85},
+    )
 
 
 def _weights_figure(
@@ -305,20 +533,36 @@ def _weights_figure(
     ax: Axes | Sequence[Axes] | None,
     fig: Figure | None,
 ) -> Figure:
-    panels = [
-        _weights_panel(result, weights, symbol),
-        _relative_error_panel(result, weights, symbol),
-    ]
     size = weights.shape[1]
-    extra = _legend_columns(size) - 1 if size <= _MAX_LEGEND_WEIGHTS else 0
+    title = _title(title, result)
+    if size <= _MAX_LEGEND_WEIGHTS:
+        panels = [
+            _weights_panel(result, weights, symbol),
+            _relative_error_panel(result, weights, symbol),
+        ]
+        return _draw(
+            panels,
+            ax=ax,
+            fig=fig,
+            height=5.2,
+            title=title,
+            ratios=(2.2, 1.0),
+            width=_WIDTH + 1.3 * (_legend_columns(size) - 1),  # the legend's extra columns
+        )
+    groups = _weight_groups(result, size)
+    known = _known_optimum(result) is not None
+    panels = [_block_panel(result, weights, symbol, group) for group in groups]
+    panels.append(_relative_error_panel(result, weights, symbol, groups if known else ()))
+    legends = [group[2].size for group in groups if group[2].size <= _MAX_LEGEND_WEIGHTS]
+    extra = max((_legend_columns(n) - 1 for n in legends), default=0)
     return _draw(
         panels,
         ax=ax,
         fig=fig,
-        height=5.2,
+        height=2.3 * len(groups) + 2.0,
         title=title,
-        ratios=(2.2, 1.0),
-        width=_WIDTH + 1.3 * extra,  # room for the legend's extra columns
+        ratios=(*[1.6] * len(groups), 1.2),
+        width=_WIDTH + 1.3 * extra,
     )
 
 
@@ -346,7 +590,13 @@ def plot_critic_weights(
         Top: each weight over time with the analytic W* as black dashes (values in the legend;
         markers tell apart weights whose curves coincide). If a transient would squeeze the final
         values into a thin band, the y axis is limited to the range that matters and the panel says
-        how far the transient went. Bottom: the relative error on a log scale, with the 2 % line.
+        how far the transient went. Bottom: the relative error on a log scale, with the verdict's
+        tolerance (diagnostics.tolerance, 1 %) as a line.
+        More than 12 weights (a URDF arm's structured basis) take one panel per block (the K
+        block, the inertia block; ``ax`` then takes up to three Axes), each weight drawn as
+        (W - W*) / max |W*| of its block, named in a legend only for a block of at most 12; the
+        error panel adds each block's relative error. A run that diverged or was interrupted
+        is marked where it stopped (see the module's notes).
     """
     return _weights_figure(
         result,
@@ -408,6 +658,7 @@ def _joint_panel(
         axes.set_ylabel(ylabel)
         axes.set_xlabel("time t (s)")
         _mark_probe_end(axes, result, label=annotate_probe)
+        _mark_stop(axes, result, label=annotate_probe)
         _legend_outside(axes)
 
     return panel
@@ -440,7 +691,7 @@ def plot_errors(
         _joint_panel(result, result.e2, "$e_2$ (rad/s)", "$e_{{2,{j}}}$"),
         _joint_panel(result, result.e1, "$|e_1|$ (rad)", "$|e_{{1,{j}}}|$", log=True),
     ]
-    title = "Joint angles and tracking errors (Figure 4)"
+    title = _title("Joint angles and tracking errors (Figure 4)", result)
     return _draw(panels, ax=ax, fig=fig, height=6.4, title=title)
 
 
@@ -471,7 +722,8 @@ def plot_torques(
         ),
         _joint_panel(result, result.probe, "probing signal (N m)", "probe$_{j}$"),
     ]
-    return _draw(panels, ax=ax, fig=fig, height=4.2, title="Applied torques and probing signal")
+    title = _title("Applied torques and probing signal", result)
+    return _draw(panels, ax=ax, fig=fig, height=4.2, title=title)
 
 
 #: Line style of each controller in :func:`plot_comparison`: colour, dashes and width differ, and

@@ -23,6 +23,7 @@ __all__ = [
     "accumulated_cost",
     "deviations",
     "relative_weight_error",
+    "stop_time",
     "summarize",
     "summary_markdown",
 ]
@@ -163,7 +164,27 @@ def relative_weight_error(weights: np.ndarray, target: np.ndarray) -> np.ndarray
     return np.linalg.norm(np.asarray(weights) - target, axis=-1) / np.linalg.norm(target)
 
 
-def _time_to_stay_within(t: np.ndarray, error: np.ndarray, tolerance: float) -> float | None:
+def stop_time(result: SimulationResult) -> float | None:
+    """When a run that did not finish stopped: a diverged run at the end of the step after its
+    last finite row (0 if it recorded none; the time SimulationDiverged reports when the state
+    left the bound within a step), an interrupted or running one at its last row. None for a
+    finished run."""
+    if result.status == "finished":
+        return None
+    t = result.t
+    if result.status == "diverged":
+        return min(float(t[-1]) + result.config.sim.dt, result.config.sim.T) if t.size else 0.0
+    return float(t[-1]) if t.size else 0.0
+
+
+def _time_to_stay_within(
+    t: np.ndarray, error: np.ndarray, tolerance: float, *, finished: bool = True
+) -> float | None:
+    """The time from which ``error`` stays within ``tolerance`` up to the end; None unless the
+    run finished (a diverged or interrupted run's last row is not where it would have ended) and
+    its last row is within."""
+    if not finished or not t.size or not error[-1] <= tolerance:
+        return None
     outside = np.nonzero(~(error <= tolerance))[0]
     if outside.size == 0:
         return float(t[0]) if t.size else None
@@ -219,6 +240,9 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
     out: dict[str, Any] = {
         "status": result.status,
         "t_end": _number(t[-1]) if t.size else None,
+        "stopped_at": stop_time(result),
+        "T": result.config.sim.T,
+        "divergence_bound": result.config.sim.divergence_bound,
         "basis": list(basis_names(result.config)),
         "critic_weights": result.critic_weights[-1].tolist() if t.size else None,
         "actor_weights": result.actor_weights[-1].tolist() if t.size else None,
@@ -251,7 +275,9 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
         out[f"{name}_weight_error"] = (weights[-1] - target).tolist() if t.size else None
         out[f"{name}_relative_error"] = _number(error[-1]) if t.size else None
         out[f"{name}_relative_error_at_claim"] = _number(_value_at(t, error, PAPER_CLAIM_TIME))
-        out[f"{name}_time_within_tolerance"] = _time_to_stay_within(t, error, tolerance)
+        out[f"{name}_time_within_tolerance"] = _time_to_stay_within(
+            t, error, tolerance, finished=result.status == "finished"
+        )
     return out
 
 
@@ -292,9 +318,54 @@ def _diagnostics_lines(d: dict[str, Any] | None) -> list[str]:
     return lines
 
 
+def stop_line(summary: dict[str, Any]) -> str | None:
+    """The first thing to say about a run that did not finish: where it diverged (or was
+    interrupted) and its last |e1|, and that the weights reported are not a result. None for a
+    finished run."""
+    status = summary["status"]
+    if status == "finished":
+        return None
+    stopped = summary.get("stopped_at")
+    where = f"t = {_fmt(stopped)} s" if stopped is not None else "an unknown time"
+    horizon = summary.get("T")
+    of = f" of sim.T = {_fmt(horizon)} s" if horizon is not None else ""
+    last = summary["t_end"]
+    if last is None:
+        return (
+            f"**{status} at {where}**{of}: not even the first row was finite, nothing was "
+            "recorded"
+            + (
+                " (the state or an output became non-finite or left sim.divergence_bound)"
+                if status == "diverged"
+                else ""
+            )
+        )
+    e1 = (
+        f"final |e1| = {_fmt(summary['final_e1_norm'])} rad at the last finite row "
+        f"(t = {_fmt(last)} s)"
+    )
+    if status == "diverged":
+        bound = summary.get("divergence_bound")
+        cause = "the state or an output became non-finite or left sim.divergence_bound" + (
+            f" = {_fmt(bound)}" if bound is not None else ""
+        )
+        return (
+            f"**diverged at {where}**{of}: {cause}; {e1}. The weights and errors below are those "
+            "of that row, before the divergence: not a result"
+        )
+    return (
+        f"**{status} at {where}**{of}: {e1.replace('finite row', 'row')}. The weights and errors "
+        "below are those of that row, not of a finished run"
+    )
+
+
 def summary_markdown(summary: dict[str, Any]) -> str:
-    """``summary.md``: the W* table, the convergence figures and the deviations."""
+    """``summary.md``: the W* table, the convergence figures and the deviations. A run that
+    diverged or was interrupted says so first (:func:`stop_line`)."""
     lines = ["# adparm run summary", ""]
+    stopped = stop_line(summary)
+    if stopped is not None:
+        lines += [stopped, ""]
     lines += [
         f"- status: {summary['status']}, simulated to t = {_fmt(summary['t_end'])} s, "
         f"wall time {_fmt(summary['wall_time'])} s",
@@ -319,13 +390,20 @@ def summary_markdown(summary: dict[str, Any]) -> str:
         ]
     else:
         tol = 100 * summary["tolerance"]
+        finished = summary["status"] == "finished"
+        end = "at the end" if finished else f"at the last row (t = {_fmt(summary['t_end'])} s)"
         for name in ("critic", "actor"):
             within = summary[f"{name}_time_within_tolerance"]
+            if within is not None:
+                settled = f"within {tol:g} % from t = {within:.6g} s on"
+            elif finished:
+                settled = f"not within {tol:g} % at the end"
+            else:
+                settled = f"no time within {tol:g} %: the run {summary['status']}"
             lines.append(
-                f"- {name}: ||W - W*|| / ||W*|| = {_fmt(summary[f'{name}_relative_error'])} at the "
-                f"end, {_fmt(summary[f'{name}_relative_error_at_claim'])} at t = "
-                f"{_fmt(summary['paper_claim_time'])} s; within {tol:g} % from t = "
-                + (f"{within:.6g} s on" if within is not None else "- (not within at the end)")
+                f"- {name}: ||W - W*|| / ||W*|| = {_fmt(summary[f'{name}_relative_error'])} {end}, "
+                f"{_fmt(summary[f'{name}_relative_error_at_claim'])} at t = "
+                f"{_fmt(summary['paper_claim_time'])} s; {settled}"
             )
         lines += [
             "",
