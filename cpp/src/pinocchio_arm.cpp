@@ -261,7 +261,7 @@ LockedJoints resolve_locked(const ::urdf::ModelInterface& tree, const pinocchio:
       const JointSlot slot = joint_slot(full, name);
       suggestion = name + " = " + number_text(std::min(std::max(0.0, slot.lower), slot.upper));
     }
-    refuse_locked(source + ": joint '" + name + "' is a mimic joint (of '" + leader +
+    refuse_locked("URDF " + source + ": joint '" + name + "' is a mimic joint (of '" + leader +
                   "'); a mimic joint cannot be actuated on its own: lock it: locked_joints = {" +
                   suggestion + "}");
   }

@@ -1423,8 +1423,8 @@ class Config:
             n_model = urdf_info(believed["urdf"], name, believed["locked_joints"])[0]
             if n_model != n:
                 raise ValueError(
-                    f"{name}: the model has n = {n_model} free joints, the plant (plant.urdf) "
-                    f"n = {n}; the model must have the plant's joints"
+                    f"{name}: the model has n = {n_model} joints, the plant (plant.urdf) "
+                    f"n = {n}; the model must leave the plant's joints free"
                 )
         _refuse_two_link_basis(self.controller.basis)
 
