@@ -406,6 +406,8 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         ]
     if key == "urdf":
         return [1, True, "", "/nonexistent/arm.urdf", "bad\0path", ["arm.urdf"]]
+    if key == "locked_joints":  # a URDF arm's: refused with the two-link arm too
+        return [1, True, "a", [0.0], {"a": 0.0}, {"a": NAN}, {"": 0.0}, {"a": "0"}]
     if key == "gravity":  # gravity is a URDF arm's: refused with the two-link arm too
         return ["1", True, [0.0, 0.0], [0.0, 0.0, NAN], [0.0, 0.0, -9.81]]
     if key == "basis":  # a list of one built-in name is a valid (expression) basis

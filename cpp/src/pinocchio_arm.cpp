@@ -4,10 +4,17 @@
 
 #include <urdf_parser/urdf_parser.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <limits>
+#include <map>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/model.hpp>
 #include <pinocchio/algorithm/regressor.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody/data.hpp>
@@ -64,10 +71,208 @@ Eigen::VectorXd per_joint(const Eigen::VectorXd& values, int dof, const std::str
 
 namespace {
 
+// A number as TOML reads it back (0.0, not 0).
+std::string number_text(double value) {
+  std::ostringstream text;
+  text << std::setprecision(12) << value;
+  std::string out = text.str();
+  if (out.find_first_of(".eEn") == std::string::npos) out += ".0";
+  return out;
+}
+
+bool movable(int type) {
+  return type == ::urdf::Joint::REVOLUTE || type == ::urdf::Joint::CONTINUOUS ||
+         type == ::urdf::Joint::PRISMATIC;
+}
+
+// The principal moments of a symmetric 3 x 3 inertia, increasing.
+Eigen::Vector3d principal_moments(const Eigen::Matrix3d& inertia) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia, Eigen::EigenvaluesOnly)
+      .eigenvalues();
+}
+
+// Tolerance of the inertia checks: a millionth of the largest principal moment (URDFs print
+// their inertias to a few digits), and 1e-12 kg m^2 absolute.
+double inertia_tolerance(const Eigen::Vector3d& moments) {
+  return 1e-6 * moments.cwiseAbs().maxCoeff() + 1e-12;
+}
+
+std::string moments_text(const Eigen::Vector3d& moments) {
+  std::ostringstream text;
+  text << std::setprecision(6) << moments[0] << ", " << moments[1] << ", " << moments[2];
+  return text.str();
+}
+
+// Each link's <inertial> as the URDF declares it: mass >= 0, an inertia (about the centre of
+// mass) positive semi-definite and meeting the triangle inequality of its principal moments.
+// A link without mass and inertia (a frame) passes.
+void check_links(const ::urdf::ModelInterface& tree, const std::string& source) {
+  for (const auto& [name, link] : tree.links_) {
+    if (!link || !link->inertial) continue;
+    const ::urdf::Inertial& inertial = *link->inertial;
+    const double mass = inertial.mass;
+    if (!std::isfinite(mass) || mass < 0.0)
+      refuse(source, "link '" + name + "' has mass " + number_text(mass) +
+                         " in its <inertial>; a mass must be >= 0 (kg)");
+    Eigen::Matrix3d inertia;
+    inertia << inertial.ixx, inertial.ixy, inertial.ixz, inertial.ixy, inertial.iyy, inertial.iyz,
+        inertial.ixz, inertial.iyz, inertial.izz;
+    if (!inertia.allFinite())
+      refuse(source, "link '" + name + "' has an inertia that is not finite");
+    const Eigen::Vector3d moments = principal_moments(inertia);
+    const double tolerance = inertia_tolerance(moments);
+    if (moments[0] < -tolerance)
+      refuse(source, "link '" + name +
+                         "' has an inertia that is not positive semi-definite (principal "
+                         "moments " +
+                         moments_text(moments) + " kg m^2)");
+    if (moments[0] + moments[1] < moments[2] - tolerance)
+      refuse(source, "link '" + name +
+                         "' has an inertia that breaks the triangle inequality (principal "
+                         "moments " +
+                         moments_text(moments) +
+                         " kg m^2: the two smaller must add up to at least the largest)");
+  }
+}
+
+// Every body a joint moves (its link and the links fixed or locked to it, as Pinocchio merged
+// them): a positive mass and a positive definite inertia about its centre of mass.
+void check_bodies(const pinocchio::Model& model, const std::string& source) {
+  for (pinocchio::JointIndex joint = 1; joint < static_cast<pinocchio::JointIndex>(model.njoints);
+       ++joint) {
+    std::string link = model.names[joint];
+    for (const auto& frame : model.frames)
+      if (frame.type == pinocchio::BODY && frame.parentJoint == joint) {
+        link = frame.name;
+        break;
+      }
+    const std::string body = "link '" + link + "' (the body joint '" + model.names[joint] +
+                             "' moves, with the links fixed or locked to it)";
+    const pinocchio::Inertia& inertia = model.inertias[joint];
+    if (!(inertia.mass() > 0.0))
+      refuse(source, body + " has mass " + number_text(inertia.mass()) +
+                         "; a body that a joint moves needs a positive mass");
+    const Eigen::Vector3d moments = principal_moments(inertia.inertia().matrix());
+    if (!(moments[0] > inertia_tolerance(moments)))
+      refuse(source, body + " has an inertia that is not positive definite (principal moments " +
+                         moments_text(moments) + " kg m^2)");
+  }
+}
+
+// Where joint `name` stands in Pinocchio's configuration, and its limits (+-inf: continuous).
+struct JointSlot {
+  pinocchio::JointIndex index;
+  int iq;
+  bool continuous;
+  double lower, upper;
+};
+
+JointSlot joint_slot(const pinocchio::Model& model, const std::string& name) {
+  const pinocchio::JointIndex index = model.getJointId(name);
+  const int iq = model.idx_qs[index];
+  const bool continuous = model.nqs[index] == 2;
+  const double inf = std::numeric_limits<double>::infinity();
+  return {index, iq, continuous, continuous ? -inf : model.lowerPositionLimit[iq],
+          continuous ? inf : model.upperPositionLimit[iq]};
+}
+
+[[noreturn]] void refuse_locked(const std::string& problem) {
+  throw LockedJointsError("locked_joints: " + problem);
+}
+
+// The locked joints checked against the URDF (names, limits) and completed with the mimic joints
+// that follow a locked joint; a mimic joint left free is refused, saying what to lock.
+LockedJoints resolve_locked(const ::urdf::ModelInterface& tree, const pinocchio::Model& full,
+                            const LockedJoints& given, const std::string& source) {
+  std::vector<std::string> names;  // the URDF's movable joints, in Pinocchio's order
+  for (pinocchio::JointIndex joint = 1; joint < static_cast<pinocchio::JointIndex>(full.njoints);
+       ++joint)
+    names.push_back(full.names[joint]);
+  auto joined = [](const std::vector<std::string>& items) {
+    std::string out;
+    for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
+    return out;
+  };
+  auto check_value = [&](const std::string& name, double value, const std::string& why) {
+    const JointSlot slot = joint_slot(full, name);
+    if (!std::isfinite(value))
+      refuse_locked("joint '" + name + "'" + why + ": the position must be finite, got " +
+                    number_text(value));
+    if (value < slot.lower || value > slot.upper)
+      refuse_locked("joint '" + name + "'" + why + " at " + number_text(value) +
+                    ", outside its limits [" + number_text(slot.lower) + ", " +
+                    number_text(slot.upper) + "] in " + source);
+  };
+  LockedJoints locked;
+  std::map<std::string, double> value_of;
+  for (const auto& [name, value] : given) {
+    if (!full.existJointName(name) || name == "universe") {
+      const ::urdf::JointConstSharedPtr joint = tree.getJoint(name);
+      const std::string what =
+          joint ? "joint '" + name + "' of " + source + " is fixed (it does not move)"
+                : "no joint '" + name + "' in " + source;
+      refuse_locked(what + "; its joints: " + joined(names));
+    }
+    if (value_of.count(name)) refuse_locked("joint '" + name + "' is given twice");
+    check_value(name, value, " locked");
+    value_of[name] = value;
+    locked.emplace_back(name, value);
+  }
+  // Mimic joints (movable ones): locked with their leader, or given; a free one is refused.
+  bool changed = true;
+  while (changed) {
+    changed = false;
+    for (const auto& [name, joint] : tree.joints_) {
+      if (!joint->mimic || !movable(joint->type)) continue;
+      const std::string& leader = joint->mimic->joint_name;
+      const auto found = value_of.find(leader);
+      if (found == value_of.end()) continue;
+      const double follows = joint->mimic->multiplier * found->second + joint->mimic->offset;
+      const auto own = value_of.find(name);
+      if (own == value_of.end()) {
+        check_value(name, follows,
+                    " (a mimic joint of '" + leader + "', locked with it: " +
+                        number_text(joint->mimic->multiplier) + " * " + number_text(found->second) +
+                        " + " + number_text(joint->mimic->offset) + ")");
+        value_of[name] = follows;
+        locked.emplace_back(name, follows);
+        changed = true;
+      } else if (std::abs(own->second - follows) > 1e-9 * (1.0 + std::abs(follows))) {
+        refuse_locked("joint '" + name + "' is a mimic joint of '" + leader + "' (" +
+                      number_text(joint->mimic->multiplier) + " * " + leader + " + " +
+                      number_text(joint->mimic->offset) + "), locked at " +
+                      number_text(own->second) + " where '" + leader + "' at " +
+                      number_text(found->second) + " puts it at " + number_text(follows) +
+                      "; lock it there or leave it out (it follows its leader)");
+      }
+    }
+  }
+  for (const auto& [name, joint] : tree.joints_) {
+    if (!joint->mimic || !movable(joint->type) || value_of.count(name)) continue;
+    // A free mimic joint: suggest locking it with its leader, at 0 or the nearest limit.
+    const std::string& leader = joint->mimic->joint_name;
+    std::string suggestion;
+    if (full.existJointName(leader)) {
+      const JointSlot slot = joint_slot(full, leader);
+      const double at = std::min(std::max(0.0, slot.lower), slot.upper);
+      const double follows = joint->mimic->multiplier * at + joint->mimic->offset;
+      suggestion = leader + " = " + number_text(at) + ", " + name + " = " + number_text(follows);
+    } else {
+      const JointSlot slot = joint_slot(full, name);
+      suggestion = name + " = " + number_text(std::min(std::max(0.0, slot.lower), slot.upper));
+    }
+    refuse_locked("URDF " + source + ": joint '" + name + "' is a mimic joint (of '" + leader +
+                  "'); a mimic joint cannot be actuated on its own: lock it: locked_joints = {" +
+                  suggestion + "}");
+  }
+  return locked;
+}
+
 std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::string& source,
                                           const Eigen::Vector3d& gravity,
                                           const Eigen::VectorXd& coulomb,
-                                          const Eigen::VectorXd& viscous) {
+                                          const Eigen::VectorXd& viscous,
+                                          const LockedJoints& locked) {
   check_finite(gravity, "gravity");
   check_finite(coulomb, "coulomb");
   check_finite(viscous, "viscous");
@@ -79,13 +284,14 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
            "floating or planar is one cause)");
   // Refuse what the arm cannot be: a joint the loop cannot actuate as one coordinate.
   for (const auto& [name, joint] : tree->joints_) {
-    if (joint->mimic)
-      refuse(source, "joint '" + name + "' is a mimic joint (of '" + joint->mimic->joint_name +
-                         "'); mimic joints are not supported: every joint must be actuated");
     switch (joint->type) {
       case ::urdf::Joint::REVOLUTE:
       case ::urdf::Joint::CONTINUOUS:
       case ::urdf::Joint::PRISMATIC:
+        if (joint->axis.x == 0.0 && joint->axis.y == 0.0 && joint->axis.z == 0.0)
+          refuse(source, "joint '" + name + "' (which moves link '" + joint->child_link_name +
+                             "') has a zero axis");
+        break;
       case ::urdf::Joint::FIXED:
         break;
       case ::urdf::Joint::FLOATING:
@@ -98,22 +304,48 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
                            "supported");
     }
   }
+  check_links(*tree, source);
   auto impl = std::make_unique<PinocchioArm::Impl>();
   impl->source = source;
+  pinocchio::Model full;
   try {
-    pinocchio::urdf::buildModel(tree, impl->model);
+    pinocchio::urdf::buildModel(tree, full);  // mimic = false: a mimic joint is a joint of its own
   } catch (const std::exception& error) {
     refuse(source, std::string("Pinocchio could not build a model: ") + error.what());
+  }
+  impl->locked = resolve_locked(*tree, full, locked, source);
+  if (impl->locked.empty()) {
+    impl->model = full;
+  } else {
+    Eigen::VectorXd reference = pinocchio::neutral(full);
+    std::vector<pinocchio::JointIndex> indices;
+    for (const auto& [name, value] : impl->locked) {
+      const JointSlot slot = joint_slot(full, name);
+      indices.push_back(slot.index);
+      if (slot.continuous) {
+        reference[slot.iq] = std::cos(value);
+        reference[slot.iq + 1] = std::sin(value);
+      } else {
+        reference[slot.iq] = value;
+      }
+    }
+    try {
+      pinocchio::buildReducedModel(full, indices, reference, impl->model);
+    } catch (const std::exception& error) {
+      refuse(source, std::string("Pinocchio could not lock the joints: ") + error.what());
+    }
   }
   pinocchio::Model& model = impl->model;
   const int dof = model.njoints - 1;
   if (dof == 0)
-    refuse(source,
-           "no actuated joint (the arm needs at least one revolute, continuous or "
-           "prismatic joint)");
+    refuse(source, impl->locked.empty()
+                       ? "no actuated joint (the arm needs at least one revolute, continuous or "
+                         "prismatic joint)"
+                       : "no free joint: every joint is locked");
   if (model.nv != dof)
     refuse(source, "Pinocchio's model has " + std::to_string(model.nv) + " velocities for " +
                        std::to_string(dof) + " joints; only one-coordinate joints are supported");
+  check_bodies(model, source);
   model.gravity.linear(gravity);
   impl->model_without_gravity = model;
   impl->model_without_gravity.gravity.setZero();
@@ -174,13 +406,26 @@ PinocchioArm::PinocchioArm(std::unique_ptr<Impl> impl)
       residual_(Eigen::VectorXd::Zero(impl_->model.nv)) {}
 
 PinocchioArm::PinocchioArm(const std::string& urdf_path, const Eigen::Vector3d& gravity,
-                           const Eigen::VectorXd& coulomb, const Eigen::VectorXd& viscous)
-    : PinocchioArm(build(read_file(urdf_path), urdf_path, gravity, coulomb, viscous)) {}
+                           const Eigen::VectorXd& coulomb, const Eigen::VectorXd& viscous,
+                           const LockedJoints& locked)
+    : PinocchioArm(build(read_file(urdf_path), urdf_path, gravity, coulomb, viscous, locked)) {}
 
 PinocchioArm PinocchioArm::from_xml(const std::string& xml, const Eigen::Vector3d& gravity,
                                     const Eigen::VectorXd& coulomb, const Eigen::VectorXd& viscous,
-                                    const std::string& name) {
-  return PinocchioArm(build(xml, name, gravity, coulomb, viscous));
+                                    const std::string& name, const LockedJoints& locked) {
+  return PinocchioArm(build(xml, name, gravity, coulomb, viscous, locked));
+}
+
+std::string LockedJointsError::with_section(const std::string& section) const {
+  std::string message = what();
+  const std::string head = "locked_joints: ";
+  if (message.rfind(head, 0) == 0)
+    message = section + ".locked_joints: " + message.substr(head.size());
+  const std::string hint = "lock it: locked_joints = {";
+  const std::size_t at = message.find(hint);
+  if (at != std::string::npos)
+    message.replace(at, hint.size(), "lock it: [" + section + "] locked_joints = {");
+  return message;
 }
 
 PinocchioArm::PinocchioArm(const PinocchioArm& other)
@@ -206,6 +451,7 @@ const PinocchioArm::Limits& PinocchioArm::limits() const { return impl_->limits;
 const Eigen::Vector3d& PinocchioArm::gravity_vector() const { return impl_->gravity; }
 const Eigen::VectorXd& PinocchioArm::coulomb() const { return impl_->coulomb; }
 const Eigen::VectorXd& PinocchioArm::viscous() const { return impl_->viscous; }
+const LockedJoints& PinocchioArm::locked_joints() const { return impl_->locked; }
 
 PinocchioArm::Terms PinocchioArm::make_terms() const {
   Terms terms;

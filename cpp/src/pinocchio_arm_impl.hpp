@@ -29,6 +29,7 @@ struct PinocchioArmFields {
   PinocchioArm::Limits limits;
   Eigen::Vector3d gravity;
   Eigen::VectorXd coulomb, viscous;
+  LockedJoints locked;  // given and implied (mimic joints of locked joints)
 };
 
 // The fields and Pinocchio's work space (pinocchio::Data), which a copy builds afresh from the

@@ -41,9 +41,17 @@ DESCRIPTIONS = {
     "See :doc:`/guide/urdf-arms`.",
     ("plant", "gravity"): "Acceleration of gravity [gx, gy, gz] in the URDF's root frame "
     "(m/s^2); only with ``urdf``.",
+    ("plant", "locked_joints"): "Joints of the URDF held at a position, a table "
+    "``{name = position, ...}`` (rad or m), through Pinocchio's reduced model: their links "
+    "become part of the parent body and n counts the free joints only. A mimic joint must be "
+    "locked or follow a locked joint (it is then locked at multiplier x position + offset). An "
+    "unknown name (the message lists the arm's joints) or a position outside the joint's limits "
+    "is refused; only with ``urdf``. See :doc:`/guide/urdf-arms`.",
     ("model", "urdf"): "Another URDF of the same joint count as the controller's believed arm "
     "(a model error); only with ``plant.urdf``.",
     ("model", "gravity"): "The believed gravity [gx, gy, gz]; only with ``plant.urdf``.",
+    ("model", "locked_joints"): "The believed locked joints (a table as ``plant.locked_joints``); "
+    "the model must have the plant's number of free joints; only with ``plant.urdf``.",
     ("model", "p1"): "The arm the controller believes (feedforward h, f, g and W*). "
     "Each key left out takes the plant's value; set one to introduce a model error.",
     ("model", "p2"): "As p1.",
@@ -145,6 +153,7 @@ RESOLVED_DEFAULTS = {
     ("model", "*"): "the plant's value",
     ("plant", "urdf"): "none (the built-in two-link arm)",
     ("plant", "gravity"): "[0, 0, -9.81] (with ``urdf``)",
+    ("plant", "locked_joints"): "none (every joint free)",
     ("critic", "epsilon_T"): "1e-6; 1e-3 with extrapolation points",
     ("probe", "phases"): "k rad for sinusoid k, both joints",
     ("task.qd sinusoid", "phase"): "zeros",

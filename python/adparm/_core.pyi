@@ -196,6 +196,11 @@ class UrdfArmSettings:
         """(n,), (1,) or (0,)"""
     @viscous.setter
     def viscous(self, value: ArrayLike) -> None: ...
+    @property
+    def locked_joints(self) -> list[tuple[str, float]]:
+        """Joints held at a position: [(name, rad or m), ...]"""
+    @locked_joints.setter
+    def locked_joints(self, value: list[tuple[str, float]]) -> None: ...
 
 class Settings:
     """All settings of one run. Eigen members are copied on access: assign them whole.
@@ -265,9 +270,11 @@ def simulate_open_loop(
 
 class UrdfArm:
     """A fixed-base serial arm from a URDF file, through Pinocchio (cpp/src/pinocchio_arm.cpp).
-    gravity (3,), coulomb and viscous: one number or one per joint. A URDF that cannot be read or
-    parsed, without a revolute/continuous/prismatic joint, or with a floating, planar or mimic
-    joint raises ValueError naming the file."""
+    gravity (3,), coulomb and viscous: one number or one per joint; locked_joints: joints held at
+    a position (Pinocchio's reduced model). A URDF that cannot be read or parsed, without a free
+    revolute/continuous/prismatic joint, with a floating or planar joint, or that fails a
+    physical check raises ValueError naming the file (and the link); a problem with the locked
+    joints (or a free mimic joint) raises ValueError starting "locked_joints: "."""
 
     def __init__(
         self,
@@ -275,6 +282,7 @@ class UrdfArm:
         gravity: ArrayLike = ...,
         coulomb: float | ArrayLike = 0.0,
         viscous: float | ArrayLike = 0.0,
+        locked_joints: list[tuple[str, float]] = ...,
     ) -> None: ...
     @staticmethod
     def from_xml(
@@ -283,6 +291,7 @@ class UrdfArm:
         coulomb: float | ArrayLike = 0.0,
         viscous: float | ArrayLike = 0.0,
         name: str = "<URDF string>",
+        locked_joints: list[tuple[str, float]] = ...,
     ) -> UrdfArm:
         """The same from the URDF's XML text; name stands for the file in error messages."""
     @property
@@ -293,6 +302,8 @@ class UrdfArm:
     def joint_names(self) -> list[str]: ...
     @property
     def joint_types(self) -> list[str]: ...
+    @property
+    def locked_joints(self) -> list[tuple[str, float]]: ...
     @property
     def gravity(self) -> _FloatArray: ...
     @property

@@ -382,44 +382,93 @@ def _urdf_path(value: Any, name: str) -> str:
     return path
 
 
-@functools.lru_cache(maxsize=32)
-def _urdf_info(path: str, mtime_ns: int, size: int) -> tuple[int, tuple[str, ...]]:
-    """(n, joint names) of a URDF read by the core (once per file version)."""
-    from . import _core
+#: Joints held at a position, as the core takes them: ((name, position), ...).
+LockedPairs = tuple[tuple[str, float], ...]
 
-    arm = _core.UrdfArm(path)
+
+def _locked_pairs(locked: Mapping[str, float] | None) -> LockedPairs:
+    return tuple((name, float(value)) for name, value in (locked or {}).items())
+
+
+@functools.lru_cache(maxsize=32)
+def _urdf_info(
+    path: str, mtime_ns: int, size: int, locked: LockedPairs = ()
+) -> tuple[int, tuple[str, ...]]:
+    """(n, joint names) of a URDF read by the core (once per file version and locked joints),
+    after the checks of the text of its <inertial> elements (urdf.check_inertial_text)."""
+    from . import _core
+    from .urdf import check_inertial_text
+
+    check_inertial_text(path)
+    arm = _core.UrdfArm(path, locked_joints=list(locked))
     return arm.dof, tuple(arm.joint_names)
 
 
-def urdf_info(path: str, name: str = "plant.urdf") -> tuple[int, tuple[str, ...]]:
-    """The joint count and joint names of the URDF at ``path``; a file that does not parse, has
-    no actuated joint or has a floating base is refused with a ValueError naming ``name``."""
+def _urdf_error(error: Exception, name: str) -> ValueError:
+    """A ValueError naming ``name`` (plant.urdf or model.urdf), or its section's locked_joints
+    field for a problem with the locked joints."""
+    from .urdf import locked_joints_message
+
+    section = name.split(".")[0]
+    text = locked_joints_message(str(error), section)
+    return ValueError(text if text != str(error) else f"{name}: {error}")
+
+
+def urdf_info(
+    path: str, name: str = "plant.urdf", locked: Mapping[str, float] | None = None
+) -> tuple[int, tuple[str, ...]]:
+    """The free joint count and joint names of the URDF at ``path`` with the joints ``locked``
+    held; a file that does not parse, has no free actuated joint, has a floating base or fails a
+    physical check is refused with a ValueError naming ``name``, a problem with the locked joints
+    naming its section's locked_joints (plant.locked_joints)."""
     import os
 
     try:
         stat = os.stat(path)
-        return _urdf_info(path, stat.st_mtime_ns, stat.st_size)
+        return _urdf_info(path, stat.st_mtime_ns, stat.st_size, _locked_pairs(locked))
     except (OSError, ValueError) as error:
-        raise ValueError(f"{name}: {error}") from None
+        raise _urdf_error(error, name) from None
 
 
 @functools.lru_cache(maxsize=64)
-def _urdf_structured_size(path: str, mtime_ns: int, size: int) -> int:
+def _urdf_structured_size(path: str, mtime_ns: int, size: int, locked: LockedPairs = ()) -> int:
     from . import _core
 
-    return int(_core.UrdfStructuredBasis(_core.UrdfArm(path)).size)
+    arm = _core.UrdfArm(path, locked_joints=list(locked))
+    return int(_core.UrdfStructuredBasis(arm).size)
 
 
-def urdf_structured_size(path: str, name: str = "plant.urdf") -> int:
-    """The number of functions of the structured basis of the URDF arm at ``path`` (it depends
-    on the kinematics only: n (n + 1) / 2 + the number of base inertial parameters)."""
+def urdf_structured_size(
+    path: str, name: str = "plant.urdf", locked: Mapping[str, float] | None = None
+) -> int:
+    """The number of functions of the structured basis of the URDF arm at ``path`` with the
+    joints ``locked`` held (it depends on the kinematics only: n (n + 1) / 2 + the number of
+    base inertial parameters)."""
     import os
 
     try:
         stat = os.stat(path)
-        return _urdf_structured_size(path, stat.st_mtime_ns, stat.st_size)
+        return _urdf_structured_size(path, stat.st_mtime_ns, stat.st_size, _locked_pairs(locked))
     except (OSError, ValueError) as error:
-        raise ValueError(f"{name}: {error}") from None
+        raise _urdf_error(error, name) from None
+
+
+def _locked_joints(value: Any, name: str) -> dict[str, float] | None:
+    """A table {joint name: position (rad or m)}; an empty one is None (nothing locked). The
+    names and limits are checked against the URDF by the core (urdf_info)."""
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise TypeError(
+            f"{name}: expected a table of joint names and positions such as "
+            f"{{panda_finger_joint1 = 0.0}}, got {type(value).__name__} {_text(value)}"
+        )
+    locked = {}
+    for joint, position in value.items():
+        if not isinstance(joint, str) or not joint:
+            raise TypeError(f"{name}: joint names must be non-empty strings, got {_text(joint)}")
+        locked[joint] = _scalar(position, f"{name}.{_name(joint)}")
+    return locked or None
 
 
 def _check_urdf_arm(arm: Any, section: str) -> None:
@@ -444,6 +493,11 @@ def _check_urdf_arm(arm: Any, section: str) -> None:
             f"{section}.gravity: only with {section}.urdf (the two-link arm's gravity terms are "
             f"{section}.g1 and {section}.g2)"
         )
+    if arm.locked_joints is not None:
+        raise ValueError(
+            f"{section}.locked_joints: only with a URDF arm ({section}.urdf); the two-link arm "
+            "has no joint to lock"
+        )
     for key in ("coulomb", "viscous"):
         if isinstance(getattr(arm, key), tuple):
             raise ValueError(
@@ -463,7 +517,9 @@ class PlantConfig:
     ``urdf`` names a URDF file instead (any fixed-base serial arm, through Pinocchio; relative to
     the TOML file, or to the current directory for a config built from a dict; stored absolute),
     with ``gravity`` (default DEFAULT_GRAVITY) and coulomb, viscous as one number or one per
-    joint; p1 ... g2 are then not used and may not be set."""
+    joint; p1 ... g2 are then not used and may not be set. ``locked_joints`` ({name: position})
+    holds joints of the URDF at a position (Pinocchio's reduced model): the arm's joints are
+    the free ones."""
 
     p1: float = 5.0
     p2: float = 1.0
@@ -475,17 +531,20 @@ class PlantConfig:
     disturbance: Vector = (0.1, 0.1)
     urdf: str | None = None
     gravity: Vector | None = None
+    locked_joints: dict[str, float] | None = None
 
     def __post_init__(self) -> None:
         for key in _TWO_LINK_KEYS:
             object.__setattr__(self, key, _scalar(getattr(self, key), f"plant.{key}"))
+        locked = _locked_joints(self.locked_joints, "plant.locked_joints")
+        object.__setattr__(self, "locked_joints", locked)
         for key in ("coulomb", "viscous"):
             object.__setattr__(self, key, _friction(getattr(self, key), f"plant.{key}"))
         disturbance = _vector(self.disturbance, "plant.disturbance", None)
         object.__setattr__(self, "disturbance", disturbance)
         if self.urdf is not None:
             object.__setattr__(self, "urdf", _urdf_path(self.urdf, "plant.urdf"))
-            urdf_info(self.urdf, "plant.urdf")
+            urdf_info(self.urdf, "plant.urdf", self.locked_joints)
         if self.gravity is not None:
             object.__setattr__(self, "gravity", _vector(self.gravity, "plant.gravity", 3))
         _check_urdf_arm(self, "plant")
@@ -502,7 +561,7 @@ class ModelConfig:
     """The arm the controller believes (feedforward h of eq. 5 and f, g of eq. 9). A key left
     out (None) takes the plant's value, so the default is an exact model. With a URDF plant,
     ``urdf`` may name another URDF of the same joint count (a model error), with its own
-    ``gravity``, coulomb and viscous (each left out: the plant's)."""
+    ``gravity``, coulomb, viscous and ``locked_joints`` (each left out: the plant's)."""
 
     p1: float | None = None
     p2: float | None = None
@@ -513,19 +572,22 @@ class ModelConfig:
     viscous: float | Vector | None = None
     urdf: str | None = None
     gravity: Vector | None = None
+    locked_joints: dict[str, float] | None = None
 
     def __post_init__(self) -> None:
         for key in _TWO_LINK_KEYS:
             value = getattr(self, key)
             if value is not None:
                 object.__setattr__(self, key, _scalar(value, f"model.{key}"))
+        locked = _locked_joints(self.locked_joints, "model.locked_joints")
+        object.__setattr__(self, "locked_joints", locked)
         for key in ("coulomb", "viscous"):
             value = getattr(self, key)
             if value is not None:
                 object.__setattr__(self, key, _friction(value, f"model.{key}"))
         if self.urdf is not None:
+            # read with the locked joints in Config (they may be the plant's)
             object.__setattr__(self, "urdf", _urdf_path(self.urdf, "model.urdf"))
-            urdf_info(self.urdf, "model.urdf")
         if self.gravity is not None:
             object.__setattr__(self, "gravity", _vector(self.gravity, "model.gravity", 3))
 
@@ -537,13 +599,16 @@ class ModelConfig:
         }
 
     def resolve_urdf(self, plant: PlantConfig) -> dict[str, Any]:
-        """The believed URDF arm: urdf, gravity, coulomb, viscous, each the plant's when left
-        out (a URDF plant only)."""
+        """The believed URDF arm: urdf, gravity, coulomb, viscous, locked_joints, each the
+        plant's when left out (a URDF plant only)."""
         return {
             "urdf": plant.urdf if self.urdf is None else self.urdf,
             "gravity": plant.resolved_gravity if self.gravity is None else self.gravity,
             "coulomb": plant.coulomb if self.coulomb is None else self.coulomb,
             "viscous": plant.viscous if self.viscous is None else self.viscous,
+            "locked_joints": (
+                plant.locked_joints if self.locked_joints is None else self.locked_joints
+            ),
         }
 
 
@@ -1410,7 +1475,7 @@ class Config:
     def _check_model(self) -> None:
         """The model's keys against the plant's kind of arm (URDF or the two-link arm)."""
         if self.plant.urdf is None:
-            for key in ("urdf", "gravity"):
+            for key in ("urdf", "gravity", "locked_joints"):
                 if getattr(self.model, key) is not None:
                     raise ValueError(
                         f"model.{key}: only with a URDF plant (plant.urdf); the two-link model "
@@ -1419,12 +1484,15 @@ class Config:
             _check_urdf_arm(self.model, "model")
             return
         _check_urdf_arm(dataclasses.replace(self.model, urdf=self.plant.urdf), "model")
-        if self.model.urdf is not None:
-            n, n_model = self.dof, urdf_info(self.model.urdf, "model.urdf")[0]
+        if self.model.urdf is not None or self.model.locked_joints is not None:
+            believed = self.model.resolve_urdf(self.plant)
+            name = "model.urdf" if self.model.urdf is not None else "model.locked_joints"
+            n = self.dof
+            n_model = urdf_info(believed["urdf"], name, believed["locked_joints"])[0]
             if n_model != n:
                 raise ValueError(
-                    f"model.urdf: the model has n = {n_model} joints, the plant (plant.urdf) "
-                    f"n = {n}; a model URDF must have the plant's joints"
+                    f"{name}: the model has n = {n_model} joints, the plant (plant.urdf) "
+                    f"n = {n}; the model must leave the plant's joints free"
                 )
         _refuse_two_link_basis(self.controller.basis)
 
@@ -1459,10 +1527,11 @@ class Config:
     @property
     def dof(self) -> int:
         """The joint count n of the plant: 2 for the built-in two-link arm, the URDF's
-        revolute, continuous and prismatic joints for plant.urdf."""
+        revolute, continuous and prismatic joints for plant.urdf that plant.locked_joints leaves
+        free."""
         if self.plant.urdf is None:
             return 2
-        return urdf_info(self.plant.urdf, "plant.urdf")[0]
+        return urdf_info(self.plant.urdf, "plant.urdf", self.plant.locked_joints)[0]
 
     def initial_weights(self, key: str = "critic_weights") -> np.ndarray:
         """init.critic_weights (or ``key = "actor_weights"``), or the basis' default when left
@@ -1488,8 +1557,12 @@ class Config:
         the structured basis of a URDF arm has n (n + 1) / 2 + one per base inertial parameter
         of the believed model's URDF."""
         if self.plant.urdf is not None and self.controller.basis == "structured":
-            urdf = self.model.resolve_urdf(self.plant)["urdf"]
-            return urdf_structured_size(urdf, "model.urdf" if self.model.urdf else "plant.urdf")
+            believed = self.model.resolve_urdf(self.plant)
+            return urdf_structured_size(
+                believed["urdf"],
+                "model.urdf" if self.model.urdf else "plant.urdf",
+                believed["locked_joints"],
+            )
         return self.controller.basis_size(self.dof)
 
     def _expression_initial_weights(self, key: str) -> np.ndarray:
@@ -1629,6 +1702,8 @@ def _check_sizes(config: Config, n: int) -> None:
 def _plain(value: Any) -> Any:
     if isinstance(value, tuple):
         return [_plain(v) for v in value]
+    if isinstance(value, dict):  # plant.locked_joints, model.locked_joints
+        return dict(value)
     if isinstance(value, SampledTrajectory):  # the samples inline, not the file
         return {
             "kind": value.kind,

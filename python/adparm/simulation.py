@@ -62,6 +62,7 @@ def core_settings(config: Config) -> _core.Settings:
             config.plant.resolved_gravity,
             config.plant.coulomb,
             config.plant.viscous,
+            config.plant.locked_joints,
         )
         settings.model_urdf = _urdf_settings(**config.model.resolve_urdf(config.plant))
     settings.disturbance = np.array(config.plant.disturbance)
@@ -137,14 +138,20 @@ def core_settings(config: Config) -> _core.Settings:
 
 
 def _urdf_settings(
-    urdf: str, gravity: Any, coulomb: float | tuple[float, ...], viscous: float | tuple[float, ...]
+    urdf: str,
+    gravity: Any,
+    coulomb: float | tuple[float, ...],
+    viscous: float | tuple[float, ...],
+    locked_joints: dict[str, float] | None = None,
 ) -> _core.UrdfArmSettings:
-    """The core's description of a URDF arm (friction: one value per joint, or one for all)."""
+    """The core's description of a URDF arm (friction: one value per joint, or one for all;
+    locked joints: {name: position} or None)."""
     arm = _core.UrdfArmSettings()
     arm.urdf = urdf
     arm.gravity = np.array(gravity, dtype=float)
     arm.coulomb = np.atleast_1d(np.array(coulomb, dtype=float))
     arm.viscous = np.atleast_1d(np.array(viscous, dtype=float))
+    arm.locked_joints = [(name, float(value)) for name, value in (locked_joints or {}).items()]
     return arm
 
 

@@ -1,16 +1,19 @@
 """Arms from URDF files: the model terms of eq. (1) through Pinocchio's C++ library.
 
 ``UrdfArm`` reads a URDF (a fixed-base serial arm: revolute, continuous, prismatic and fixed
-joints) and computes M(q), C(q, dq), G(q), F(dq) and M(q)^-1 in adparm's C++ core, with the same
-conventions as the built-in two-link arm. ``example_robot_urdf`` finds the URDFs of the
-``example-robot-data`` package (UR5, Panda, ...).
+joints; joints may be locked at a position) and computes M(q), C(q, dq), G(q), F(dq) and
+M(q)^-1 in adparm's C++ core, with the same conventions as the built-in two-link arm.
+``example_robot_urdf`` finds the URDFs of the ``example-robot-data`` package (UR5, Panda, ...).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import sysconfig
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -21,13 +24,135 @@ from . import _core
 
 __all__ = ["UrdfArm", "example_robot_urdf", "EXAMPLE_ROBOTS"]
 
-#: Names accepted by example_robot_urdf, and their files under example-robot-data's robots/.
+#: Names accepted by example_robot_urdf, and their files under example-robot-data's robots/:
+#: every fixed-base arm of the package (4.x). The Panda needs its fingers locked (they mimic
+#: each other) and Baxter every joint but one arm's (docs: Arms from URDF files).
 EXAMPLE_ROBOTS: dict[str, str] = {
     "ur3": "ur_description/urdf/ur3_robot.urdf",
     "ur5": "ur_description/urdf/ur5_robot.urdf",
     "ur10": "ur_description/urdf/ur10_robot.urdf",
+    "ur3_limited": "ur_description/urdf/ur3_joint_limited_robot.urdf",
+    "ur5_limited": "ur_description/urdf/ur5_joint_limited_robot.urdf",
+    "ur10_limited": "ur_description/urdf/ur10_joint_limited_robot.urdf",
+    "ur3_gripper": "ur_description/urdf/ur3_gripper.urdf",
+    "ur5_gripper": "ur_description/urdf/ur5_gripper.urdf",
     "double_pendulum": "double_pendulum_description/urdf/double_pendulum.urdf",
+    "double_pendulum_continuous": (
+        "double_pendulum_description/urdf/double_pendulum_continuous.urdf"
+    ),
+    "double_pendulum_simple": "double_pendulum_description/urdf/double_pendulum_simple.urdf",
+    "asr_twodof": "asr_twodof_description/urdf/TwoDofs.urdf",
+    "kinova": "kinova_description/robots/kinova.urdf",
+    "z1": "z1_description/urdf/z1.urdf",
+    "xarm7": "xarm_description/urdf/xarm7.urdf",
+    "so100": "so_arm_description/urdf/so100.urdf",
+    "so101": "so_arm_description/urdf/so101.urdf",
+    "finger_edu": "finger_edu_description/robots/finger_edu.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "panda_collision": "panda_description/urdf/panda_collision.urdf",
+    "talos_arm": "talos_data/robots/talos_left_arm.urdf",
+    "baxter": "baxter_description/urdf/baxter.urdf",
 }
+
+#: The joints to lock for the robots of EXAMPLE_ROBOTS that need some (their mimic joints, or
+#: for Baxter everything but the left arm), as the docs and tests use them.
+EXAMPLE_LOCKED_JOINTS: dict[str, dict[str, float]] = {
+    "panda": {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0},
+    "panda_collision": {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0},
+    "baxter": {
+        name: 0.0
+        for name in (
+            "head_pan",
+            "right_s0",
+            "right_s1",
+            "right_e0",
+            "right_e1",
+            "right_w0",
+            "right_w1",
+            "right_w2",
+            "l_gripper_l_finger_joint",
+            "l_gripper_r_finger_joint",
+            "r_gripper_l_finger_joint",
+            "r_gripper_r_finger_joint",
+        )
+    },
+}
+
+
+def locked_joints_message(message: str, section: str) -> str:
+    """The core's message about locked joints ("locked_joints: ...") for the field of a config
+    section: "plant.locked_joints: ...", "lock it: [plant] locked_joints = {...}". Any other
+    message is returned as is."""
+    head = "locked_joints: "
+    if not message.startswith(head):
+        return message
+    message = f"{section}.locked_joints: " + message[len(head) :]
+    return message.replace(
+        "lock it: locked_joints = {", f"lock it: [{section}] locked_joints = {{", 1
+    )
+
+
+#: The attributes of an <inertial> element that urdfdom reads as numbers.
+_INERTIAL_NUMBERS = {
+    "mass": ("value",),
+    "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+}
+
+
+def check_inertial_text(path: str | os.PathLike[str]) -> None:
+    """Refuses (ValueError naming the file and the link) an <inertial> element whose numbers do
+    not read as finite floats: urdfdom prints a warning (e.g. "mass [2,0] is not a float") and
+    goes on with a massless link. Only the text of <mass value> and <inertia ixx ...> and of the
+    inertial <origin xyz rpy> is read here; the core checks the values (mass, inertia)."""
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (OSError, ElementTree.ParseError):
+        return  # the core refuses what it cannot read or parse, with its own reason
+    for link in root.iter("link"):
+        for inertial in link.findall("inertial"):
+            name = link.get("name", "?")
+            checks = [
+                (inertial.find(tag), tag, attributes)
+                for tag, attributes in _INERTIAL_NUMBERS.items()
+            ]
+            checks.append((inertial.find("origin"), "origin", ()))
+            for element, tag, attributes in checks:
+                if element is None:
+                    continue
+                for attribute in attributes:
+                    text = element.get(attribute)
+                    if text is None or not _is_float(text):
+                        raise ValueError(
+                            f"URDF {path}: link {name!r}: <{tag} {attribute}={text!r}> in its "
+                            "<inertial> is not a number (urdfdom would read the link as "
+                            "massless)"
+                        )
+                if tag == "origin":
+                    for attribute in ("xyz", "rpy"):
+                        text = element.get(attribute)
+                        if text is not None and not all(_is_float(t) for t in text.split()):
+                            raise ValueError(
+                                f"URDF {path}: link {name!r}: <origin {attribute}={text!r}> in "
+                                "its <inertial> is not three numbers"
+                            )
+
+
+def _is_float(text: str) -> bool:
+    try:
+        return math.isfinite(float(text.strip()))
+    except ValueError:
+        return False
+
+
+def _locked_list(locked_joints: Mapping[str, float] | None) -> list[tuple[str, float]]:
+    if locked_joints is None:
+        return []
+    if not isinstance(locked_joints, Mapping):
+        raise TypeError(
+            "locked_joints: expected a mapping of joint names to positions, got "
+            f"{type(locked_joints).__name__}"
+        )
+    return [(str(name), float(value)) for name, value in locked_joints.items()]
 
 
 def _as_per_joint(value: float | ArrayLike, name: str) -> float | NDArray[np.float64]:
@@ -58,11 +183,20 @@ class UrdfArm:
     coulomb, viscous:
         Friction F(dq) = coulomb * sign(dq) + viscous * dq: one number for every joint or one
         per joint (default 0). The URDF's own <dynamics> tags are not read.
+    locked_joints:
+        Joints held at a position, {name: rad or m} (Pinocchio's reduced model): their links
+        become part of the parent body, and q has the free joints only. A mimic joint must be
+        locked or follow a locked joint (it is then locked at multiplier * position + offset).
 
-    The joints q are the URDF's revolute, continuous and prismatic joints, in Pinocchio's model
-    order (``joint_names``); a continuous joint's q is its angle. A URDF that cannot be read or
-    parsed, that has no such joint, or that has a floating, planar or mimic joint is refused with
-    a ValueError naming the file and the problem.
+    The joints q are the URDF's revolute, continuous and prismatic joints left free, in
+    Pinocchio's model order (``joint_names``); a continuous joint's q is its angle. A URDF that
+    cannot be read or parsed, that has no free such joint, that has a floating or planar joint
+    or a free mimic joint, or that fails a physical check (an <inertial> that does not read, a
+    negative mass, an inertia that is not positive semi-definite or breaks the triangle
+    inequality, a moved body without mass or rotational inertia, a zero joint axis) is refused
+    with a ValueError naming the file and the link or joint. A problem with the locked joints
+    (an unknown name, a position outside the joint's limits) is a ValueError starting
+    "locked_joints: ".
     """
 
     def __init__(
@@ -71,15 +205,18 @@ class UrdfArm:
         gravity: ArrayLike = (0.0, 0.0, -9.81),
         coulomb: float | ArrayLike = 0.0,
         viscous: float | ArrayLike = 0.0,
+        locked_joints: Mapping[str, float] | None = None,
     ) -> None:
         path = Path(urdf)
         if not path.is_file():
             raise ValueError(f"URDF {path}: no such file")
+        check_inertial_text(path)
         self._arm = _core.UrdfArm(
             str(path),
             gravity=_vector(gravity, 3, "gravity"),
             coulomb=_as_per_joint(coulomb, "coulomb"),
             viscous=_as_per_joint(viscous, "viscous"),
+            locked_joints=_locked_list(locked_joints),
         )
         self.path = path
 
@@ -94,6 +231,12 @@ class UrdfArm:
     @property
     def joint_names(self) -> list[str]:
         return list(self._arm.joint_names)
+
+    @property
+    def locked_joints(self) -> dict[str, float]:
+        """The locked joints and their positions: those given, then the mimic joints that
+        follow one of them."""
+        return dict(self._arm.locked_joints)
 
     @property
     def joint_types(self) -> list[str]:
@@ -246,9 +389,12 @@ def config_arm(config: Any, *, model: bool = False) -> UrdfArm:
             "gravity": plant.resolved_gravity,
             "coulomb": plant.coulomb,
             "viscous": plant.viscous,
+            "locked_joints": plant.locked_joints,
         }
     )
-    return UrdfArm(arm["urdf"], arm["gravity"], arm["coulomb"], arm["viscous"])
+    return UrdfArm(
+        arm["urdf"], arm["gravity"], arm["coulomb"], arm["viscous"], arm["locked_joints"]
+    )
 
 
 def _example_robot_data_root() -> Path | None:

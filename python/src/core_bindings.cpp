@@ -150,12 +150,14 @@ void bind_settings(py::module_& m) {
       .def_readwrite("divergence_bound", &SimSettings::divergence_bound);
   py::class_<UrdfArmSettings>(m, "UrdfArmSettings",
                               "A URDF arm of the loop: urdf (path; empty: the two-link arm), "
-                              "gravity (3,), coulomb and viscous (n, 1 or 0 values).")
+                              "gravity (3,), coulomb and viscous (n, 1 or 0 values), locked_joints "
+                              "([(name, position), ...]).")
       .def(py::init<>())
       .def_readwrite("urdf", &UrdfArmSettings::urdf)
       .def_readwrite("gravity", &UrdfArmSettings::gravity)
       .def_readwrite("coulomb", &UrdfArmSettings::coulomb)
-      .def_readwrite("viscous", &UrdfArmSettings::viscous);
+      .def_readwrite("viscous", &UrdfArmSettings::viscous)
+      .def_readwrite("locked_joints", &UrdfArmSettings::locked_joints);
   py::class_<Settings>(m, "Settings",
                        "All settings of one run. Eigen members are copied on access: assign them "
                        "whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and "
@@ -229,25 +231,30 @@ void bind_urdf_arm(py::module_& m) {
                            "gravity (3,), coulomb and viscous: one number or one per joint.")
       .def(py::init([](const std::string& urdf_path, const Eigen::Vector3d& gravity,
                        const std::variant<double, Vector>& coulomb,
-                       const std::variant<double, Vector>& viscous) {
-             return PinocchioArm(urdf_path, gravity, per_joint(coulomb), per_joint(viscous));
+                       const std::variant<double, Vector>& viscous, const LockedJoints& locked) {
+             return PinocchioArm(urdf_path, gravity, per_joint(coulomb), per_joint(viscous),
+                                 locked);
            }),
            py::arg("urdf_path"), py::arg("gravity") = Eigen::Vector3d(0.0, 0.0, -9.81),
-           py::arg("coulomb") = 0.0, py::arg("viscous") = 0.0)
+           py::arg("coulomb") = 0.0, py::arg("viscous") = 0.0,
+           py::arg("locked_joints") = LockedJoints())
       .def_static(
           "from_xml",
           [](const std::string& xml, const Eigen::Vector3d& gravity,
              const std::variant<double, Vector>& coulomb,
-             const std::variant<double, Vector>& viscous, const std::string& name) {
+             const std::variant<double, Vector>& viscous, const std::string& name,
+             const LockedJoints& locked) {
             return PinocchioArm::from_xml(xml, gravity, per_joint(coulomb), per_joint(viscous),
-                                          name);
+                                          name, locked);
           },
           py::arg("xml"), py::arg("gravity") = Eigen::Vector3d(0.0, 0.0, -9.81),
           py::arg("coulomb") = 0.0, py::arg("viscous") = 0.0, py::arg("name") = "<URDF string>",
+          py::arg("locked_joints") = LockedJoints(),
           "The same from the URDF's XML text; name stands for the file in error messages.")
       .def_property_readonly("dof", &PinocchioArm::dof)
       .def_property_readonly("source", &PinocchioArm::source)
       .def_property_readonly("joint_names", &PinocchioArm::joint_names)
+      .def_property_readonly("locked_joints", &PinocchioArm::locked_joints)
       .def_property_readonly("joint_types", &PinocchioArm::joint_types)
       .def_property_readonly("gravity", &PinocchioArm::gravity_vector)
       .def_property_readonly("coulomb", &PinocchioArm::coulomb)

@@ -8,6 +8,16 @@
 // The joints q are the URDF's revolute, continuous and prismatic joints in Pinocchio's model order
 // (depth first from the root); fixed joints merge their links into the parent body. A continuous
 // joint's q is its angle (Pinocchio stores it as cos, sin; the conversion is done here).
+// Locked joints (a name and a position each) are held at that position through Pinocchio's
+// reduced model (pinocchio::buildReducedModel): their links merge into the parent body as fixed
+// joints' do, and q has the free joints only. A mimic joint must be locked, or follow a locked
+// joint (it is then locked at multiplier * value + offset).
+//
+// Physical checks when the arm is read (each names the link): every link's <inertial> has a
+// mass >= 0 and an inertia that is positive semi-definite and meets the triangle inequality of
+// its principal moments; every body a joint moves (its link and those fixed or locked to it, as
+// Pinocchio merges them) has a positive mass and a positive definite inertia; no revolute,
+// continuous or prismatic joint has a zero axis.
 //
 // Same members as TwoLinkArm (kDof, Terms, compute, acceleration) with dynamic sizes. This header
 // does not include Pinocchio (pimpl): everything that does is compiled once, in cpp/src/ (the
@@ -19,10 +29,26 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace adparm {
+
+// Joints held at a position (rad or m), by name.
+using LockedJoints = std::vector<std::pair<std::string, double>>;
+
+// A problem with the locked joints (an unknown name, a position outside the joint's limits, a
+// mimic joint left free): the message starts with "locked_joints: " (the argument), which a
+// configuration replaces by its field (plant.locked_joints; with_field below).
+class LockedJointsError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+  // The message for the field of a configuration section ("plant" or "model"):
+  // "plant.locked_joints: ...", and "[plant] locked_joints = {...}" where it says what to lock.
+  std::string with_section(const std::string& section) const;
+};
 
 class PinocchioArm {
  public:
@@ -44,20 +70,25 @@ class PinocchioArm {
   };
 
   // Reads the URDF file at `urdf_path`. gravity: the acceleration of gravity in the URDF's root
-  // frame (m/s^2). coulomb, viscous: one value per joint, or one value for all, or empty (0).
-  // Throws std::invalid_argument, naming the file and the problem, for a file that cannot be read
-  // or parsed, an arm without any revolute, continuous or prismatic joint, or a joint that is not
-  // one of those (floating, planar, mimic, ...).
+  // frame (m/s^2). coulomb, viscous: one value per (free) joint, or one value for all, or empty
+  // (0). locked: joints held at a position (see above). Throws std::invalid_argument, naming the
+  // file and the problem, for a file that cannot be read or parsed, an arm without any free
+  // revolute, continuous or prismatic joint, a joint that is not one of those (floating,
+  // planar, ...) or a failed physical check (naming the link); LockedJointsError for a locked
+  // joint that the URDF does not have (the message lists its joints), a position outside the
+  // joint's limits, or a mimic joint left free (the message says what to lock).
   explicit PinocchioArm(const std::string& urdf_path,
                         const Eigen::Vector3d& gravity = Eigen::Vector3d(0.0, 0.0, -9.81),
                         const Eigen::VectorXd& coulomb = Eigen::VectorXd(),
-                        const Eigen::VectorXd& viscous = Eigen::VectorXd());
+                        const Eigen::VectorXd& viscous = Eigen::VectorXd(),
+                        const LockedJoints& locked = LockedJoints());
   // The same from the URDF's XML text; `name` stands for the file in error messages.
   static PinocchioArm from_xml(const std::string& xml,
                                const Eigen::Vector3d& gravity = Eigen::Vector3d(0.0, 0.0, -9.81),
                                const Eigen::VectorXd& coulomb = Eigen::VectorXd(),
                                const Eigen::VectorXd& viscous = Eigen::VectorXd(),
-                               const std::string& name = "<URDF string>");
+                               const std::string& name = "<URDF string>",
+                               const LockedJoints& locked = LockedJoints());
 
   PinocchioArm(const PinocchioArm& other);
   PinocchioArm& operator=(const PinocchioArm& other);
@@ -75,6 +106,9 @@ class PinocchioArm {
   const Eigen::Vector3d& gravity_vector() const;
   const Eigen::VectorXd& coulomb() const;
   const Eigen::VectorXd& viscous() const;
+  // Every locked joint and its position: those given, then the mimic joints that follow one of
+  // them (multiplier * position + offset), in that order.
+  const LockedJoints& locked_joints() const;
 
   Terms make_terms() const;
 

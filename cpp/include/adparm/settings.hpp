@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "adparm/actor.hpp"
 #include "adparm/arm_model.hpp"
@@ -47,10 +49,13 @@ struct UrdfArmSettings {
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
   Eigen::VectorXd coulomb;
   Eigen::VectorXd viscous;
+  // Joints held at a position (rad or m), by name (PinocchioArm's locked joints).
+  std::vector<std::pair<std::string, double>> locked_joints;
 
   friend bool operator==(const UrdfArmSettings& a, const UrdfArmSettings& b) {
     return a.urdf == b.urdf && a.gravity == b.gravity && a.coulomb.size() == b.coulomb.size() &&
-           a.coulomb == b.coulomb && a.viscous.size() == b.viscous.size() && a.viscous == b.viscous;
+           a.coulomb == b.coulomb && a.viscous.size() == b.viscous.size() &&
+           a.viscous == b.viscous && a.locked_joints == b.locked_joints;
   }
 };
 

@@ -69,7 +69,9 @@ class UrdfLoopArm {
   static PinocchioArm read(const UrdfArmSettings& arm, const std::string& field) {
     if (arm.urdf.empty()) throw std::invalid_argument(field + ": no URDF file given");
     try {
-      return PinocchioArm(arm.urdf, arm.gravity, arm.coulomb, arm.viscous);
+      return PinocchioArm(arm.urdf, arm.gravity, arm.coulomb, arm.viscous, arm.locked_joints);
+    } catch (const LockedJointsError& error) {  // names field's section: plant.locked_joints
+      throw std::invalid_argument(error.with_section(field.substr(0, field.find('.'))));
     } catch (const std::invalid_argument& error) {
       throw std::invalid_argument(field + ": " + error.what());
     }
