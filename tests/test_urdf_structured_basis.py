@@ -443,7 +443,7 @@ def chain_urdf(joints: int) -> str:
     """A serial chain of `joints` revolute joints with axes turning x, y, z (a spatial arm)."""
     link = (
         '<link name="l{i}"><inertial><origin xyz="0.1 0.02 0.05"/><mass value="1"/>'
-        '<inertia ixx="0.1" ixy="0.01" ixz="0.02" iyy="0.2" iyz="0.03" izz="0.3"/>'
+        '<inertia ixx="0.2" ixy="0.01" ixz="0.02" iyy="0.25" iyz="0.03" izz="0.3"/>'
         "</inertial></link>"
     )
     joint = (

@@ -466,6 +466,8 @@ def _relative_error_panel(
                         **style,
                     )
             tolerance = result.config.diagnostics.tolerance  # the verdict's band
+            if not result.t.size:  # no rows: the tolerance line alone would give a flat range
+                axes.set_ylim(1e-3 * tolerance, 10.0)
             axes.axhline(
                 tolerance, color=OKABE_ITO[1], lw=0.9, ls="--", label=f"{100 * tolerance:g} %"
             )

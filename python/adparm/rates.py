@@ -12,8 +12,9 @@ closed loop of adparm has several fast terms, each a rate in 1/s:
   omega has eigenvalues below eta_c / nu, and Bellman-error extrapolation adds the same bound
   again (the average over the points): eta_c / nu (1 + [points > 0]).
 
-M is the believed model's inertia, sampled at qd(0), q(0) and (with extrapolation) at the joint
-positions of the extrapolation box. :func:`closed_loop_rates` lists them, :func:`auto_step` picks
+M is the plant's inertia (the policy's gain is computed from the believed model's, as the
+controller does), sampled at qd(0), q(0) and (with extrapolation) at the joint positions of the
+extrapolation box. :func:`closed_loop_rates` lists them, :func:`auto_step` picks
 sim.dt = "auto" and :func:`check_step` refuses an explicit sim.dt beyond the limit.
 
 :func:`urdf_defaults` derives the settings a URDF arm's config leaves out from the believed
@@ -61,15 +62,14 @@ _SEED = 20241202
 
 
 @functools.lru_cache(maxsize=64)
-def _inertia_range(urdf: str, mtime_ns: int, size: int) -> tuple[float, float]:
+def _inertia_range(
+    urdf: str, mtime_ns: int, size: int, locked: tuple[tuple[str, float], ...]
+) -> tuple[float, float]:
     from .urdf import UrdfArm
 
-    arm = UrdfArm(urdf)
+    arm = UrdfArm(urdf, locked_joints=dict(locked) or None)
     n = arm.dof
-    limits = arm.limits
-    low = np.clip(np.nan_to_num(limits["lower"], nan=-np.pi), -np.pi, np.pi)
-    high = np.clip(np.nan_to_num(limits["upper"], nan=np.pi), -np.pi, np.pi)
-    high = np.maximum(high, low)
+    low, high = _limits_box(arm)
     rng = np.random.default_rng(_SEED)
     positions = np.vstack([np.clip(np.zeros(n), low, high), rng.uniform(low, high, (_SAMPLES, n))])
     smallest, largest = math.inf, 0.0
@@ -79,20 +79,23 @@ def _inertia_range(urdf: str, mtime_ns: int, size: int) -> tuple[float, float]:
     return float(smallest), float(largest)
 
 
-def inertia_range(urdf: str) -> tuple[float, float]:
-    """(lambda_min, lambda_max) of M(q) of a URDF arm over q at 0 (clipped into the limits) and
-    64 seeded samples of its joint-limit box (limits clipped to [-pi, pi]); cached per file."""
+def _limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The joint-limit box clipped to [-pi, pi] (a continuous joint: [-pi, pi])."""
+    limits = arm.limits
+    low = np.clip(np.nan_to_num(limits["lower"], nan=-np.pi), -np.pi, np.pi)
+    high = np.clip(np.nan_to_num(limits["upper"], nan=np.pi), -np.pi, np.pi)
+    return low, np.maximum(high, low)
+
+
+def inertia_range(urdf: str, locked_joints: dict[str, float] | None = None) -> tuple[float, float]:
+    """(lambda_min, lambda_max) of M(q) of a URDF arm (with its locked joints held) over q at 0
+    (clipped into the limits) and 64 seeded samples of its joint-limit box (limits clipped to
+    [-pi, pi]); cached per file."""
     from pathlib import Path
 
     stat = Path(urdf).stat()
-    return _inertia_range(str(urdf), stat.st_mtime_ns, stat.st_size)
-
-
-def _joint_box(urdf: str) -> tuple[np.ndarray, np.ndarray]:
-    from .urdf import UrdfArm
-
-    limits = UrdfArm(urdf).limits
-    return np.asarray(limits["lower"], dtype=float), np.asarray(limits["upper"], dtype=float)
+    locked = tuple(sorted((locked_joints or {}).items()))
+    return _inertia_range(str(urdf), stat.st_mtime_ns, stat.st_size, locked)
 
 
 def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
@@ -117,8 +120,8 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
     """
     from .optimal import solvable_cost
 
-    urdf = config.model.resolve_urdf(config.plant)["urdf"]
-    smallest, largest = inertia_range(urdf)
+    believed = config.model.resolve_urdf(config.plant)
+    smallest, largest = inertia_range(believed["urdf"], believed["locked_joints"])
     explicit = config.explicit_keys
     n = config.dof
     eye = np.eye(n)
@@ -135,7 +138,10 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
             values[(section, name)] = value
             reasons[key] = reason
 
-    low, high = _joint_box(urdf)
+    from .urdf import config_arm
+
+    limits = config_arm(config, model=True).limits
+    low, high = np.asarray(limits["lower"], dtype=float), np.asarray(limits["upper"], dtype=float)
     qd = np.clip(np.zeros(n), low, high)
     put("task.qd", tuple(qd), "0 within the joint limits")
     if "task.qd" in explicit:
@@ -207,17 +213,18 @@ def _positions(config: Config) -> np.ndarray:
     return np.array(rows)
 
 
-def _arm_inertia(config: Config) -> Any:
-    """M(q) of the believed model, as a function of q (one arm built for all positions)."""
+def _arm_inertia(config: Config, *, model: bool) -> Any:
+    """M(q) of the plant (``model=False``) or the believed model, as a function of q (one arm
+    built for all positions)."""
     n = config.dof
     if config.plant.urdf is not None:
         from .urdf import config_arm
 
-        arm = config_arm(config, model=True)
+        arm = config_arm(config, model=model)
         return lambda q: arm.terms(q, np.zeros(n))["M"]
     from .optimal import arm_terms
 
-    return lambda q: arm_terms(config, q, np.zeros(n), model=True)["M"]
+    return lambda q: arm_terms(config, q, np.zeros(n), model=model)["M"]
 
 
 def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:
@@ -273,9 +280,11 @@ def closed_loop_rates(config: Config) -> list[dict[str, Any]]:
     alpha1 = np.array(config.control.alpha1, dtype=float)
     rise_gain = (config.control.ks + 1.0) if config.controller.rise else 0.0
     positions = _positions(config)
-    inertia = _arm_inertia(config)
-    masses = np.array([inertia(q) for q in positions])
-    gains = _policy_gains(config, positions, masses)
+    # the controller computes its policy from the believed model; every torque acts through the
+    # plant's M^-1, whose rates the step must resolve
+    believed, plant = (_arm_inertia(config, model=model) for model in (True, False))
+    gains = _policy_gains(config, positions, np.array([believed(q) for q in positions]))
+    masses = np.array([plant(q) for q in positions])
     inverses = np.linalg.inv(masses)
     rise = rise_gain / float(np.linalg.eigvalsh(masses)[:, 0].min())
     policy = _spectral_radius(inverses @ gains[:, :, n:])

@@ -144,7 +144,9 @@ def deviations(config: Config) -> list[dict[str, Any]]:
             if section in first_of_section:
                 reason = f"See {first_of_section[section]}."
             first_of_section.setdefault(section, name)
-        if value != default.get(name):
+        if name in config.derived:  # left out, derived for this arm (rates.urdf_defaults)
+            reason = f"Derived for this arm: {config.derived[name]}."
+        elif value != default.get(name):
             reason = "Set by this configuration (differs from adparm's default)."
         elif printed is None and reason is None:
             continue
