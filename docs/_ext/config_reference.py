@@ -143,7 +143,7 @@ DESCRIPTIONS = {
     ): "The run stops as diverged when ``|q|``, ``|dq|``, ``|Wc|`` or ``|Wa|`` "
     "exceeds this value, or a state or recorded output is not finite.",
     ("diagnostics", "tolerance"): 'Verdict "ok" needs the critic weights, the actor weights '
-    "and the applied policy (rms |u_hat - u*| / rms |u*| over the last 10 % of the run) each "
+    "and the applied policy (``rms |u_hat - u*| / rms |u*|`` over the last 10 % of the run) each "
     "within this relative distance of a known optimum; also the band of the summary's time "
     "within tolerance.",
 }

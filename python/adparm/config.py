@@ -1271,7 +1271,7 @@ class SimConfig:
 @dataclass(frozen=True)
 class DiagnosticsConfig:
     """What a run's verdict holds it to (adparm.truth.diagnose). ``tolerance``: "ok" needs the
-    critic weights, the actor weights and the applied policy (rms |u_hat - u*| / rms |u*| over
+    critic weights, the actor weights and the applied policy (``rms |u_hat - u*| / rms |u*|`` over
     the last 10 % of the run) each within this relative distance of the known optimum; also the
     band of the summary's "time within tolerance". 0 < tolerance < 1; default 1 %."""
 

@@ -596,7 +596,7 @@ def plot_critic_weights(
         tolerance (diagnostics.tolerance, 1 %) as a line.
         More than 12 weights (a URDF arm's structured basis) take one panel per block (the K
         block, the inertia block; ``ax`` then takes up to three Axes), each weight drawn as
-        (W - W*) / max |W*| of its block, named in a legend only for a block of at most 12; the
+        ``(W - W*) / max |W*|`` of its block, named in a legend only for a block of at most 12; the
         error panel adds each block's relative error. A run that diverged or was interrupted
         is marked where it stopped (see the module's notes).
     """

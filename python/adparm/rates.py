@@ -114,7 +114,7 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
       Q = solvable_cost(K, alpha1, R): of the exact family, so W* is known. With Q given and R
       left out, R = I (as before);
     - learning: Bellman-error extrapolation at 2 K points (K basis functions) in a fixed box of
-      half-widths b1 = max(1, 2 |e1(0)|_max) rad on e1 and alpha b1 rad/s on e2, no probing
+      half-widths ``b1 = max(1, 2 max|e1(0)|)`` rad on e1 and alpha b1 rad/s on e2, no probing
       signal (probe.until = 0; the amplitude, if it is turned on, 0.1 (ks + 1 + 1 / r) N m per
       joint, which moves e2 by about 0.1 rad/s); sim.T = 10 s; sim.dt = "auto".
     """
