@@ -221,3 +221,23 @@ def test_an_inadmissible_start_is_named() -> None:
     except adparm.SimulationDiverged as error:
         verdict = str(error)
     assert "not positive definite" in verdict
+
+
+def test_a_divergence_suggests_only_what_works_and_is_not_in_effect() -> None:
+    from adparm.truth import divergence_causes
+
+    # the critic at 1600/s (extrapolation) with dt = 1.5 ms: inside RK4's limit (not refused) but
+    # near it, so a divergence would name the step; the step it names finishes
+    near = adparm.paper_config().updated(
+        {"extrapolation": {"points": 10}, "sim": {"dt": 1.5e-3, "T": 0.5}}
+    )
+    causes = divergence_causes(near)
+    suggestion = next(cause for cause in causes if "use sim.dt" in cause)
+    dt = float(re.search(r"use sim\.dt = ([0-9.e-]+)", suggestion).group(1))
+    assert dt < 1.5e-3
+    assert adparm.simulate(near.updated({"sim": {"dt": dt}}), diagnose=False).status == "finished"
+    # at the paper's step nothing is suggested for the step, and weights left out are not
+    # suggested to be left out
+    causes = divergence_causes(adparm.paper_config())
+    assert not any("use sim.dt" in cause or "leave init" in cause for cause in causes)
+    assert any("rates at the start" in cause for cause in causes)

@@ -680,7 +680,8 @@ def _simulate(config: Config, progress: bool, diagnose: bool) -> SimulationResul
             raise
         run = runs[0]
         result = _result(run, config, batch.seconds(0))
-        reached = config.sim.T * run.step / run.steps
+        # the core's clock: step * dt (the last step shortened to T), as the recorded t
+        reached = min(run.step * config.sim.dt, config.sim.T)
         raise SimulationInterrupted(
             f"simulation interrupted at t = {reached:.6g} s of sim.T = {config.sim.T:g} s; the "
             f"{result.t.size} rows recorded so far are in the exception's .result",
