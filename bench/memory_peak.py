@@ -2,7 +2,10 @@
 which reads its peak resident set (resource.getrusage(...).ru_maxrss) after the imports (also
 those the run's diagnosis makes lazily, a one-off cost of the process) and the config, then after
 adparm.simulate (and, with --save, after writing result.npz and result.csv); the growth is the
-run's real peak, compared with adparm.simulation.memory_needed.
+run's real peak, compared with adparm.simulation.memory_needed. The cases cover the paper's
+two-link arm (fixed sizes: a long recording, many points) and the dynamic-size loop (an expression
+basis, the planar 3-link URDF and the UR5 with the structured basis: about 25 KiB per point),
+each short (three steps) where the points dominate.
 
 The last lines are machine-readable:
 bench=memory case=NAME estimate_mib=E measured_mib=M ratio=E/M
@@ -16,12 +19,28 @@ import argparse
 import json
 import subprocess
 import sys
+from pathlib import Path
 
+ROOT = Path(__file__).resolve().parents[1]
+POLYNOMIAL = {"basis": "polynomial", "degree": 4}
+# name: (config file or None for adparm.paper_config(), changes, steps or None to keep sim.T)
 CASES = {
-    "paper_1e6_rows": {"sim": {"T": 1000.0, "record_every": 1}},
-    "paper_3e5_rows": {"sim": {"T": 300.0, "record_every": 1}},
-    "points_1e5": {"extrapolation": {"points": 100_000}, "sim": {"T": 0.003}},
-    "points_1e6": {"extrapolation": {"points": 1_000_000}, "sim": {"T": 0.001}},
+    "paper_1e6_rows": (None, {"sim": {"T": 1000.0, "record_every": 1}}, None),
+    "paper_3e5_rows": (None, {"sim": {"T": 300.0, "record_every": 1}}, None),
+    "points_1e5": (None, {"extrapolation": {"points": 100_000}}, 3),
+    "points_1e6": (None, {"extrapolation": {"points": 1_000_000}}, 1),
+    "polynomial4_2e4": (None, {"controller": POLYNOMIAL, "extrapolation": {"points": 20_000}}, 3),
+    "polynomial4_1e5": (None, {"controller": POLYNOMIAL, "extrapolation": {"points": 100_000}}, 3),
+    "planar3_structured_1e4": (
+        "examples/planar_3link.toml",
+        {"controller": {"basis": "structured"}, "extrapolation": {"points": 10_000}},
+        3,
+    ),
+    "ur5_structured_5e3": (
+        "examples/ur5.toml",
+        {"controller": {"basis": "structured"}, "extrapolation": {"points": 5_000}},
+        3,
+    ),
 }
 
 CHILD = """
@@ -29,7 +48,11 @@ import json, resource, sys, tempfile, pathlib
 import adparm
 from adparm.simulation import memory_needed
 import control, scipy.optimize  # imported lazily by the run's diagnosis: a one-off cost
-config = adparm.paper_config().updated(json.loads(sys.argv[1]))
+file, changes, steps = json.loads(sys.argv[1])
+config = adparm.load_config(file) if file else adparm.paper_config()
+if steps:  # a short run at an explicit step (URDF arms default to sim.dt = "auto", T = 10 s)
+    changes = {**changes, "sim": {"dt": 0.001, "T": steps * 0.001}}
+config = config.updated(changes)
 save = sys.argv[2] == "1"
 before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 result = adparm.simulate(config)
@@ -53,6 +76,7 @@ def main(argv: list[str] | None = None) -> int:
             [sys.executable, "-c", CHILD, json.dumps(CASES[name]), "1" if args.save else "0"],
             check=True,
             capture_output=True,
+            cwd=ROOT,
             text=True,
         )
         data = json.loads(out.stdout.splitlines()[-1])

@@ -10,6 +10,7 @@ import errno
 import json
 import os
 import pickle
+import resource
 import signal
 import subprocess
 import sys
@@ -367,6 +368,44 @@ def test_memory_estimate_is_within_1_5x_of_the_measured_peak() -> None:
     assert "worst_factor=" in out.stdout
 
 
+def test_memory_estimate_follows_the_joints_the_basis_and_the_points() -> None:
+    """Issue 22, item 4: on the dynamic-size loop (URDF arms, expression bases) a point costs
+    about 25 KiB, not the two-link arm's 240 bytes; the estimate is within 1.5x of the measured
+    peak for the planar 3-link URDF (10,000 points, about 250 MB) and the UR5 (5,000 points),
+    both with the structured basis."""
+    cases = ["planar3_structured_1e4"]
+    try:
+        adparm.example_robot_urdf("ur5")
+        cases.append("ur5_structured_5e3")
+    except (ImportError, ValueError, OSError):
+        cases.append("points_1e5")  # without example-robot-data: the paper's arm
+    bench = Path(__file__).parent.parent / "bench" / "memory_peak.py"
+    argv = [sys.executable, str(bench), *(x for case in cases for x in ("--case", case))]
+    out = subprocess.run(argv, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert out.stdout.count("ratio=") == 2, out.stdout
+
+
+def test_a_million_points_on_the_ur5_are_refused_before_the_run(monkeypatch) -> None:
+    """Issue 22, item 4: 1e6 points on the UR5 need about 24 GiB (they used to pass the guard
+    at 0.2 GiB and end in std::bad_alloc); refused before the run, naming extrapolation.points."""
+    from adparm.simulation import memory_needed
+
+    try:
+        adparm.example_robot_urdf("ur5")
+    except (ImportError, ValueError, OSError):
+        pytest.skip("example-robot-data is not installed")
+    examples = Path(__file__).parent.parent / "examples"
+    config = adparm.load_config(examples / "ur5.toml").updated(
+        {"extrapolation": {"points": 1_000_000}, "sim": {"dt": 0.001, "T": 0.003}}
+    )
+    assert memory_needed([config]) > 20 * 2**30
+    monkeypatch.setattr(adparm.simulation, "available_memory", lambda: 16 * 2**30)
+    monkeypatch.setattr(adparm.simulation, "_run_batch", no_computation)
+    with pytest.raises(ValueError, match="^extrapolation.points: .*fewer extrapolation.points"):
+        adparm.simulate(config)
+
+
 def test_the_cli_refuses_a_run_that_would_not_fit_before_running(monkeypatch, tmp_path, capsys):
     from adparm.simulation import memory_needed
 
@@ -536,3 +575,86 @@ def test_any_config_file_loads_or_is_refused_with_a_value_error(
 
 def test_files_module_documents_the_manifest() -> None:
     assert MANIFEST in (_files.__doc__ or "")
+
+
+# -- results that are safe to share and load (issue 22, item 11) ---------------------------------
+
+
+def _urdf_run(urdf: Path) -> adparm.SimulationResult:
+    examples = Path(__file__).parent.parent / "examples"
+    config = adparm.load_config(examples / "planar_3link.toml").updated(
+        {"plant": {"urdf": str(urdf)}, "sim": {"dt": 0.001, "T": 0.02}}
+    )
+    return adparm.simulate(config, diagnose=False)
+
+
+def test_a_urdf_result_reads_back_its_own_arm_once_the_urdf_moves_or_changes(
+    tmp_path, monkeypatch
+) -> None:
+    monkeypatch.setenv("ADPARM_CACHE", str(tmp_path / "cache"))
+    urdf = tmp_path / "arm" / "planar_3link.urdf"
+    urdf.parent.mkdir()
+    source = Path(__file__).parent.parent / "examples" / "arms" / "planar_3link.urdf"
+    urdf.write_text(source.read_text())
+    result = _urdf_run(urdf)
+    size = result.config.basis_size
+    for suffix in ("npz", "csv"):
+        result.save(tmp_path / f"result.{suffix}")
+    # edited: the masses change; the loaded run keeps the arm it ran with
+    urdf.write_text(source.read_text().replace('<mass value="', '<mass value="1'))
+    for suffix in ("npz", "csv"):
+        back = adparm.load_result(tmp_path / f"result.{suffix}")
+        assert Path(back.config.plant.urdf).read_text() == source.read_text()
+        assert str(tmp_path / "cache") in back.config.plant.urdf
+        np.testing.assert_allclose(back.critic_weights, result.critic_weights, rtol=1e-15)
+    urdf.unlink()  # moved away
+    for suffix in ("npz", "csv"):
+        back = adparm.load_result(tmp_path / f"result.{suffix}")
+        assert back.config.dof == 3 and back.config.basis_size == size
+
+
+def test_an_embedded_urdf_that_does_not_match_its_hash_is_refused(tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("ADPARM_CACHE", str(tmp_path / "cache"))
+    source = Path(__file__).parent.parent / "examples" / "arms" / "planar_3link.urdf"
+    result = _urdf_run(source)
+    path = result.save(tmp_path / "result.csv")
+    lines = path.read_text().split("\n")
+    meta = json.loads(lines[0][len(storage.CSV_PREFIX) :])
+    meta["urdf"][0]["text"] = meta["urdf"][0]["text"].replace('<mass value="', '<mass value="1')
+    lines[0] = storage.CSV_PREFIX + json.dumps(meta)
+    path.write_text("\n".join(lines))
+    with pytest.raises(ValueError, match="does not match its sha256"):
+        adparm.load_result(path)
+
+
+def test_a_csv_with_a_deeply_nested_header_gives_a_clear_error(tmp_path) -> None:
+    path = tmp_path / "result.csv"
+    deep = "[" * 100_000 + "]" * 100_000
+    path.write_text(f'{storage.CSV_PREFIX}{{"config": {deep}}}\nt\n{storage.CSV_END}0 rows\n')
+    with pytest.raises(ValueError, match="nests deeper than"):
+        adparm.load_result(path)
+
+
+def test_an_npz_declaring_a_huge_array_is_refused_before_allocating(tmp_path) -> None:
+    """A small .npz whose q declares 6 GiB (a zip of zeros compresses about 1000:1): refused
+    from its .npy header, against the rows the recorded config makes (and never read)."""
+    import zipfile
+
+    result = adparm.simulate(adparm.paper_config().updated({"sim": {"T": 0.1}}), diagnose=False)
+    path = result.save(tmp_path / "result.npz")
+    huge = tmp_path / "huge.npz"
+    rows = 6 * 2**30 // 16
+    header = {"descr": "<f8", "fortran_order": False, "shape": (rows, 2)}
+    with zipfile.ZipFile(path) as source, zipfile.ZipFile(huge, "w") as target:
+        for item in source.infolist():
+            if item.filename == "q.npy":
+                with target.open("q.npy", "w", force_zip64=True) as member:
+                    np.lib.format.write_array_header_1_0(member, header)
+                    member.write(b"\0" * 2**20)  # the start of the data only
+            else:
+                target.writestr(item, source.read(item.filename))
+    assert huge.stat().st_size < 10 * 2**20
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(ValueError, match="q declares shape .*refused before reading"):
+        adparm.load_result(huge)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 2**20  # KiB: < 1 GiB

@@ -515,30 +515,67 @@ def _take_rest(
         yield i, run
 
 
-# Values of one recorded row besides the weights: t, hjb_error, cost and ten joint series of 2.
-_ROW_VALUES = 3 + 2 * len(_ARRAYS_2)
 # Memory of a run at its peak, measured with bench/memory_peak.py (the growth of the peak resident
 # set of a fresh process, ru_maxrss, over simulate()): the core's recording and the NumPy arrays
-# the result takes over from it (2 x 8 bytes per recorded value), POINT_BYTES per extrapolation
-# point (the points and their prepared basis values), and RUN_BYTES of fixed cost.
-POINT_BYTES = 240
+# the result takes over from it (2 x 8 bytes per recorded value), _point_bytes per extrapolation
+# point, and RUN_BYTES of fixed cost.
 RUN_BYTES = 1 << 20
 # Drawing a run's figures (matplotlib's lines of every recorded row), measured with adparm run
 # (/usr/bin/time's maximum resident set): about 1.7 times one copy of the recording.
 FIGURE_COPIES = 1.7
+# The core's bounds on a dynamic size (cpp/include/adparm/types.hpp: kMaxDof, kMaxBasisSize): the
+# n-joint loop's vectors and matrices keep their coefficients inline, sized for these bounds.
+CORE_MAX_DOF = 12
+CORE_MAX_BASIS_SIZE = 128
+# Bytes of one extrapolation point of the paper's two-link arm (8 functions, fixed sizes).
+POINT_BYTES = 240
+
+
+def _aligned(size: int) -> int:
+    """``size`` rounded up to Eigen's 16-byte alignment."""
+    return -(-size // 16) * 16
+
+
+def _dynamic_sizes(config: Config) -> bool:
+    """Whether ``config`` runs on the core's dynamic-size (n-joint) loop: a URDF arm or an
+    expression basis (cpp/include/adparm/simulation.hpp)."""
+    return config.plant.urdf is not None or config.controller.is_expression
+
+
+def _point_bytes(config: Config) -> int:
+    """Bytes the core holds per extrapolation point (cpp/include/adparm/extrapolation.hpp): the
+    point x (2n values) and its prepared HJB terms (hjb.hpp's HjbPoint: the drift rate, K values;
+    the input gradient B, K x n; the state cost). On the dynamic-size loop these are bounded Eigen
+    types whose coefficients are inline and sized for the bounds (K <= 128, n <= 12: 1 KiB, 24 KiB
+    and 200 bytes), and every point is zeroed when the points are allocated, so a point costs about
+    25 KiB whatever n and K are; on the two-link arm's fixed sizes, 8 (K + K n + 2n + 1) bytes."""
+    if _dynamic_sizes(config):
+        k, n = CORE_MAX_BASIS_SIZE, 2 * CORE_MAX_DOF  # BasisMatrix<K, n> is bounded by 2 kMaxDof
+        drift = _aligned(8 * k + 8)  # coefficients and the row count
+        gradient = _aligned(8 * k * n + 16)  # coefficients, rows and columns
+        state = _aligned(8 * 2 * CORE_MAX_DOF + 8)
+        return _aligned(drift + gradient + 8) + state
+    k, n = config.basis_size, config.dof
+    return _aligned(8 * k) + _aligned(_aligned(8 * k * n) + 8) + 8 * 2 * n
 
 
 def _recording_bytes(config: Config) -> int:
-    """Bytes of one copy of the recording of ``config`` (all its rows)."""
+    """Bytes of one copy of the recording of ``config`` (all its rows): t, hjb_error, cost, n
+    values of each joint series and the K critic and K actor weights per row."""
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
-    width = _ROW_VALUES + 2 * config.basis_size
+    width = 3 + config.dof * len(_ARRAYS_2) + 2 * config.basis_size
     return 8 * rows * width
+
+
+def _points_bytes(config: Config) -> int:
+    """Bytes of the extrapolation points of ``config`` in the core."""
+    return _point_bytes(config) * config.extrapolation.points
 
 
 def _core_bytes(config: Config) -> int:
     """Bytes a run holds in the core while it runs (its recording, points, fixed cost)."""
-    return _recording_bytes(config) + POINT_BYTES * config.extrapolation.points + RUN_BYTES
+    return _recording_bytes(config) + _points_bytes(config) + RUN_BYTES
 
 
 def memory_needed(
@@ -588,10 +625,9 @@ def _check_memory(
     needed = memory_needed(configs, at_once, threads, figures)
     if needed > available:
         which = "these runs" if len(configs) > 1 else "this run"
-        points = max(c.extrapolation.points for c in configs)
         field = "sim.record_every"
         change = "record fewer rows (a larger sim.record_every or a shorter sim.T)"
-        if points and POINT_BYTES * points > needed / 4:
+        if max(_points_bytes(c) for c in configs) > needed / 4:
             field = "extrapolation.points"
             change = "use fewer extrapolation.points, or " + change
         if len(configs) > 1 and at_once is None:
