@@ -7,6 +7,7 @@ import functools
 import itertools
 import math
 import os
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -694,7 +695,16 @@ def _simulate(config: Config, progress: bool, diagnose: bool) -> SimulationResul
     if diagnose:
         from .truth import warn_if_approximate
 
-        warn_if_approximate(result)
+        try:
+            warn_if_approximate(result)
+        except Exception as error:  # noqa: BLE001 - the diagnosis never loses a finished run
+            from .summary import _failure
+
+            warnings.warn(
+                "adparm: " + _failure("the diagnosis (adparm.truth.diagnose)", error),
+                RuntimeWarning,
+                stacklevel=2,
+            )
     return result
 
 
