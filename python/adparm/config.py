@@ -1074,6 +1074,7 @@ def _expression_basis(basis: tuple[str, ...], degree: int | None, joints: int) -
         text = str(error)
         if text.startswith("degree:"):
             raise ValueError(f"controller.{text}") from None
+        text = text.removeprefix("basis: ")
         raise ValueError(f"controller.basis: {text}") from None
 
 
@@ -1082,6 +1083,8 @@ def name_in(basis: tuple[str, ...], name: str) -> bool:
 
 
 EXTRAPOLATION_MODES = ("fixed", "grid", "local")
+#: The largest controller.degree (adparm.bases.MAX_DEGREE; one joint reaches 128 functions at 22).
+_MAX_DEGREE = 20
 
 
 @dataclass(frozen=True)
@@ -1128,7 +1131,9 @@ class ControllerConfig:
         object.__setattr__(self, "basis", basis)
         if self.degree is not None:
             object.__setattr__(
-                self, "degree", _integer(self.degree, "controller.degree", minimum=2)
+                self,
+                "degree",
+                _integer(self.degree, "controller.degree", minimum=2, maximum=_MAX_DEGREE),
             )
             if self.degree % 2:
                 raise ValueError(
