@@ -259,12 +259,40 @@ def _number_or_text(text: str) -> float | str:
         return text.strip()
 
 
+#: The deepest nesting of brackets and braces in a --grid value (TOML's reader recurses).
+MAX_GRID_NESTING = 32
+
+
+def _nesting(text: str) -> int:
+    """The deepest nesting of [ ] and { } in ``text`` outside quoted strings (an upper bound)."""
+    depth = deepest = 0
+    quote = ""
+    for char in text:
+        if quote:
+            quote = "" if char == quote else quote
+        elif char in "\"'":
+            quote = char
+        elif char in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif char in "]}":
+            depth -= 1
+    return deepest
+
+
 def _grid_entry(text: str) -> tuple[str, list]:
     name, separator, values = text.partition("=")
     if not separator or not name.strip() or not values.strip():
         raise argparse.ArgumentTypeError(f"expected SECTION.KEY=V1,V2,..., got {text!r}")
+    depth = _nesting(values)
+    if depth > MAX_GRID_NESTING:
+        raise argparse.ArgumentTypeError(
+            f"{name.strip()}: values nested {depth} deep; at most {MAX_GRID_NESTING}"
+        )
     try:
         parsed = tomllib.loads(f"values = [{values}]")["values"]
+    except (RecursionError, MemoryError):  # a safety net below the bound above
+        raise argparse.ArgumentTypeError(f"{name.strip()}: values nested too deeply") from None
     except tomllib.TOMLDecodeError as error:
         raise argparse.ArgumentTypeError(
             f"{name.strip()}: expected TOML values separated by commas, got {values!r} ({error})"
