@@ -220,6 +220,16 @@ def test_a_hostile_basis_is_refused_at_once_naming_the_field(case) -> None:
     assert elapsed < FAST, elapsed
 
 
+def test_a_deeply_nested_entry_is_refused_without_recursion() -> None:
+    value: object = "x1"
+    for _ in range(3000):
+        value = [value]
+    with pytest.raises(ValueError, match="must be a string"):
+        adparm.ExpressionBasis([value])
+    with pytest.raises(ValueError, match="must be a string"):
+        bases.parse_term(value)
+
+
 def test_terms_inside_the_bounds_still_work() -> None:
     basis = adparm.ExpressionBasis(
         ["(x1+x2)^4", "-(-(x3^2))", "sin(sin(sin(x1)))*x2", "x1^(3/2)", "2^10*x4^2", "x1/(x2+1)"],

@@ -21,6 +21,7 @@ import itertools
 import math
 import operator
 import re
+import reprlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -157,7 +158,7 @@ def _unique_terms(
         raise ValueError("basis: needs at least one term or family")
     for item in items:
         if not isinstance(item, str):
-            raise ValueError(f"basis: each entry must be a string, got {_short(repr(item))}")
+            raise ValueError(f"basis: each entry must be a string, got {_repr(item)}")
     names = {item.strip() for item in items}
     count = sum(item.strip() not in FAMILIES for item in items)
     count += sum(len(PAPER_TERMS) for name in ("paper", "augmented") if name in names)
@@ -426,6 +427,19 @@ class ExpressionBasis:
 # --- internals ------------------------------------------------------------------------------------
 
 
+def _repr(value: Any) -> str:
+    """repr(value) for a message: a string cut to 80 characters, anything else with bounded
+    nesting (never a RecursionError)."""
+    if isinstance(value, str):
+        return _short(repr(value))
+    short = reprlib.Repr()
+    short.maxlevel, short.maxlist, short.maxstring, short.maxother = 3, 6, 60, 60
+    try:
+        return _short(short.repr(value))
+    except Exception:  # noqa: BLE001 - a repr that fails
+        return f"<{type(value).__name__}>"
+
+
 def _short(text: str, size: int = 80) -> str:
     """``text`` cut to ``size`` characters (a hostile term is never printed whole)."""
     return text if len(text) <= size else text[: size - 20] + f"... ({len(text):_} characters)"
@@ -454,16 +468,16 @@ def _check_text(term: str, joints: int) -> int:
     """The checks of a term's text (type, length, characters, then :func:`_check_bounds`);
     returns the work of expanding it."""
     if not isinstance(term, str):
-        raise ValueError(f"basis term {_short(repr(term))}: must be a string")
+        raise ValueError(f"basis term {_repr(term)}: must be a string")
     if not term.strip():
         raise ValueError("basis term '': empty")
     if len(term) > MAX_TERM_LENGTH:
         raise ValueError(
-            f"basis term {_short(repr(term))}: {len(term):_} characters; at most {MAX_TERM_LENGTH}"
+            f"basis term {_repr(term)}: {len(term):_} characters; at most {MAX_TERM_LENGTH}"
         )
     if not _ALLOWED.match(term) or _ATTRIBUTE.search(term) or "__" in term:
         raise ValueError(
-            f"basis term {_short(repr(term))}: may contain only variables "
+            f"basis term {_repr(term)}: may contain only variables "
             f"({_range_text(joints)}), numbers, + - * / ^ ** ( ) and the functions "
             f"{', '.join(FUNCTIONS)}"
         )
@@ -477,7 +491,7 @@ def _check_bounds(term: str, joints: int) -> int:
     MAX_EXPONENT, whose integers have more than MAX_INTEGER_DIGITS digits or whose floats
     overflow, or whose expansion (q = qd - e1 substituted) has more than MAX_EXPANSION terms.
     Iterative: no recursion, whatever the text. Returns the work of expanding it (in terms)."""
-    where = f"basis term {_short(repr(term))}"
+    where = f"basis term {_repr(term)}"
     try:
         tree = ast.parse(term.replace("^", "**").strip(), mode="eval")
     except SyntaxError as error:
