@@ -315,6 +315,37 @@ def test_any_term_text_is_refused_or_accepted_quickly(text) -> None:
     assert time.perf_counter() - start < FAST
 
 
+def _expressions() -> st.SearchStrategy[str]:
+    """Term texts built from hostile pieces: large exponents and integers, towers, long sums,
+    functions and signs nested at random depth."""
+    leaves = st.sampled_from(["x1", "x2", "q1", "qd2", "9", "99999999999", "1e300", "0.5", "pi"])
+
+    def grow(inner: st.SearchStrategy[str]) -> st.SearchStrategy[str]:
+        return st.one_of(
+            st.tuples(inner, st.sampled_from(["+", "-", "*", "/", "^", "**"]), inner).map(
+                lambda t: f"({t[0]}{t[1]}{t[2]})"
+            ),
+            st.tuples(st.sampled_from(["sin", "log", "sqrt", "exp", "-", "+"]), inner).map(
+                lambda t: f"{t[0]}({t[1]})"
+            ),
+            st.tuples(inner, st.integers(0, 10**6)).map(lambda t: f"{t[0]}^{t[1]}"),
+        )
+
+    return st.recursive(leaves, grow, max_leaves=40)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_expressions())
+def test_any_composed_term_is_refused_or_accepted_quickly(text) -> None:
+    """Property: a term composed of hostile pieces is a basis or a ValueError, quickly."""
+    start = time.perf_counter()
+    try:
+        adparm.ExpressionBasis(["x1^2", text], joints=2)
+    except ValueError as error:
+        assert "basis" in str(error) and len(str(error)) < 1500
+    assert time.perf_counter() - start < FAST
+
+
 # -- 9. deep nesting and thread failures: exit 2, never a traceback ------------------------------
 
 

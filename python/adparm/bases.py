@@ -265,7 +265,8 @@ def parse_term(term: str, joints: int = 2) -> sympy.Expr:
             )
     if not expression.free_symbols:
         raise ValueError(
-            f"basis term {term!r}: is the constant {expression}; a basis function must depend on "
+            f"basis term {term!r}: is the constant {_expression_text(expression)}; a basis "
+            "function must depend on "
             f"the state (only its gradient enters the HJB error)"
         )
     if not any(not symbol.name.startswith("qd") for symbol in expression.free_symbols):
@@ -279,12 +280,15 @@ def parse_term(term: str, joints: int = 2) -> sympy.Expr:
 
 
 def compile_terms(
-    terms: Sequence[str] | Sequence[sympy.Expr], joints: int = 2
+    terms: Sequence[str] | Sequence[sympy.Expr],
+    joints: int = 2,
+    *,
+    labels: Sequence[str] | None = None,
 ) -> tuple[NDArray[np.int32], NDArray[np.float64]]:
     """The postfix program of the C++ ``ExpressionBasis``: (opcodes, arguments).
 
     Variables are numbered over z = [x; qd] (x1 to x2n, then qd1 to qdn); q_i is replaced by
-    qd_i - x_i.
+    qd_i - x_i. ``labels``: the terms' texts, for messages (default: the terms themselves).
     """
     import sympy
 
@@ -296,9 +300,13 @@ def compile_terms(
         for i in range(1, joints + 1)
     }
     program: list[tuple[Any, float]] = []
-    for term in terms:
+    for i, term in enumerate(terms):
         expression = parse_term(term, joints) if isinstance(term, str) else term
-        _emit(expression.xreplace(substitution), index, program, str(term))
+        if labels is not None:
+            label = labels[i]
+        else:
+            label = term if isinstance(term, str) else _expression_text(term)
+        _emit(expression.xreplace(substitution), index, program, label)
         program.append((_core.ExpressionOp.store, 0.0))
     opcodes = np.array([int(op) for op, _ in program], dtype=np.int32)
     arguments = np.array([argument for _, argument in program], dtype=np.float64)
@@ -333,7 +341,7 @@ class ExpressionBasis:
         unique = _unique_terms(basis, joints, degree, MAX_FUNCTIONS)
         self.terms: tuple[str, ...] = tuple(term for term, _ in unique)
         self.expressions = tuple(expression for _, expression in unique)
-        self.opcodes, self.arguments = compile_terms(self.expressions, joints)
+        self.opcodes, self.arguments = compile_terms(self.expressions, joints, labels=self.terms)
         self.core = _core.ExpressionBasis(joints, self.opcodes.tolist(), self.arguments.tolist())
 
     @property
@@ -438,6 +446,15 @@ def _repr(value: Any) -> str:
         return _short(short.repr(value))
     except Exception:  # noqa: BLE001 - a repr that fails
         return f"<{type(value).__name__}>"
+
+
+def _expression_text(expression: Any) -> str:
+    """A sympy expression as text for a message, cut to 60 characters (never raises: sympy
+    cannot print some numbers beyond a double's range)."""
+    try:
+        return _short(str(expression), 60)
+    except Exception:  # noqa: BLE001
+        return "a number beyond the range of a double"
 
 
 def _short(text: str, size: int = 80) -> str:
@@ -733,7 +750,8 @@ def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: st
         value = complex(expression)
         if value.imag != 0 or not np.isfinite(value.real):
             raise ValueError(
-                f"basis term {term!r}: the constant {expression} is not finite and real"
+                f"basis term {_repr(term)}: the constant {_expression_text(expression)} is not "
+                "finite and real"
             )
         program.append((op.constant, value.real))
     elif expression.is_Symbol:
@@ -764,7 +782,8 @@ def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: st
     elif expression.is_Pow:
         if not expression.exp.is_number:
             raise ValueError(
-                f"basis term {term!r}: the exponent of {expression} must be a number "
+                f"basis term {_repr(term)}: the exponent of {_expression_text(expression)} must "
+                "be a number "
                 f"(write exp(b*log(a)) for a variable power)"
             )
         _emit(expression.base, index, program, term)
@@ -774,4 +793,7 @@ def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: st
         _emit(argument, index, program, term)
         program.append((getattr(op, type(expression).__name__), 0.0))
     else:
-        raise ValueError(f"basis term {term!r}: cannot compile {expression} ({type(expression)})")
+        raise ValueError(
+            f"basis term {_repr(term)}: cannot compile {_expression_text(expression)} "
+            f"({type(expression).__name__})"
+        )
