@@ -572,10 +572,15 @@ def _check_bounds(term: str, joints: int) -> int:
     # the work of expanding: the terms of the whole term, of each function's argument, of each
     # denominator and of each base of a negative or fractional power (each is expanded)
     size: dict[int, int] = {}
+    values: dict[int, float] = {}  # the constant parts, as doubles: each must be finite and real
     work = 0
     cap = MAX_EXPANSION + 1
+    source = term.replace("^", "**").strip()
     for node in reversed(order):
         expanded = 0
+        value = _fold(node, values, where, source)
+        if value is not None:
+            values[id(node)] = value
         if isinstance(node, ast.Name):
             terms = 2 if node.id in q_names else 1
         elif isinstance(node, ast.Constant):
@@ -593,7 +598,12 @@ def _check_bounds(term: str, joints: int) -> int:
             elif isinstance(node.op, ast.Div):
                 terms, expanded = left, right
             else:
-                exponent = _constant(node.right, where)
+                if id(node.right) not in values:
+                    raise ValueError(
+                        f"{where}: an exponent must be a number (write exp(b*log(a)) for a "
+                        "variable power)"
+                    )
+                exponent = values[id(node.right)]
                 if abs(exponent) > MAX_EXPONENT:
                     raise ValueError(
                         f"{where}: the exponent {_number_text(exponent)} is larger than "
@@ -648,56 +658,61 @@ def _number_text(value: float) -> str:
     return f"{value:.6g}"
 
 
-def _constant(node: ast.AST, where: str) -> float:
-    """The value of a constant exponent (numbers, pi, + - * / ** and functions of them), with
-    each power bounded as the term's; a ValueError for a variable exponent or an overflow."""
-    stack: list[tuple[ast.AST, bool]] = [(node, False)]
-    values: dict[int, float] = {}
+def _fold(node: ast.AST, values: dict[int, float], where: str, source: str) -> float | None:
+    """The value of ``node`` as a double if it is constant (numbers, pi, + - * / ** and the
+    functions of constants; its children already folded into ``values``), else None. A constant
+    that overflows a double, divides by zero or is not real is a ValueError: sympy would carry
+    it exactly and may take forever on it (exp(1e300^27))."""
     functions = {name: getattr(math, name) for name in FUNCTIONS}
     try:
-        while stack:
-            current, ready = stack.pop()
-            if isinstance(current, ast.Constant):
-                values[id(current)] = float(current.value)
-            elif isinstance(current, ast.Name) and current.id == "pi":
-                values[id(current)] = math.pi
-            elif isinstance(current, (ast.Name, ast.Call)) and not (
-                isinstance(current, ast.Call) and current.func.id in functions
-            ):
+        if isinstance(node, ast.Constant):
+            result = float(node.value)
+        elif isinstance(node, ast.Name):
+            if node.id != "pi":
+                return None
+            result = math.pi
+        elif isinstance(node, ast.UnaryOp):
+            if id(node.operand) not in values:
+                return None
+            operand = values[id(node.operand)]
+            result = -operand if isinstance(node.op, ast.USub) else operand
+        elif isinstance(node, ast.Call):
+            name = node.func.id  # type: ignore[attr-defined]
+            if id(node.args[0]) not in values or name not in functions:
+                return None
+            result = functions[name](values[id(node.args[0])])
+        elif isinstance(node, ast.BinOp):
+            if id(node.left) not in values or id(node.right) not in values:
+                return None
+            a, b = values[id(node.left)], values[id(node.right)]
+            if isinstance(node.op, ast.Pow) and abs(b) > MAX_EXPONENT:
                 raise ValueError(
-                    f"{where}: an exponent must be a number (write exp(b*log(a)) for a variable "
-                    "power)"
+                    f"{where}: the exponent {_number_text(b)} is larger than {MAX_EXPONENT} in size"
                 )
-            elif not ready:
-                stack.append((current, True))
-                children = (
-                    [current.operand]
-                    if isinstance(current, ast.UnaryOp)
-                    else current.args
-                    if isinstance(current, ast.Call)
-                    else [current.left, current.right]
-                )
-                stack.extend((child, False) for child in children)
-            elif isinstance(current, ast.UnaryOp):
-                value = values[id(current.operand)]
-                values[id(current)] = -value if isinstance(current.op, ast.USub) else value
-            elif isinstance(current, ast.Call):
-                values[id(current)] = float(functions[current.func.id](values[id(current.args[0])]))
-            else:
-                a, b = values[id(current.left)], values[id(current.right)]
-                if isinstance(current.op, ast.Pow) and abs(b) > MAX_EXPONENT:
-                    raise ValueError(
-                        f"{where}: the exponent {_number_text(b)} is larger than {MAX_EXPONENT} "
-                        "in size"
-                    )
-                operation = _OPERATIONS[type(current.op)]
-                values[id(current)] = float(operation(a, b))
-    except (ZeroDivisionError, OverflowError, TypeError) as error:
-        raise ValueError(f"{where}: its exponent cannot be evaluated ({error})") from None
-    value = values[id(node)]
-    if not math.isfinite(value):
-        raise ValueError(f"{where}: its exponent is not finite")
-    return value
+            result = _OPERATIONS[type(node.op)](a, b)
+        else:
+            return None
+    except ZeroDivisionError:
+        raise ValueError(f"{where}: {_segment(source, node)} divides by zero") from None
+    except OverflowError:
+        raise ValueError(
+            f"{where}: the constant {_segment(source, node)} is beyond the range of a double"
+        ) from None
+    except (ValueError, TypeError) as error:
+        if str(error).startswith("basis term"):
+            raise
+        raise ValueError(f"{where}: the constant {_segment(source, node)} is not real") from None
+    if isinstance(result, complex):
+        raise ValueError(f"{where}: the constant {_segment(source, node)} is not real")
+    if not math.isfinite(result):
+        raise ValueError(
+            f"{where}: the constant {_segment(source, node)} is beyond the range of a double"
+        )
+    return float(result)
+
+
+def _segment(source: str, node: ast.AST) -> str:
+    return _short(ast.get_source_segment(source, node) or "?", 40)
 
 
 def _check_joints(joints: int) -> None:
