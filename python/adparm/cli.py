@@ -259,12 +259,40 @@ def _number_or_text(text: str) -> float | str:
         return text.strip()
 
 
+#: The deepest nesting of brackets and braces in a --grid value (TOML's reader recurses).
+MAX_GRID_NESTING = 32
+
+
+def _nesting(text: str) -> int:
+    """The deepest nesting of [ ] and { } in ``text`` outside quoted strings (an upper bound)."""
+    depth = deepest = 0
+    quote = ""
+    for char in text:
+        if quote:
+            quote = "" if char == quote else quote
+        elif char in "\"'":
+            quote = char
+        elif char in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif char in "]}":
+            depth -= 1
+    return deepest
+
+
 def _grid_entry(text: str) -> tuple[str, list]:
     name, separator, values = text.partition("=")
     if not separator or not name.strip() or not values.strip():
         raise argparse.ArgumentTypeError(f"expected SECTION.KEY=V1,V2,..., got {text!r}")
+    depth = _nesting(values)
+    if depth > MAX_GRID_NESTING:
+        raise argparse.ArgumentTypeError(
+            f"{name.strip()}: values nested {depth} deep; at most {MAX_GRID_NESTING}"
+        )
     try:
         parsed = tomllib.loads(f"values = [{values}]")["values"]
+    except (RecursionError, MemoryError):  # a safety net below the bound above
+        raise argparse.ArgumentTypeError(f"{name.strip()}: values nested too deeply") from None
     except tomllib.TOMLDecodeError as error:
         raise argparse.ArgumentTypeError(
             f"{name.strip()}: expected TOML values separated by commas, got {values!r} ({error})"
@@ -319,6 +347,43 @@ def _interrupted(command: str, signals: _Signals, what: str, kept: str) -> int:
     return signals.status()
 
 
+def _summary(result: SimulationResult) -> dict[str, Any]:
+    """result.summary(), which reports a failed post-run step in "post_run_errors"; should the
+    summary itself fail, a minimal one that says so (the run's files are written all the same)."""
+    try:
+        summary = result.summary()
+    except Exception as error:  # noqa: BLE001 - never loses a finished run
+        from .summary import _failure
+
+        message = _failure("the summary (adparm.summary.summarize)", error)
+        t = result.t
+        summary = {
+            "status": result.status,
+            "t_end": float(t[-1]) if t.size else None,
+            "stopped_at": None,
+            "T": result.config.sim.T,
+            "final_e1": result.e1[-1].tolist() if t.size else None,
+            "final_e1_norm": float(np.linalg.norm(result.e1[-1])) if t.size else None,
+            "accumulated_cost": None,
+            "accumulated_cost_without_probe": None,
+            "covariance_resets": result.covariance_resets,
+            "wall_time": float(result.wall_time),
+            "optimal_weights": None,
+            "optimal_weights_unavailable": message,
+            "verdict": f"unknown: {message}",
+            "deviations": [],
+            "post_run_errors": [message],
+        }
+    summary.setdefault("post_run_errors", [])
+    return summary
+
+
+def _say_post_run_errors(command: str, summary: dict[str, Any]) -> None:
+    """Says on stderr which post-run steps failed (they are in summary.md and summary.json)."""
+    for problem in summary.get("post_run_errors") or ():
+        _say(command, f"{problem}; the run and its files are complete (see summary.md)")
+
+
 def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str:
     from .truth import divergence_causes
 
@@ -365,11 +430,17 @@ def _run(args: argparse.Namespace) -> int:
         signals.writing = True  # from here on a signal lets the files be finished
         if diverged is not None:  # the divergence first: what follows is not a result
             _say(command, _divergence_text(result, diverged))
-        summary = result.summary()
+        summary = _summary(result)
         if getattr(args, "check_dt", False) and interrupt is None:
+            from .summary import _failure
             from .truth import check_step_size
 
-            summary["step_size_check"] = check_step_size(result.config)
+            try:
+                summary["step_size_check"] = check_step_size(result.config)
+            except (KeyboardInterrupt, SimulationInterrupted):
+                raise
+            except Exception as error:  # noqa: BLE001 - never loses the finished run
+                summary["post_run_errors"].append(_failure("the step-size check", error))
         try:
             _writing(
                 signals,
@@ -395,6 +466,7 @@ def _run(args: argparse.Namespace) -> int:
             )
             return _interrupted(command, signals, what, folder.describe_written())
         print(written)
+        _say_post_run_errors(command, summary)
         error_value = summary.get("critic_relative_error")
         if error_value is not None:
             claim = summary["critic_relative_error_at_claim"]
@@ -536,6 +608,8 @@ def _compare(args: argparse.Namespace) -> int:
             return _interrupted(command, signals, what, folder.describe_written())
         print(comparison.table_markdown(), end="")
         print(f"wrote {folder.describe_written()}")
+        for problem in comparison.post_run_errors:
+            _say(command, f"{problem}; the runs and their files are complete")
         if signals.received is not None:
             _say(command, f"{signal.Signals(signals.received).name} received while writing")
             return signals.status()
@@ -561,7 +635,14 @@ def _write_comparison(
         on_file(folder.write(name, lambda t, n=name: _save_one(comparison, n, t)))
     on_file(folder.write_text("config.toml", config.to_toml()))
     if not args.no_figures:
-        for path in folder.write_figures({"compare": comparison.plot()}, args.formats):
+        try:
+            drawn = comparison.plot()
+        except Exception as error:  # noqa: BLE001 - drawing never loses the runs' tables
+            from .summary import _failure
+
+            _say("compare", f"{_failure('the figure compare', error)}; the tables are written")
+            return
+        for path in folder.write_figures({"compare": drawn}, args.formats):
             on_file(path)
 
 

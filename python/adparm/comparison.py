@@ -14,6 +14,7 @@ show a lower J than ``optimal``, which is optimal for the error system without m
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Iterable, Sequence
@@ -196,6 +197,8 @@ class Comparison:
     results: dict[str, SimulationResult]
     rows: list[dict[str, Any]]
     optimal_cost: float | None = None
+    #: The steps after the runs that failed (e.g. J*), one line each; the runs are complete.
+    post_run_errors: tuple[str, ...] = ()
 
     @property
     def diverged(self) -> list[str]:
@@ -311,20 +314,26 @@ def compare(
             "exception's .result",
             _comparison(results),
         ) from None
-    return _comparison(results, _optimal_cost(config))  # after the runs: Ctrl-C reaches them
+    # after the runs: Ctrl-C reaches them; a failure of J* loses no run (post_run_errors)
+    best, problem = _optimal_cost(config)
+    comparison = _comparison(results, best)
+    if problem is not None:
+        comparison = dataclasses.replace(comparison, post_run_errors=(problem,))
+    return comparison
 
 
-def _optimal_cost(config: Config) -> float | None:
+def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
     """J* of adparm.optimal_cost, or None where it does not apply (moving qd, a URDF arm) or
-    IPOPT fails."""
+    fails; and the failure (one line) or None."""
+    from .summary import _failure
     from .truth import optimal_cost
 
     if not config.task.is_set_point or config.plant.urdf is not None:  # two-link arm only
-        return None
+        return None, None
     try:
-        return optimal_cost(config)
-    except RuntimeError:  # pragma: no cover - IPOPT failed
-        return None
+        return optimal_cost(config), None
+    except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
+        return None, _failure("J* (adparm.optimal_cost)", error)
 
 
 def _run(config: Config, progress: bool) -> SimulationResult:

@@ -284,10 +284,12 @@ def _matrix(value: Any, name: str, rows: int | None, cols: int | None) -> Matrix
     return tuple(tuple(float(v) for v in row) for row in _array(value, name, (rows, cols)))
 
 
-def _symmetric_positive_definite(matrix: Matrix, name: str) -> None:
+def _symmetric_positive_definite(matrix: Matrix, name: str) -> Matrix:
     """The C++ core's test (cost.hpp), on matrix / max|entry| so that no square overflows:
     symmetric to 1e-12 (relative, Frobenius norm), and positive definite: a Cholesky factor
-    exists."""
+    exists. Returns the exactly symmetric 0.5 (M + M^T): a matrix asymmetric by round-off (one
+    ulp) is accepted here, so every later step (python-control's care, CasADi) gets it
+    symmetric."""
     array = np.array(matrix)
     scale = np.abs(array).max()
     scaled = array / scale if scale > 0.0 else array
@@ -300,6 +302,10 @@ def _symmetric_positive_definite(matrix: Matrix, name: str) -> None:
         positive_definite = False
     if not positive_definite:
         raise ValueError(f"{name}: must be positive definite, got {_text(array.tolist(), 300)}")
+    symmetric = 0.5 * (array + array.T)
+    if not np.all(np.isfinite(symmetric)):  # 0.5 (a + b) overflows only where a + b does
+        symmetric = 0.5 * array + 0.5 * array.T
+    return tuple(tuple(float(v) for v in row) for row in symmetric)
 
 
 def _check_arm(p1: float, p2: float, p3: float, section: str) -> None:
@@ -845,8 +851,8 @@ class CostConfig:
     def __post_init__(self) -> None:
         object.__setattr__(self, "Q", _square(self.Q, "cost.Q"))
         object.__setattr__(self, "R", _square(self.R, "cost.R"))
-        _symmetric_positive_definite(self.Q, "cost.Q")
-        _symmetric_positive_definite(self.R, "cost.R")
+        object.__setattr__(self, "Q", _symmetric_positive_definite(self.Q, "cost.Q"))
+        object.__setattr__(self, "R", _symmetric_positive_definite(self.R, "cost.R"))
 
 
 @dataclass(frozen=True)
@@ -1068,6 +1074,7 @@ def _expression_basis(basis: tuple[str, ...], degree: int | None, joints: int) -
         text = str(error)
         if text.startswith("degree:"):
             raise ValueError(f"controller.{text}") from None
+        text = text.removeprefix("basis: ")
         raise ValueError(f"controller.basis: {text}") from None
 
 
@@ -1076,6 +1083,8 @@ def name_in(basis: tuple[str, ...], name: str) -> bool:
 
 
 EXTRAPOLATION_MODES = ("fixed", "grid", "local")
+#: The largest controller.degree (adparm.bases.MAX_DEGREE; one joint reaches 128 functions at 22).
+_MAX_DEGREE = 20
 
 
 @dataclass(frozen=True)
@@ -1122,7 +1131,9 @@ class ControllerConfig:
         object.__setattr__(self, "basis", basis)
         if self.degree is not None:
             object.__setattr__(
-                self, "degree", _integer(self.degree, "controller.degree", minimum=2)
+                self,
+                "degree",
+                _integer(self.degree, "controller.degree", minimum=2, maximum=_MAX_DEGREE),
             )
             if self.degree % 2:
                 raise ValueError(

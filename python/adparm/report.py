@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._files import OutputFolder
-from .summary import summarize, summary_markdown
+from .summary import _failure, summarize, summary_markdown
 
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import SimulationResult
@@ -25,8 +25,9 @@ FIGURE_FORMATS = ("png", "svg", "pdf")
 
 
 def check_formats(formats: Iterable[str]) -> tuple[str, ...]:
-    """``formats`` as a tuple; ValueError if one is not in FIGURE_FORMATS."""
-    formats = tuple(formats)
+    """``formats`` as a tuple without repeats (``png,png`` is ``png``: each figure is written
+    once); ValueError if one is not in FIGURE_FORMATS."""
+    formats = tuple(dict.fromkeys(formats))
     unknown = [fmt for fmt in formats if fmt not in FIGURE_FORMATS]
     if unknown:
         expected = ", ".join(FIGURE_FORMATS)
@@ -73,19 +74,30 @@ def write_report(
     for name, writer in (("result.npz", _write_npz), ("result.csv", _write_csv)):
         written.append(folder.write(name, lambda temporary, w=writer: w(result, temporary)))
         done(written[-1])
+    written.append(folder.write_text("config.toml", result.config.to_toml()))
+    done(written[-1])
+    # the figures before the summaries, so that a figure that cannot be drawn is reported in them;
+    # a failure to draw (not to write) loses neither the run nor the other files
+    failed: list[str] = []
+    if figures:
+        from .plotting import FIGURES
+
+        for name in FIGURES:  # one figure at a time: progress, and one figure in memory
+            try:
+                drawn = result.plot([name])
+            except Exception as error:  # noqa: BLE001 - reported in the summary
+                failed.append(_failure(f"the figure {name}", error))
+                continue
+            paths = folder.write_figures(drawn, formats)
+            written += paths
+            for path in paths:
+                done(path)
+    if failed:
+        summary = {**summary, "post_run_errors": [*summary.get("post_run_errors", []), *failed]}
     for name, text in (
-        ("config.toml", result.config.to_toml()),
         ("summary.json", json.dumps(summary, indent=2) + "\n"),
         ("summary.md", summary_markdown(summary)),
     ):
         written.append(folder.write_text(name, text))
         done(written[-1])
-    if figures:
-        from .plotting import FIGURES
-
-        for name in FIGURES:  # one figure at a time: progress, and one figure in memory
-            paths = folder.write_figures(result.plot([name]), formats)
-            written += paths
-            for path in paths:
-                done(path)
     return written

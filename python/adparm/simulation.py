@@ -7,6 +7,7 @@ import functools
 import itertools
 import math
 import os
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -472,6 +473,26 @@ def _progress_bar(total: float, unit: str, desc: str, enabled: bool) -> tqdm:
     )
 
 
+def _start_batch(batch: _core.Batch, threads: int, window: int | None) -> None:
+    """batch.start; threads that cannot be created (the core's std::system_error, a
+    RuntimeError) are a ValueError that says so and what to do, with no worker left running."""
+    try:
+        if window is None:
+            batch.start(threads)
+        else:
+            batch.start(threads, window)
+    except RuntimeError as error:
+        try:
+            batch.stop()
+        except Exception:  # noqa: BLE001, S110 - nothing was running
+            pass
+        raise ValueError(
+            f"threads: could not start {threads} worker thread{'s' if threads != 1 else ''} "
+            f"({error}); use fewer threads (adparm sweep --threads) or raise the process's "
+            "thread limit (ulimit -u)"
+        ) from error
+
+
 def _run_batch(
     batch: _core.Batch,
     threads: int,
@@ -483,10 +504,7 @@ def _run_batch(
     ``on_end(i, run)`` receives each run as it ends (handed over by the core, which no longer
     holds it), ``on_poll()`` runs after each poll. Any exception (Ctrl-C) stops the workers
     (within one step) before it propagates."""
-    if window is None:
-        batch.start(threads)
-    else:
-        batch.start(threads, window)
+    _start_batch(batch, threads, window)
     try:
         while not batch.done:
             for i in batch.wait(POLL_SECONDS):
@@ -731,7 +749,16 @@ def _simulate(config: Config, progress: bool, diagnose: bool) -> SimulationResul
     if diagnose:
         from .truth import warn_if_approximate
 
-        warn_if_approximate(result)
+        try:
+            warn_if_approximate(result)
+        except Exception as error:  # noqa: BLE001 - the diagnosis never loses a finished run
+            from .summary import _failure
+
+            warnings.warn(
+                "adparm: " + _failure("the diagnosis (adparm.truth.diagnose)", error),
+                RuntimeWarning,
+                stacklevel=2,
+            )
     return result
 
 

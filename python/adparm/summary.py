@@ -235,10 +235,21 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
     if not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
     t = result.t
+    # The steps after the run (W*, the diagnosis and its yardsticks, the deviations) never lose
+    # the run: a failure of one is reported in "post_run_errors" and the rest is summarised.
+    post_run_errors: list[str] = []
     try:
         target = optimal_weights(result.config)
     except ValueError as error:
         target, no_target = None, str(error)
+    except Exception as error:  # noqa: BLE001 - any failure after the run is reported
+        target, no_target = None, _failure("W* (adparm.optimal_weights)", error)
+        post_run_errors.append(no_target)
+    try:
+        deviation_rows = deviations(result.config)
+    except Exception as error:  # noqa: BLE001
+        deviation_rows = []
+        post_run_errors.append(_failure("the deviations from the paper", error))
     out: dict[str, Any] = {
         "status": result.status,
         "t_end": _number(t[-1]) if t.size else None,
@@ -257,18 +268,24 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
         "wall_time": _number(result.wall_time),
         "tolerance": tolerance,
         "paper_claim_time": PAPER_CLAIM_TIME,
-        "deviations": deviations(result.config),
+        "deviations": deviation_rows,
     }
-    diagnostics = (
-        result.diagnostics
-        if tolerance == result.config.diagnostics.tolerance
-        else diagnose(result, tolerance=tolerance)
-    )
+    try:
+        diagnostics = (
+            result.diagnostics
+            if tolerance == result.config.diagnostics.tolerance
+            else diagnose(result, tolerance=tolerance)
+        )
+    except Exception as error:  # noqa: BLE001
+        message = _failure("the diagnosis (adparm.truth.diagnose)", error)
+        post_run_errors.append(message)
+        diagnostics = {"verdict": f"unknown: {message}", "problems": [], "advice": []}
     out["verdict"] = diagnostics["verdict"]
     out["policy_relative_error"] = diagnostics.get("policy_relative_error")
     out["e2_block_min_eigenvalue"] = diagnostics.get("e2_block_min_eigenvalue")
     out["hjb_residual_explored"] = diagnostics.get("hjb_residual_explored")
     out["diagnostics"] = diagnostics
+    out["post_run_errors"] = post_run_errors
     if target is None:
         out["optimal_weights_unavailable"] = no_target
         return out
@@ -281,6 +298,15 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
             t, error, tolerance, finished=result.status == "finished"
         )
     return out
+
+
+def _failure(step: str, error: BaseException) -> str:
+    """One line for a post-run step that failed: the step, the error's type and its message
+    (its first line, at most 300 characters)."""
+    text = (str(error).strip().splitlines() or [""])[0]
+    if len(text) > 300:
+        text = text[:297] + "..."
+    return f"{step} failed after the run: {type(error).__name__}" + (f": {text}" if text else "")
 
 
 def _fmt(value: Any) -> str:
@@ -376,6 +402,8 @@ def summary_markdown(summary: dict[str, Any]) -> str:
         f"probe, {_fmt(summary['accumulated_cost_without_probe'])} with the actor's u_hat alone",
         f"- covariance resets: {summary['covariance_resets']}",
     ]
+    for problem in summary.get("post_run_errors") or ():
+        lines.append(f"- not computed: {problem} (the run and its files are complete)")
     lines += _diagnostics_lines(summary.get("diagnostics"))
     check = summary.get("step_size_check")
     if check is not None:

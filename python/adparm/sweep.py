@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
+import reprlib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -154,9 +155,16 @@ def _point_config(base: Config, point: Mapping[str, Any]) -> Config:
     try:
         return base.updated(changes)
     except TypeError as error:
-        raise TypeError(f"grid point {point}: {error}") from error
+        raise TypeError(f"grid point {_point_text(point)}: {error}") from error
     except ValueError as error:
-        raise ValueError(f"grid point {point}: {error}") from error
+        raise ValueError(f"grid point {_point_text(point)}: {error}") from error
+
+
+def _point_text(point: Mapping[str, Any]) -> str:
+    """A short repr of a grid point (bounded nesting and length: no RecursionError)."""
+    short = reprlib.Repr()
+    short.maxlevel, short.maxlist, short.maxdict, short.maxstring = 4, 6, 8, 60
+    return short.repr(dict(point))
 
 
 def _metrics(result: SimulationResult, tolerance: float | None) -> dict[str, Any]:

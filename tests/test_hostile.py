@@ -1,0 +1,393 @@
+"""Hostile inputs, round 2 (issue 22): a finished run is never lost to a step after it; basis
+expressions are bounded before sympy works on them; deep nesting and thread failures are bad
+input (exit 2), not a traceback; repeated figure formats are written once."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import adparm
+from adparm import bases, cli
+
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
+SHORT = ["--T", "0.2", "--no-progress"]
+# A generous bound for a loaded 2-core machine; each case takes about a second or less alone.
+FAST = 10.0
+
+# Q asymmetric by one ulp: passes the 1e-12 symmetry check, refused by python-control's care.
+ULP_Q = [
+    [10.0, 1.0, 0.0, 0.0],
+    [1.0000000000000002, 10.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+]
+
+
+def ulp_config(tmp_path: Path) -> Path:
+    path = tmp_path / "ulp.toml"
+    rows = ", ".join("[" + ", ".join(repr(v) for v in row) + "]" for row in ULP_Q)
+    path.write_text(f"[cost]\nQ = [{rows}]\n[sim]\nT = 0.2\n")
+    return path
+
+
+# -- 1. the steps after a run never lose it ------------------------------------------------------
+
+
+def test_a_matrix_asymmetric_by_round_off_is_stored_symmetric() -> None:
+    config = adparm.paper_config().updated({"cost": {"Q": ULP_Q, "R": [[0.25, 1e-17], [0, 0.25]]}})
+    Q, R = np.array(config.cost.Q), np.array(config.cost.R)
+    assert np.array_equal(Q, Q.T) and np.array_equal(R, R.T)
+    assert Q[0, 1] == pytest.approx(1.0, rel=1e-15)
+    P = adparm.lqr_value(config)  # python-control's care refused the asymmetric Q
+    assert np.all(np.isfinite(np.asarray(P)))
+    bad = [[10, 1, 0, 0], [1.001, 10, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    with pytest.raises(ValueError, match="cost.Q: must be symmetric"):
+        adparm.paper_config().updated({"cost": {"Q": bad}})
+
+
+def test_run_with_a_round_off_asymmetric_q_finishes_and_writes(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    status = cli.main(["run", str(ulp_config(tmp_path)), "--out", str(out), "--no-figures", *SHORT])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["post_run_errors"] == []
+    assert (out / "result.npz").is_file() and (out / "result.csv").is_file()
+
+
+def raising(*args, **kwargs):
+    raise RuntimeError("a yardstick broke\nsecond line")
+
+
+@pytest.mark.parametrize("command", ["run", "reproduce"])
+def test_a_failing_diagnosis_is_reported_and_every_file_is_written(
+    command, tmp_path, monkeypatch, capsys
+) -> None:
+    from adparm import summary, truth
+
+    monkeypatch.setattr(truth, "diagnose", raising)
+    monkeypatch.setattr(summary, "diagnose", raising)
+    out = tmp_path / "out"
+    argv = [command] + ([str(ulp_config(tmp_path))] if command == "run" else [])
+    status = cli.main([*argv, "--out", str(out), "--formats", "png", *SHORT])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "Traceback" not in captured.err
+    assert "diagnosis" in captured.err and "a yardstick broke" in captured.err
+    data = json.loads((out / "summary.json").read_text())
+    assert len(data["post_run_errors"]) == 1
+    assert "RuntimeError: a yardstick broke" in data["post_run_errors"][0]
+    assert data["verdict"].startswith("unknown")
+    assert "a yardstick broke" in (out / "summary.md").read_text()
+    for name in ("result.npz", "result.csv", "config.toml", "fig2_critic_weights.png"):
+        assert (out / name).is_file(), name
+
+
+def test_a_figure_that_cannot_be_drawn_is_reported_and_the_rest_written(
+    tmp_path, monkeypatch, capsys
+) -> None:
+    from adparm import simulation
+
+    def plot(self, names=None, **kwargs):
+        if names == ["fig3_actor_weights"]:
+            raise ValueError("cannot draw this one")
+        return original(self, names, **kwargs)
+
+    original = simulation.SimulationResult.plot
+    monkeypatch.setattr(simulation.SimulationResult, "plot", plot)
+    out = tmp_path / "out"
+    assert cli.main(["reproduce", "--out", str(out), "--formats", "png", *SHORT]) == 0
+    data = json.loads((out / "summary.json").read_text())
+    assert any("fig3_actor_weights" in line for line in data["post_run_errors"])
+    assert (out / "fig2_critic_weights.png").is_file()
+    assert not (out / "fig3_actor_weights.png").exists()
+    assert (out / "result.npz").is_file()
+
+
+def test_a_failing_summary_still_writes_the_run(tmp_path, monkeypatch, capsys) -> None:
+    from adparm import summary
+
+    monkeypatch.setattr(summary, "summarize", raising)
+    out = tmp_path / "out"
+    assert cli.main(["reproduce", "--out", str(out), "--no-figures", *SHORT]) == 0
+    assert "a yardstick broke" in capsys.readouterr().err
+    assert (out / "result.npz").is_file()
+    assert "a yardstick broke" in (out / "summary.md").read_text()
+
+
+def test_sweep_keeps_its_table_when_the_diagnosis_fails(tmp_path, monkeypatch, capsys) -> None:
+    from adparm import summary, truth
+
+    monkeypatch.setattr(truth, "diagnose", raising)
+    monkeypatch.setattr(summary, "diagnose", raising)
+    out = tmp_path / "sweep.csv"
+    status = cli.main(
+        ["sweep", "--grid", "critic.eta_c=100,200", "--threads", "1", "--out", str(out), *SHORT]
+    )
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "Traceback" not in captured.err
+    assert out.is_file() and "unknown" in out.read_text()
+
+
+def test_compare_keeps_its_runs_when_j_star_fails(tmp_path, monkeypatch, capsys) -> None:
+    from adparm import truth
+
+    monkeypatch.setattr(truth, "optimal_cost", raising)
+    out = tmp_path / "out"
+    status = cli.main(
+        ["compare", "--kinds", "pd,optimal", "--out", str(out), "--no-figures", *SHORT]
+    )
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "J*" in captured.err and "a yardstick broke" in captured.err
+    assert (out / "compare.csv").is_file()
+
+
+# -- 10. a repeated figure format is written once ------------------------------------------------
+
+
+def test_repeated_formats_are_written_once(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    assert cli.main(["reproduce", "--out", str(out), "--formats", "png,png", *SHORT]) == 0
+    assert (out / "fig2_critic_weights.png").is_file()
+    assert adparm.report.check_formats(["svg", "png", "svg"]) == ("svg", "png")
+
+
+def test_compare_repeated_formats_are_written_once(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    argv = ["compare", "--kinds", "pd", "--formats", "svg,svg", "--out", str(out), *SHORT]
+    assert cli.main(argv) == 0
+    assert (out / "compare.svg").is_file()
+
+
+# -- 2. basis expressions are bounded before sympy works on them ---------------------------------
+
+HOSTILE_BASES = {
+    "tower of nines": ({"basis": ["quadratic", "9**9**9*x1"]}, "controller.basis", "exponent"),
+    "huge power of a sum": ({"basis": ["(x1+x2)**100000"]}, "controller.basis", "exponent"),
+    "tower of twos": ({"basis": ["x1*2**2**2**2**2**2"]}, "controller.basis", "exponent"),
+    "degree 1e6": ({"basis": "polynomial", "degree": 1000000}, "controller.degree", "<= 20"),
+    "degree 40": ({"basis": "polynomial", "degree": 40}, "controller.degree", "<= 20"),
+    "degree 20": ({"basis": "polynomial", "degree": 20}, "controller.basis", "at most 128"),
+    "3000 minuses": ({"basis": ["-" * 3000 + "x1"]}, "controller.basis", "at most 1000"),
+    "900 minuses": ({"basis": ["-" * 900 + "x1"]}, "controller.basis", "nested more than"),
+    "100000 factors": ({"basis": ["*".join(["x1"] * 100000)]}, "controller.basis", "characters"),
+    "10000 terms": (
+        {"basis": [f"x1*x2^{i}" for i in range(10000)]},
+        "controller.basis",
+        "at most 128",
+    ),
+    "big expansion": ({"basis": ["(x1+x2+x3+x4)^64"]}, "controller.basis", "expansion"),
+    "expansion in all": (
+        {"basis": [f"({i}*x1+x2+x3+x4+q1+q2)^5*x1" for i in range(1, 100)]},
+        "controller.basis",
+        "in all",
+    ),
+    "and": ({"basis": ["x1 and x2"]}, "controller.basis", "and/or"),
+    "if else": ({"basis": ["x1 if x1 else x2"]}, "controller.basis", "if ... else"),
+    "comparison": ({"basis": ["x1 is x2"]}, "controller.basis", "a comparison"),
+    "not": ({"basis": ["not x1"]}, "controller.basis", "not allowed"),
+    "floor division": ({"basis": ["x1 // x2"]}, "controller.basis", "//"),
+    "complex": ({"basis": ["1j*x1"]}, "controller.basis", "not a real number"),
+    "1e400": ({"basis": ["1e400*x1"]}, "controller.basis", "1e400 is beyond"),
+    "400 digits": ({"basis": ["9" * 400 + "*x1"]}, "controller.basis", "400 digits"),
+    "variable exponent": ({"basis": ["2**x1"]}, "controller.basis", "exponent must be a number"),
+}
+
+
+@pytest.mark.parametrize("case", list(HOSTILE_BASES))
+def test_a_hostile_basis_is_refused_at_once_naming_the_field(case) -> None:
+    controller, field, fragment = HOSTILE_BASES[case]
+    start = time.perf_counter()
+    with pytest.raises(ValueError) as error:
+        adparm.paper_config().updated({"controller": controller})
+    elapsed = time.perf_counter() - start
+    message = str(error.value)
+    assert message.startswith(field), message
+    assert fragment in message, message
+    assert len(message) < 400, message  # never the whole term, never a 400-digit number
+    assert elapsed < FAST, elapsed
+
+
+def test_a_deeply_nested_entry_is_refused_without_recursion() -> None:
+    value: object = "x1"
+    for _ in range(3000):
+        value = [value]
+    with pytest.raises(ValueError, match="must be a string"):
+        adparm.ExpressionBasis([value])
+    with pytest.raises(ValueError, match="must be a string"):
+        bases.parse_term(value)
+
+
+def test_terms_inside_the_bounds_still_work() -> None:
+    basis = adparm.ExpressionBasis(
+        ["(x1+x2)^4", "-(-(x3^2))", "sin(sin(sin(x1)))*x2", "x1^(3/2)", "2^10*x4^2", "x1/(x2+1)"],
+        joints=2,
+    )
+    assert basis.size == 6
+    phi, _, _ = basis.evaluate([0.5, 0.25, 2.0, 1.0])
+    assert phi[0] == pytest.approx(0.75**4) and phi[4] == pytest.approx(1024.0)
+    assert len(bases.basis_terms("polynomial", 2, degree=6)) == 129  # listing: up to MAX_TERMS
+
+
+def test_a_negative_square_root_names_the_term_not_lapack(capfd) -> None:
+    config = adparm.paper_config().updated(
+        {"controller": {"basis": ["quadratic", "sqrt(x1)"]}, "sim": {"T": 0.01}}
+    )
+    with pytest.raises(ValueError, match=r"basis term 'sqrt\(x1\)': not finite at x"):
+        adparm.simulate(config)
+    assert "SVD" not in capfd.readouterr().err
+
+
+def test_a_result_file_with_a_hostile_basis_is_refused_quickly(tmp_path) -> None:
+    result = adparm.simulate(
+        adparm.paper_config().updated({"controller": {"basis": "quadratic"}, "sim": {"T": 0.01}})
+    )
+    for suffix in (".csv", ".npz"):
+        path = tmp_path / f"run{suffix}"
+        result.save(path)
+        if suffix == ".csv":
+            text = path.read_text().replace('"quadratic"', '"9**9**9*x1"', 1)
+            path.write_text(text)
+        else:
+            with np.load(path, allow_pickle=False) as stored:
+                fields = {name: stored[name] for name in stored.files}
+            text = str(fields["config_json"]).replace('"quadratic"', '"9**9**9*x1"', 1)
+            fields["config_json"] = np.array(text)
+            np.savez(path, **fields)
+        start = time.perf_counter()
+        with pytest.raises(ValueError, match="exponent"):
+            adparm.load_result(path)
+        assert time.perf_counter() - start < FAST
+
+
+@pytest.mark.parametrize(
+    "basis",
+    ['["quadratic", "9**9**9*x1"]', '["' + "-" * 3000 + 'x1"]', '["x1 and x2"]'],
+    ids=["tower", "3000 minuses", "and"],
+)
+def test_the_cli_exits_2_on_a_hostile_basis_within_seconds(basis, tmp_path) -> None:
+    config = tmp_path / "hostile.toml"
+    config.write_text(f"[controller]\nbasis = {basis}\n")
+    start = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-m", "adparm", "run", str(config), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    elapsed = time.perf_counter() - start
+    assert done.returncode == cli.EXIT_BAD_INPUT, done.stderr
+    assert "controller.basis" in done.stderr and "Traceback" not in done.stderr
+    assert elapsed < FAST + 5.0, elapsed  # the interpreter's start-up included
+
+
+def test_the_cli_exits_2_on_a_huge_degree(tmp_path, capsys) -> None:
+    config = tmp_path / "hostile.toml"
+    config.write_text('[controller]\nbasis = "polynomial"\ndegree = 1000000\n')
+    start = time.perf_counter()
+    assert cli.main(["run", str(config), "--out", str(tmp_path / "o")]) == cli.EXIT_BAD_INPUT
+    assert time.perf_counter() - start < FAST
+    assert "controller.degree" in capsys.readouterr().err
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.text(alphabet="x1234q9.e+-*/^() ", min_size=1, max_size=40))
+def test_any_term_text_is_refused_or_accepted_quickly(text) -> None:
+    """Property: any text over the term alphabet is a basis or a ValueError naming the term,
+    in well under a second; never another exception, a hang or a RecursionError."""
+    start = time.perf_counter()
+    try:
+        adparm.ExpressionBasis(["x1^2", text], joints=2)
+    except ValueError as error:
+        assert "basis" in str(error)
+    assert time.perf_counter() - start < FAST
+
+
+def _expressions() -> st.SearchStrategy[str]:
+    """Term texts built from hostile pieces: large exponents and integers, towers, long sums,
+    functions and signs nested at random depth."""
+    leaves = st.sampled_from(["x1", "x2", "q1", "qd2", "9", "99999999999", "1e300", "0.5", "pi"])
+
+    def grow(inner: st.SearchStrategy[str]) -> st.SearchStrategy[str]:
+        return st.one_of(
+            st.tuples(inner, st.sampled_from(["+", "-", "*", "/", "^", "**"]), inner).map(
+                lambda t: f"({t[0]}{t[1]}{t[2]})"
+            ),
+            st.tuples(st.sampled_from(["sin", "log", "sqrt", "exp", "-", "+"]), inner).map(
+                lambda t: f"{t[0]}({t[1]})"
+            ),
+            st.tuples(inner, st.integers(0, 10**6)).map(lambda t: f"{t[0]}^{t[1]}"),
+        )
+
+    return st.recursive(leaves, grow, max_leaves=40)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_expressions())
+def test_any_composed_term_is_refused_or_accepted_quickly(text) -> None:
+    """Property: a term composed of hostile pieces is a basis or a ValueError, quickly."""
+    start = time.perf_counter()
+    try:
+        adparm.ExpressionBasis(["x1^2", text], joints=2)
+    except ValueError as error:
+        assert "basis" in str(error) and len(str(error)) < 1500
+    assert time.perf_counter() - start < FAST
+
+
+# -- 9. deep nesting and thread failures: exit 2, never a traceback ------------------------------
+
+
+def test_a_deeply_nested_grid_value_exits_2(tmp_path, capsys) -> None:
+    deep = "[" * 3000 + "1" + "]" * 3000
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["sweep", "--grid", f"critic.eta_c={deep}", "--out", str(tmp_path / "s.csv")])
+    assert exit_.value.code == cli.EXIT_BAD_INPUT
+    assert "nested 3000 deep" in capsys.readouterr().err
+
+
+def test_a_deeply_nested_grid_point_is_a_value_error() -> None:
+    value: object = 1.0
+    for _ in range(3000):
+        value = [value]
+    with pytest.raises(ValueError, match="nested"):
+        adparm.sweep(adparm.paper_config(), {"critic.eta_c": [value]})
+
+
+def test_threads_that_cannot_start_exit_2(tmp_path, monkeypatch, capsys) -> None:
+    from adparm import simulation
+
+    class NoThreads:
+        stopped = False
+
+        def start(self, *args):
+            raise RuntimeError("can't start new thread")
+
+        def stop(self):
+            self.stopped = True
+
+    batch = NoThreads()
+    with pytest.raises(ValueError, match="could not start 3 worker threads"):
+        simulation._run_batch(batch, 3, lambda i, run: None, lambda: None)
+    assert batch.stopped
+
+    def refuse(batch, threads, window):
+        raise ValueError(f"threads: could not start {threads} worker threads (test)")
+
+    monkeypatch.setattr(simulation, "_start_batch", refuse)
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "--grid", "critic.eta_c=100,200", "--out", str(out), *SHORT]
+    assert cli.main(argv) == cli.EXIT_BAD_INPUT
+    assert "could not start" in capsys.readouterr().err
+    assert cli.main(["reproduce", "--out", str(tmp_path / "o"), *SHORT]) == cli.EXIT_BAD_INPUT
