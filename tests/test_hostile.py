@@ -138,6 +138,9 @@ def test_sweep_keeps_its_table_when_the_diagnosis_fails(tmp_path, monkeypatch, c
     assert status == 0, captured.err
     assert "Traceback" not in captured.err
     assert out.is_file() and "unknown" in out.read_text()
+    # each row carries what was not computed (the post_run_errors column)
+    text = out.read_text()
+    assert "post_run_errors" in text.splitlines()[0] and "a yardstick broke" in text
 
 
 def test_compare_keeps_its_runs_when_j_star_fails(tmp_path, monkeypatch, capsys) -> None:
@@ -152,6 +155,10 @@ def test_compare_keeps_its_runs_when_j_star_fails(tmp_path, monkeypatch, capsys)
     assert status == 0, captured.err
     assert "J*" in captured.err and "a yardstick broke" in captured.err
     assert (out / "compare.csv").is_file()
+    # the files say it too: compare.json's post_run_errors and a line of compare.md
+    data = json.loads((out / "compare.json").read_text())
+    assert len(data["post_run_errors"]) == 1 and "a yardstick broke" in data["post_run_errors"][0]
+    assert "Not computed: " in (out / "compare.md").read_text()
 
 
 # -- 10. a repeated figure format is written once ------------------------------------------------

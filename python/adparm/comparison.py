@@ -219,6 +219,8 @@ class Comparison:
             "disturbance, infinite horizon). e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, "
             "tau peak = max |tau_j| over both joints.",
         ]
+        if self.post_run_errors:  # the runs are complete; a step after them failed
+            lines += ["", *(f"Not computed: {problem}" for problem in self.post_run_errors)]
         return "\n".join(lines) + "\n"
 
     def _rise(self) -> bool:
@@ -229,8 +231,12 @@ class Comparison:
         return rows_dataframe(COMPARE_COLUMNS, self.rows).set_index("controller")
 
     def to_json(self) -> dict[str, Any]:
-        """The content of compare.json: {"columns", "rows"}, non-finite numbers as null."""
-        return rows_json(COMPARE_COLUMNS, self.rows)
+        """The content of compare.json: {"columns", "rows", "post_run_errors"}, non-finite
+        numbers as null."""
+        return {
+            **rows_json(COMPARE_COLUMNS, self.rows),
+            "post_run_errors": list(self.post_run_errors),
+        }
 
     def save(self, directory: str | Path) -> list[Path]:
         """Write compare.csv, compare.json and compare.md to ``directory``; returns the paths."""

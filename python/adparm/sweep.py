@@ -42,6 +42,7 @@ __all__ = ["SWEEP_METRICS", "SweepResult", "grid_points", "sweep", "sweep_row"]
 SWEEP_METRICS = (
     "status",
     "verdict",
+    "post_run_errors",
     "t_end",
     "critic_relative_error",
     "actor_relative_error",
