@@ -143,6 +143,17 @@ def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[s
     return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
 
 
+def inertia_matrices(config: Config, positions: Any, *, model: bool = False) -> np.ndarray:
+    """M(q) (m, n, n) of the plant (``model=True``: the believed model) at each row of
+    ``positions`` (m, n); a URDF arm is read once for all of them."""
+    n = config.dof
+    rows = np.atleast_2d(np.asarray(positions, dtype=float))
+    if config.plant.urdf is not None:
+        arm = config_arm(config, model=model)
+        return np.array([arm.terms(q, np.zeros(n))["M"] for q in rows])
+    return np.array([arm_terms(config, q, np.zeros(n), model=model)["M"] for q in rows])
+
+
 def policy(config: Config, x: Any, t: Any, weights: Any) -> np.ndarray:
     """The actor's input u = -1/2 R^-1 g(x)^T (d phi / dx)^T W (eq. 20) at error states x (m, 2n)
     and times t (m,) (qd(t) enters the basis and q = qd - e1 the inertia of g = [0; M^-1]), with
@@ -156,13 +167,7 @@ def policy(config: Config, x: Any, t: Any, weights: Any) -> np.ndarray:
     _, jacobian = basis(config, states, desired)
     W = np.broadcast_to(np.asarray(weights, dtype=float), (len(states), jacobian.shape[1]))
     gradient_e2 = np.einsum("mkx,mk->mx", jacobian, W)[:, n:]
-    if config.plant.urdf is not None:
-        arm = config_arm(config, model=True)
-        masses = np.array([arm.terms(q, np.zeros(n))["M"] for q in desired - states[:, :n]])
-    else:
-        masses = np.array(
-            [arm_terms(config, q, np.zeros(n), model=True)["M"] for q in desired - states[:, :n]]
-        )
+    masses = inertia_matrices(config, desired - states[:, :n], model=True)
     R_inverse = np.linalg.inv(np.array(config.cost.R))
     return -0.5 * np.einsum(
         "ij,mj->mi", R_inverse, np.linalg.solve(masses, gradient_e2[..., None])[..., 0]

@@ -213,20 +213,6 @@ def _positions(config: Config) -> np.ndarray:
     return np.array(rows)
 
 
-def _arm_inertia(config: Config, *, model: bool) -> Any:
-    """M(q) of the plant (``model=False``) or the believed model, as a function of q (one arm
-    built for all positions)."""
-    n = config.dof
-    if config.plant.urdf is not None:
-        from .urdf import config_arm
-
-        arm = config_arm(config, model=model)
-        return lambda q: arm.terms(q, np.zeros(n))["M"]
-    from .optimal import arm_terms
-
-    return lambda q: arm_terms(config, q, np.zeros(n), model=model)["M"]
-
-
 def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:
     """d(dV/de2)/dx (positions, n, 2n) of the actor's initial V = Wa^T phi at x = 0 with
     qd = each position, by central differences of the basis' exact Jacobian (exact for the
@@ -282,9 +268,10 @@ def closed_loop_rates(config: Config) -> list[dict[str, Any]]:
     positions = _positions(config)
     # the controller computes its policy from the believed model; every torque acts through the
     # plant's M^-1, whose rates the step must resolve
-    believed, plant = (_arm_inertia(config, model=model) for model in (True, False))
-    gains = _policy_gains(config, positions, np.array([believed(q) for q in positions]))
-    masses = np.array([plant(q) for q in positions])
+    from .optimal import inertia_matrices
+
+    gains = _policy_gains(config, positions, inertia_matrices(config, positions, model=True))
+    masses = inertia_matrices(config, positions)
     inverses = np.linalg.inv(masses)
     rise = rise_gain / float(np.linalg.eigvalsh(masses)[:, 0].min())
     policy = _spectral_radius(inverses @ gains[:, :, n:])
