@@ -1,9 +1,11 @@
 """Hostile inputs, round 2 (issue 22): a finished run is never lost to a step after it; basis
 expressions are bounded before sympy works on them; deep nesting and thread failures are bad
-input (exit 2), not a traceback; repeated figure formats are written once."""
+input (exit 2), not a traceback; repeated figure formats are written once; failed writes name
+the file or the manifest, never a hidden temporary, and leave the manifest covering the folder."""
 
 from __future__ import annotations
 
+import errno
 import json
 import subprocess
 import sys
@@ -398,3 +400,71 @@ def test_threads_that_cannot_start_exit_2(tmp_path, monkeypatch, capsys) -> None
     assert cli.main(argv) == cli.EXIT_BAD_INPUT
     assert "could not start" in capsys.readouterr().err
     assert cli.main(["reproduce", "--out", str(tmp_path / "o"), *SHORT]) == cli.EXIT_BAD_INPUT
+
+
+def no_computation(*args, **kwargs):
+    raise AssertionError("computed before the output folder was checked")
+
+
+# -- 8. the manifest: failures name it, and it must be a file ------------------------------------
+
+
+def test_a_failed_manifest_write_names_it_and_leaves_the_folder_consistent(
+    tmp_path, monkeypatch, capsys
+) -> None:
+    """No inode left when the manifest records result.csv: the error names the manifest (not
+    its hidden temporary), result.csv is not left unrecorded, and the next run is not refused."""
+    from adparm import _files
+    from adparm._files import MANIFEST
+
+    atomic_write = _files.atomic_write
+
+    def no_inodes(path, write, before_rename=None):
+        def failing(temporary):
+            if Path(path).name == MANIFEST and list(Path(path).parent.glob(".result.*.tmp.csv")):
+                raise OSError(errno.ENOSPC, "No space left on device", str(temporary))
+            write(temporary)
+
+        return atomic_write(path, failing, before_rename)
+
+    monkeypatch.setattr(_files, "atomic_write", no_inodes)
+    out = tmp_path / "out"
+    assert cli.main(["reproduce", "--out", str(out), "--no-figures", *SHORT]) == 3
+    err = capsys.readouterr().err
+    assert f"could not write {out / MANIFEST} (the manifest, recording result.csv)" in err
+    assert ".tmp" not in err
+    assert not (out / "result.csv").exists()
+    recorded = json.loads((out / MANIFEST).read_text())["files"]
+    assert sorted(recorded) == ["result.npz"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["result.npz"]
+    monkeypatch.undo()
+    assert cli.main(["reproduce", "--out", str(out), "--no-figures", *SHORT]) == 0
+
+
+def test_a_manifest_that_is_a_folder_is_refused_before_the_run(tmp_path, monkeypatch, capsys):
+    from adparm._files import MANIFEST
+
+    monkeypatch.setattr(cli, "simulate", no_computation)
+    out = tmp_path / "out"
+    (out / MANIFEST).mkdir(parents=True)
+    assert cli.main(["reproduce", "--out", str(out), *SHORT]) == cli.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert f"{out / MANIFEST} exists and is not a regular file" in err
+
+
+# -- 12. save() errors ---------------------------------------------------------------------------
+
+
+def test_save_errors_name_the_file_not_its_temporary(tmp_path, monkeypatch) -> None:
+    from adparm import storage
+
+    def full_disk(result, path):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    result = adparm.simulate(adparm.paper_config().updated({"sim": {"T": 0.01}}), diagnose=False)
+    monkeypatch.setattr(storage, "_write_npz", full_disk)
+    with pytest.raises(OSError) as caught:
+        result.save(tmp_path / "run.npz")
+    assert caught.value.filename == str(tmp_path / "run.npz") and ".tmp" not in str(caught.value)
+    assert caught.value.errno == errno.ENOSPC
+    assert list(tmp_path.iterdir()) == []

@@ -1,15 +1,17 @@
 """Writing files so that nothing is ever left half-written, and knowing which files are adparm's.
 
 Every file adparm writes goes first to a temporary file in the same folder (a hidden name ending
-in ``.tmp`` and the real suffix), is flushed to disk, then renamed over its final name with
-``os.replace``, which is atomic: a reader, a crash, a full disk or a signal sees either the old
-file or the new one, never a truncated one; on any failure the temporary file is removed.
+in ``.tmp`` and the real suffix, holding the writer's pid), is flushed to disk, then renamed over
+its final name with ``os.replace``, which is atomic: a reader, a crash, a full disk or a signal
+sees either the old file or the new one, never a truncated one; on any failure the temporary file
+is removed, and the error names the final file, not the temporary.
 
 A folder written by the command line holds ``.adparm-outputs.json``, the manifest of the files
 adparm wrote there (size and modification time of each). Before a run, :class:`OutputFolder`
 refuses to overwrite a file that is not in the manifest or was changed since (a user's file); after
 the run it removes the files an earlier run of the same command wrote and this one did not (stale
-figures), and only those.
+figures), and only those. Each file is recorded in the manifest before it is renamed into place,
+so the manifest always covers the files on disk.
 """
 
 from __future__ import annotations
@@ -36,20 +38,37 @@ def _temporary(path: Path) -> Path:
     return path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.tmp{path.suffix}")
 
 
-def atomic_write(path: str | Path, write: Callable[[Path], Any]) -> Path:
-    """Call ``write(temporary)`` to write a file in ``path``'s folder, flush it to disk and
-    rename it to ``path`` (atomic); on any failure or interrupt, remove the temporary file and
-    leave ``path`` as it was. Returns ``path``."""
+def _named(error: OSError, path: Path, temporary: Path) -> OSError:
+    """``error`` naming ``path`` where it named the temporary file (or nothing)."""
+    if error.filename not in (None, str(temporary), temporary):
+        return error
+    return OSError(error.errno, error.strerror or str(error), str(path))
+
+
+def atomic_write(
+    path: str | Path,
+    write: Callable[[Path], Any],
+    before_rename: Callable[[Path], Any] | None = None,
+) -> Path:
+    """Call ``write(temporary)`` to write a file in ``path``'s folder, flush it to disk, call
+    ``before_rename(temporary)`` if given, and rename it to ``path`` (atomic); on any failure or
+    interrupt, remove the temporary file and leave ``path`` as it was. An OSError names
+    ``path``, not the temporary file. Returns ``path``."""
     path = Path(path)
     temporary = _temporary(path)
     try:
         write(temporary)
         with open(temporary, "rb+") as stream:
             os.fsync(stream.fileno())
+        if before_rename is not None:
+            before_rename(temporary)
         os.replace(temporary, path)
-    except BaseException:
+    except BaseException as error:
         with contextlib.suppress(OSError):
             temporary.unlink()
+        named = _named(error, path, temporary) if isinstance(error, OSError) else error
+        if named is not error:
+            raise named from error
         raise
     return path
 
@@ -96,6 +115,16 @@ class OutputFolder:
                 pass
         except OSError as error:
             raise OutputError(f"{self.option}: cannot write in {folder}: {error}") from None
+        self._check_files()
+
+    def _check_files(self) -> None:
+        folder = self.folder
+        manifest = folder / MANIFEST
+        if manifest.is_symlink() or (manifest.exists() and not manifest.is_file()):
+            raise OutputError(
+                f"{self.option}: {manifest} exists and is not a regular file; adparm keeps the "
+                "list of the files it wrote there: move it away"
+            )
         self._manifest = self._read_manifest()
         for name in self.names:
             path = folder / name
@@ -124,24 +153,24 @@ class OutputFolder:
         return {k: v for k, v in files.items() if isinstance(v, dict) and isinstance(k, str)}
 
     def _owned(self, name: str) -> bool:
+        """Whether ``name`` is as adparm wrote it: its stamp is the manifest's (or, while a
+        file was being replaced, the one it replaced)."""
         entry = self._manifest.get(name)
         path = self.folder / name
         try:
-            return entry is not None and entry.get("stamp") == _stamp(path)
+            return entry is not None and _stamp(path) in (entry.get("stamp"), entry.get("replaces"))
         except OSError:
             return False
 
     # -- writing --------------------------------------------------------------------------------
 
     def write(self, name: str, write: Callable[[Path], Any]) -> Path:
-        """Write ``name`` atomically with ``write(temporary_path)`` and record it."""
-        try:
-            path = atomic_write(self.folder / name, write)
-        except OSError as error:  # name the file, not its temporary
-            raise OSError(
-                error.errno, error.strerror or str(error), str(self.folder / name)
-            ) from error
-        self._record(path)
+        """Write ``name`` atomically with ``write(temporary_path)``, recorded in the manifest
+        before it is renamed into place."""
+        path = atomic_write(
+            self.folder / name, write, lambda temporary: self._record(name, temporary)
+        )
+        self.written.append(path)
         return path
 
     def write_text(self, name: str, text: str) -> Path:
@@ -149,13 +178,15 @@ class OutputFolder:
 
     def write_figures(self, figures: dict[str, Figure], formats: Iterable[str]) -> list[Path]:
         """Each figure as ``<name>.<format>`` (adparm.plotting.save_figures into a temporary
-        folder beside, then each file renamed into place)."""
+        folder beside, then each file recorded and renamed into place)."""
         formats = list(formats)
         staging = Path(tempfile.mkdtemp(dir=self.folder, prefix=".adparm-figures-"))
         paths: list[Path] = []
         try:
             self._write_figures(figures, formats, staging, paths)
         except OSError as error:
+            if error.filename is not None and str(staging) not in str(error.filename):
+                raise  # the manifest, named by _record
             names = ", ".join(f"{name}.{fmt}" for name in figures for fmt in formats)
             raise OSError(
                 error.errno, error.strerror or str(error), f"{self.folder}/ ({names})"
@@ -172,15 +203,33 @@ class OutputFolder:
         for path in save_figures(figures, staging, formats):
             with open(path, "rb+") as stream:
                 os.fsync(stream.fileno())
+            self._record(path.name, path)
             final = self.folder / path.name
             os.replace(path, final)
-            self._record(final)
+            self.written.append(final)
             paths.append(final)
 
-    def _record(self, path: Path) -> None:
-        self.written.append(path)
-        self._manifest[path.name] = {"group": self.group, "stamp": _stamp(path)}
-        self._save_manifest()
+    def _record(self, name: str, temporary: Path) -> None:
+        """Record ``name`` with the stamp of ``temporary`` (a rename keeps size and mtime),
+        before it is renamed into place; if the manifest cannot be written, the error names it
+        (and the file is not renamed into place)."""
+        previous = self._manifest.get(name)
+        entry: dict[str, Any] = {"group": self.group, "stamp": _stamp(temporary)}
+        if self._owned(name):  # replaced: the old file stays adparm's until the rename
+            entry["replaces"] = _stamp(self.folder / name)
+        self._manifest[name] = entry
+        try:
+            self._save_manifest()
+        except OSError as error:
+            if previous is None:
+                del self._manifest[name]
+            else:
+                self._manifest[name] = previous
+            raise OSError(
+                error.errno,
+                error.strerror or str(error),
+                f"{self.folder / MANIFEST} (the manifest, recording {name})",
+            ) from error
 
     def _save_manifest(self) -> None:
         text = json.dumps({"written_by": "adparm", "files": self._manifest}, indent=1) + "\n"
@@ -211,4 +260,5 @@ class OutputFolder:
         """``folder/ (a, b, c)`` of the files written so far, or a sentence saying none was."""
         if not self.written:
             return f"nothing was written in {self.folder}/"
-        return f"{self.folder}/ ({', '.join(path.name for path in self.written)})"
+        names = dict.fromkeys(path.name for path in self.written)  # once each, if rewritten
+        return f"{self.folder}/ ({', '.join(names)})"
