@@ -1,12 +1,16 @@
 """Hostile inputs, round 2 (issue 22): a finished run is never lost to a step after it; basis
 expressions are bounded before sympy works on them; deep nesting and thread failures are bad
-input (exit 2), not a traceback; repeated figure formats are written once; failed writes name
-the file or the manifest, never a hidden temporary, and leave the manifest covering the folder."""
+input (exit 2), not a traceback; repeated figure formats are written once; one command at a time
+per output folder, which holds one run's files; failed writes name the file or the manifest,
+never a hidden temporary, and leave the manifest covering the folder; the leftovers of a killed
+adparm are removed."""
 
 from __future__ import annotations
 
 import errno
 import json
+import os
+import signal
 import subprocess
 import sys
 import time
@@ -19,6 +23,8 @@ from hypothesis import strategies as st
 
 import adparm
 from adparm import bases, cli
+
+from conftest import read_until
 
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 
@@ -402,8 +408,98 @@ def test_threads_that_cannot_start_exit_2(tmp_path, monkeypatch, capsys) -> None
     assert cli.main(["reproduce", "--out", str(tmp_path / "o"), *SHORT]) == cli.EXIT_BAD_INPUT
 
 
+# -- 7. one command per folder, and a folder holds one run's files ------------------------------
+
+
+def test_a_locked_folder_is_refused_at_once_naming_the_holder(tmp_path) -> None:
+    first = adparm._files.OutputFolder(tmp_path, ["a.txt"], "g")
+    first.check()
+    second = adparm._files.OutputFolder(tmp_path, ["b.txt"], "h")
+    with pytest.raises(
+        adparm._files.OutputError, match=f"another adparm command \\(pid {os.getpid()}\\)"
+    ):
+        second.check()
+    first.close()
+    with second:
+        second.check()  # free again
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="signals to a child process are POSIX")
+def test_two_commands_into_one_folder_the_second_is_refused(tmp_path, monkeypatch, capsys):
+    """Two processes into the same --out: the second is refused at once (exit 2, naming the
+    first's pid) without touching the folder; the first writes its run."""
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "adparm", "reproduce", "--T", "20000", "--no-figures"]
+        + ["--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        started = read_until(process.stderr, b"simulating", timeout=60.0)
+        assert b"simulating" in started, started
+        monkeypatch.setattr(cli, "simulate", no_computation)
+        assert cli.main(["reproduce", "--out", str(out), *SHORT]) == cli.EXIT_BAD_INPUT
+        err = capsys.readouterr().err
+        assert f"being written by another adparm command (pid {process.pid})" in err
+        process.send_signal(signal.SIGTERM)
+        _, stderr = process.communicate(timeout=60.0)
+    finally:
+        process.kill()
+    assert process.returncode == 143, stderr
+    assert adparm.load_result(out / "result.npz").status == "interrupted"
+    assert adparm.load_result(out / "result.csv").status == "interrupted"
+
+
 def no_computation(*args, **kwargs):
     raise AssertionError("computed before the output folder was checked")
+
+
+def test_a_failed_write_leaves_only_the_new_runs_complete_files(tmp_path, monkeypatch, capsys):
+    """A rerun whose result.csv cannot be written (disk full): the folder holds the new run's
+    result.npz alone, never beside the earlier run's csv, summary and config."""
+    from adparm import storage
+    from adparm._files import MANIFEST
+
+    out = tmp_path / "out"
+    assert cli.main(["reproduce", "--out", str(out), "--no-figures", *SHORT]) == 0
+    before = adparm.load_result(out / "result.npz")
+
+    def full_disk(result, path):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(storage, "_write_csv", full_disk)
+    argv = ["reproduce", "--out", str(out), "--no-figures", "--T", "0.3", "--no-progress"]
+    assert cli.main(argv) == cli.EXIT_WRITE_FAILED
+    err = capsys.readouterr().err
+    assert "earlier run's 5 files there were removed first" in err
+    on_disk = sorted(p.name for p in out.iterdir() if not p.name.startswith(".adparm"))
+    assert on_disk == ["result.npz"]
+    after = adparm.load_result(out / "result.npz")
+    assert after.config.sim.T == 0.3 != before.config.sim.T
+    assert sorted(json.loads((out / MANIFEST).read_text())["files"]) == ["result.npz"]
+    monkeypatch.undo()
+    assert cli.main(["reproduce", "--out", str(out), "--no-figures", *SHORT]) == 0
+
+
+def test_a_command_replacing_another_commands_file_removes_that_whole_run(tmp_path) -> None:
+    """compare into a reproduce folder writes config.toml over the report's: the report's other
+    files go too, so config.toml never sits beside another run's result."""
+    from adparm._files import OutputFolder
+
+    with OutputFolder(tmp_path, ["result.npz", "config.toml"], "report") as report:
+        report.check()
+        report.remove_previous()
+        for name in report.names:
+            report.write_text(name, name)
+    (tmp_path / "notes.txt").write_text("mine")
+    with OutputFolder(tmp_path, ["compare.csv", "config.toml"], "compare") as comparing:
+        comparing.check()
+        assert sorted(p.name for p in comparing.remove_previous()) == ["config.toml", "result.npz"]
+        for name in comparing.names:
+            comparing.write_text(name, name)
+    names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
+    assert names == ["compare.csv", "config.toml", "notes.txt"]
 
 
 # -- 8. the manifest: failures name it, and it must be a file ------------------------------------
@@ -452,7 +548,30 @@ def test_a_manifest_that_is_a_folder_is_refused_before_the_run(tmp_path, monkeyp
     assert f"{out / MANIFEST} exists and is not a regular file" in err
 
 
-# -- 12. save() errors ---------------------------------------------------------------------------
+# -- 12. leftovers of a killed adparm, save() errors ------------------------------------------
+
+
+def test_leftovers_of_a_dead_adparm_are_removed_on_the_next_run(tmp_path) -> None:
+    from adparm._files import OutputFolder
+
+    done = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    dead = int(done.stdout)  # a process that has ended
+    live = os.getppid()
+    leftovers = [f".result.{dead}-0123abcd.tmp.npz", f"..adparm-outputs.{dead}-89abcdef.tmp.json"]
+    kept = [f".result.{live}-0123abcd.tmp.npz", ".mine.tmp", "notes.123-0123abcd.tmp.txt"]
+    for name in leftovers + kept:
+        (tmp_path / name).write_text("x")
+    staging = tmp_path / f".adparm-figures-{dead}-k2j4_x9a"
+    staging.mkdir()
+    (staging / "fig2_critic_weights.png").write_text("x")
+    with OutputFolder(tmp_path, ["result.npz"], "report") as folder:
+        folder.check()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name != ".adparm-lock") == sorted(kept)
 
 
 def test_save_errors_name_the_file_not_its_temporary(tmp_path, monkeypatch) -> None:

@@ -474,6 +474,7 @@ def test_output_folder_never_overwrites_or_removes_a_users_file(
     written.check()
     for name in sorted(first):
         written.write_text(name, "adparm " + name)
+    written.close()
     for name in sorted(mine - first):
         (folder / name).write_text("user " + name)
     for name in sorted(mine & first):  # the user edits a file adparm wrote
@@ -488,9 +489,10 @@ def test_output_folder_never_overwrites_or_removes_a_users_file(
         assert {p.name: p.read_text() for p in folder.iterdir() if p.name != MANIFEST} == before
         return
     assert not (second & mine)
+    again.remove_previous()
     for name in sorted(second):
         again.write_text(name, "adparm again " + name)
-    again.remove_stale()
+    again.close()
     for name in mine:
         assert (folder / name).read_text() == before[name]  # never touched
     for name in first - second - mine:

@@ -7,10 +7,13 @@ sees either the old file or the new one, never a truncated one; on any failure t
 is removed, and the error names the final file, not the temporary.
 
 A folder written by the command line holds ``.adparm-outputs.json``, the manifest of the files
-adparm wrote there (size and modification time of each). Before a run, :class:`OutputFolder`
-refuses to overwrite a file that is not in the manifest or was changed since (a user's file); after
-the run it removes the files an earlier run of the same command wrote and this one did not (stale
-figures), and only those. Each file is recorded in the manifest before it is renamed into place,
+adparm wrote there (size and modification time of each), and ``.adparm-lock``, locked
+(``fcntl.flock``) by the command writing there: one command at a time per folder. Before a run,
+:class:`OutputFolder` takes the lock, removes the temporary files and figure folders that a killed
+adparm (a pid no longer running) left, and refuses to overwrite a file that is not in the manifest
+or was changed since (a user's file). After the run, before writing the first file, it removes the
+files of the earlier run it replaces (all of them, not only those it writes again), so the folder
+never mixes two runs' files. Each file is recorded in the manifest before it is renamed into place,
 so the manifest always covers the files on disk.
 """
 
@@ -19,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import secrets
 import shutil
 import tempfile
@@ -26,12 +30,23 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX: no folder lock
+    fcntl = None  # type: ignore[assignment]
+
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["MANIFEST", "OutputError", "OutputFolder", "atomic_write", "write_text"]
+__all__ = ["LOCK", "MANIFEST", "OutputError", "OutputFolder", "atomic_write", "write_text"]
 
 MANIFEST = ".adparm-outputs.json"
+LOCK = ".adparm-lock"
+FIGURE_STAGING = ".adparm-figures-"
+
+# What adparm leaves behind only when it is killed (SIGKILL, power loss): a temporary file
+# (.<stem>.<pid>-<8 hex>.tmp<suffix>) or a figure folder (.adparm-figures-<pid>-<random>).
+_LEFTOVER = re.compile(r"\..*\.(\d+)-[0-9a-f]{8}\.tmp(\.[^.]*)?|\.adparm-figures-(\d+)-[^/]*")
 
 
 def _temporary(path: Path) -> Path:
@@ -90,10 +105,12 @@ def _stamp(path: Path) -> list[int]:
 class OutputFolder:
     """A folder a command writes ``names`` into, as the group ``group`` of the manifest.
 
-    ``check()`` (before any computation) creates the folder, proves it writable and refuses
-    files in ``names`` that adparm did not write; ``write``/``write_figures`` write atomically
-    and record each file in the manifest; ``remove_stale()`` removes the group's files of an
-    earlier run that this run did not write. ``written`` lists the files written so far."""
+    ``check()`` (before any computation) creates the folder, proves it writable, takes its lock
+    (released by ``close()``, or by leaving ``with folder:``), removes what a killed adparm left
+    and refuses files in ``names`` that adparm did not write; ``remove_previous()`` (before the
+    first write) removes the files of the earlier run this one replaces; ``write``/
+    ``write_figures`` write atomically and record each file in the manifest. ``written`` lists
+    the files written so far, ``removed`` those of the earlier run that were removed."""
 
     def __init__(self, folder: str | Path, names: Iterable[str], group: str, option: str = "--out"):
         self.folder = Path(folder)
@@ -101,7 +118,21 @@ class OutputFolder:
         self.group = group
         self.option = option
         self.written: list[Path] = []
+        self.removed: list[Path] = []
         self._manifest: dict[str, dict[str, Any]] = {}
+        self._lock: int | None = None
+
+    def __enter__(self) -> OutputFolder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Release the folder's lock (the lock file stays, for the next command)."""
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
 
     # -- before the run -------------------------------------------------------------------------
 
@@ -115,7 +146,39 @@ class OutputFolder:
                 pass
         except OSError as error:
             raise OutputError(f"{self.option}: cannot write in {folder}: {error}") from None
-        self._check_files()
+        self._take_lock()
+        try:
+            self._check_files()
+        except BaseException:
+            self.close()
+            raise
+
+    def _take_lock(self) -> None:
+        """Lock the folder (fcntl.flock on LOCK, its holder's pid written in it); another
+        command holding it is an OutputError naming its pid."""
+        if fcntl is None or self._lock is not None:  # not POSIX, or taken already
+            return
+        path = self.folder / LOCK
+        try:
+            lock = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        except OSError as error:
+            raise OutputError(
+                f"{self.option}: cannot open the lock file {path}: {error.strerror or error}; "
+                "move it away"
+            ) from None
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(lock, 32).decode("ascii", "replace").strip() or "unknown"
+            os.close(lock)
+            raise OutputError(
+                f"{self.option}: {self.folder} is being written by another adparm command (pid "
+                f"{holder}); wait for it to end or choose another folder"
+            ) from None
+        with contextlib.suppress(OSError):  # the pid only informs: a full disk keeps the lock
+            os.ftruncate(lock, 0)
+            os.write(lock, f"{os.getpid()}\n".encode("ascii"))
+        self._lock = lock
 
     def _check_files(self) -> None:
         folder = self.folder
@@ -125,6 +188,7 @@ class OutputFolder:
                 f"{self.option}: {manifest} exists and is not a regular file; adparm keeps the "
                 "list of the files it wrote there: move it away"
             )
+        self.remove_leftovers()
         self._manifest = self._read_manifest()
         for name in self.names:
             path = folder / name
@@ -141,6 +205,23 @@ class OutputFolder:
                     "since); adparm does not overwrite it: choose another folder or move the "
                     "file away"
                 )
+
+    def remove_leftovers(self) -> list[Path]:
+        """Remove the temporary files and figure folders that an adparm process no longer
+        running left here (killed while writing); returns them."""
+        removed = []
+        with os.scandir(self.folder) as entries:
+            for entry in entries:
+                match = _LEFTOVER.fullmatch(entry.name)
+                if match is None or _running(int(match.group(1) or match.group(3))):
+                    continue
+                if entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(entry.path, ignore_errors=True)
+                else:
+                    with contextlib.suppress(OSError):
+                        os.unlink(entry.path)
+                removed.append(Path(entry.path))
+        return removed
 
     def _read_manifest(self) -> dict[str, dict[str, Any]]:
         try:
@@ -164,6 +245,31 @@ class OutputFolder:
 
     # -- writing --------------------------------------------------------------------------------
 
+    def remove_previous(self, keep: Iterable[str] = ()) -> list[Path]:
+        """Before this run's first file: remove the files of the earlier runs it replaces (its
+        own group's, and every group of which it overwrites a file), so the folder never holds
+        two runs' files; only files unchanged since adparm wrote them, and not those in ``keep``
+        (a one-file output, replaced atomically). Returns them."""
+        written = {path.name for path in self.written} | set(keep)
+        groups = {self.group} | {
+            entry.get("group") for name, entry in self._manifest.items() if name in self.names
+        }
+        removed = []
+        for name, entry in list(self._manifest.items()):
+            if entry.get("group") not in groups or name in written or Path(name).name != name:
+                continue
+            path = self.folder / name
+            if self._owned(name):
+                with contextlib.suppress(OSError):
+                    path.unlink()
+                    removed.append(path)
+            if not (path.exists() or path.is_symlink()):
+                del self._manifest[name]
+        if removed:
+            self.removed += removed
+            self._save_manifest()
+        return removed
+
     def write(self, name: str, write: Callable[[Path], Any]) -> Path:
         """Write ``name`` atomically with ``write(temporary_path)``, recorded in the manifest
         before it is renamed into place."""
@@ -180,7 +286,8 @@ class OutputFolder:
         """Each figure as ``<name>.<format>`` (adparm.plotting.save_figures into a temporary
         folder beside, then each file recorded and renamed into place)."""
         formats = list(formats)
-        staging = Path(tempfile.mkdtemp(dir=self.folder, prefix=".adparm-figures-"))
+        prefix = f"{FIGURE_STAGING}{os.getpid()}-"
+        staging = Path(tempfile.mkdtemp(dir=self.folder, prefix=prefix))
         paths: list[Path] = []
         try:
             self._write_figures(figures, formats, staging, paths)
@@ -237,28 +344,22 @@ class OutputFolder:
 
     # -- after the run --------------------------------------------------------------------------
 
-    def remove_stale(self) -> list[Path]:
-        """Remove the files of this group that an earlier run wrote and this one did not (only
-        those unchanged since adparm wrote them); returns them."""
-        written = {path.name for path in self.written}
-        removed = []
-        for name, entry in list(self._manifest.items()):
-            if entry.get("group") != self.group or name in written or Path(name).name != name:
-                continue
-            path = self.folder / name
-            if self._owned(name):
-                with contextlib.suppress(OSError):
-                    path.unlink()
-                    removed.append(path)
-            if not path.exists():
-                del self._manifest[name]
-        if removed:
-            self._save_manifest()
-        return removed
-
     def describe_written(self) -> str:
         """``folder/ (a, b, c)`` of the files written so far, or a sentence saying none was."""
         if not self.written:
             return f"nothing was written in {self.folder}/"
         names = dict.fromkeys(path.name for path in self.written)  # once each, if rewritten
         return f"{self.folder}/ ({', '.join(names)})"
+
+
+def _running(pid: int) -> bool:
+    """Whether a process ``pid`` exists (this one included)."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (OSError, OverflowError):  # another user's process (EPERM), or not a pid
+        return pid > 0
+    return pid > 0

@@ -2,10 +2,10 @@
 ``adparm sweep [CONFIG] --grid section.key=v1,v2`` (also ``python -m adparm``).
 
 Exit status (one per cause): 0 done; 1 a run diverged (its rows are written); 2 bad input (a
-configuration, an option, an output path that cannot or must not be written, a run that would not
-fit in memory), found before anything runs; 3 a file could not be written (the message says what
-was kept and where); 130 interrupted by Ctrl-C (SIGINT) and 143 by SIGTERM, after writing what was
-done."""
+configuration, an option, an output path that cannot or must not be written, a folder another
+adparm command is writing, a run that would not fit in memory), found before anything runs; 3 a
+file could not be written (the message says what was kept and where); 130 interrupted by Ctrl-C
+(SIGINT) and 143 by SIGTERM, after writing what was done."""
 
 from __future__ import annotations
 
@@ -319,10 +319,16 @@ def _config(args: argparse.Namespace) -> Config:
 def _write_failed(command: str, folder: OutputFolder, error: OSError) -> int:
     """Reports a write that failed: what failed, and the complete files kept."""
     target = f" {error.filename}" if getattr(error, "filename", None) else ""
+    count = len(folder.removed)
+    removed = (
+        f"; the earlier run's {count} file{'s' if count != 1 else ''} there were removed first"
+        if count
+        else ""
+    )
     _say(
         command,
         f"could not write{target}: {error.strerror or error}; no partial file was left; "
-        f"complete files kept: {folder.describe_written()}",
+        f"complete files kept: {folder.describe_written()}{removed}",
     )
     return EXIT_WRITE_FAILED
 
@@ -330,14 +336,14 @@ def _write_failed(command: str, folder: OutputFolder, error: OSError) -> int:
 def _writing(
     signals: _Signals, folder: OutputFolder, progress: bool, write: Callable[[Callable], None]
 ) -> None:
-    """Runs ``write(on_file)`` with signals deferred and a 'writing' progress bar in files, then
-    removes the stale files of an earlier run."""
+    """With signals deferred: removes the files of the earlier run this one replaces, then runs
+    ``write(on_file)`` with a 'writing' progress bar in files."""
     with (
         signals.writing_files(),
         tqdm(total=len(folder.names), disable=not progress, desc="writing", unit="file") as bar,
     ):
+        folder.remove_previous()
         write(lambda path: bar.update(1))
-        folder.remove_stale()
 
 
 def _interrupted(command: str, signals: _Signals, what: str, kept: str) -> int:
@@ -406,15 +412,16 @@ def _run(args: argparse.Namespace) -> int:
     command = args.command
     progress = not args.no_progress
     figures = not args.no_figures
+    folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
     try:
         config = _config(args)
-        folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
-        folder.check()
+        folder.check()  # the folder stays locked to the command's end
         _check_memory([config], figures=figures)  # the run, its files and figures
     except (OSError, ValueError, TypeError) as error:
+        folder.close()
         _say(command, str(error))
         return EXIT_BAD_INPUT
-    with _Signals(command) as signals:
+    with _Signals(command) as signals, folder:
         interrupt: SimulationInterrupted | None = None
         diverged: SimulationDiverged | None = None
         try:
@@ -494,6 +501,7 @@ def _sweep(args: argparse.Namespace) -> int:
     from .sweep import sweep
 
     command = "sweep"
+    folder = OutputFolder(args.out.parent, [args.out.name], f"sweep:{args.out.name}")
     try:
         names = [name for name, _ in args.grid]
         repeated = sorted({name for name in names if names.count(name) > 1})
@@ -507,12 +515,12 @@ def _sweep(args: argparse.Namespace) -> int:
         if args.out.is_dir():
             raise OutputError(f"--out: {args.out} is a folder; give a .csv, .json or .md file")
         config = _config(args)
-        folder = OutputFolder(args.out.parent, [args.out.name], f"sweep:{args.out.name}")
-        folder.check()
+        folder.check()  # the folder stays locked to the command's end
     except (OSError, ValueError, TypeError) as error:
+        folder.close()
         _say(command, str(error))
         return EXIT_BAD_INPUT
-    with _Signals(command) as signals:
+    with _Signals(command) as signals, folder:
         interrupt: SimulationInterrupted | None = None
         try:
             table = sweep(
@@ -526,6 +534,7 @@ def _sweep(args: argparse.Namespace) -> int:
         signals.writing = True
         try:
             with signals.writing_files():
+                folder.remove_previous(keep=[args.out.name])  # the table: replaced atomically
                 folder.write(args.out.name, table.save)
         except OSError as error:
             return _write_failed(command, folder, error)
@@ -571,19 +580,20 @@ def _compare(args: argparse.Namespace) -> int:
     names = ["compare.csv", "compare.json", "compare.md", "config.toml"]
     if figures:
         names += [f"compare.{fmt}" for fmt in args.formats]
+    folder = OutputFolder(args.out, names, "compare")
     try:
         config = _config(args)
         kinds = _kinds(args.kinds)
         runs = _controller_configs(config, kinds)  # every check before the first run
-        folder = OutputFolder(args.out, names, "compare")
-        folder.check()
+        folder.check()  # the folder stays locked to the command's end
         # every run is kept (adp twice: learning, then from the learned weights) for the table
         kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
         _check_memory(kept, figures=figures)
     except (OSError, ValueError, TypeError) as error:
+        folder.close()
         _say(command, str(error))
         return EXIT_BAD_INPUT
-    with _Signals(command) as signals:
+    with _Signals(command) as signals, folder:
         interrupt: SimulationInterrupted | None = None
         try:
             comparison = compare(config, kinds, progress=not args.no_progress)
