@@ -1,9 +1,8 @@
-"""Hostile inputs, round 2 (issue 22): a finished run is never lost to a step after it; basis
-expressions are bounded before sympy works on them; deep nesting and thread failures are bad
-input (exit 2), not a traceback; repeated figure formats are written once; one command at a time
-per output folder, which holds one run's files; failed writes name the file or the manifest,
-never a hidden temporary, and leave the manifest covering the folder; the leftovers of a killed
-adparm are removed."""
+"""Hostile inputs, round 2 (issue 22): a finished run is never lost to a step after it (nor to a
+signal during one: J*, the summary, --check-dt); basis expressions are bounded before sympy works
+on them; deep nesting and thread failures are bad input (exit 2), not a traceback; repeated figure
+formats are written once; one command at a time per output folder, which holds one run's files;
+the manifest and the leftovers of a killed adparm."""
 
 from __future__ import annotations
 
@@ -13,6 +12,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -408,6 +408,137 @@ def test_threads_that_cannot_start_exit_2(tmp_path, monkeypatch, capsys) -> None
     assert cli.main(["reproduce", "--out", str(tmp_path / "o"), *SHORT]) == cli.EXIT_BAD_INPUT
 
 
+# -- 5. a signal during J* (or another step after the run) keeps the runs -------------------------
+
+
+def _signal_during(monkeypatch, module, name: str, signum: int, delay: float) -> None:
+    """Replace ``module.name`` by itself, preceded by ``signum`` sent to this process after
+    ``delay`` s (0: before it starts): a signal while the real step runs."""
+    original = getattr(module, name)
+
+    def step(*args, **kwargs):
+        if delay:
+            threading.Timer(delay, os.kill, (os.getpid(), signum)).start()
+        else:
+            os.kill(os.getpid(), signum)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, step)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_during_j_star_keeps_every_run(signum, tmp_path, monkeypatch, capsys) -> None:
+    """J* (CasADi's IPOPT, about 3 s) stopped 0.2 s in: the runs are written, compare.json and
+    compare.md say J* was interrupted, exit 130 for SIGINT and 143 for SIGTERM."""
+    from adparm import comparison, truth
+
+    _signal_during(monkeypatch, truth, "optimal_cost", signum, 0.2)
+    out = tmp_path / "out"
+    status = cli.main(
+        ["compare", "--kinds", "pd,optimal", "--out", str(out), "--no-figures", *SHORT]
+    )
+    err = capsys.readouterr().err
+    assert status == 128 + signum, err
+    assert "Traceback" not in err and "during J*" in err
+    data = json.loads((out / "compare.json").read_text())
+    assert [row["controller"] for row in data["rows"]] == ["pd", "optimal"]
+    assert {row["status"] for row in data["rows"]} == {"finished"}
+    assert data["post_run_errors"] == [comparison.J_STAR_INTERRUPTED]
+    assert "Not computed: J*" in (out / "compare.md").read_text()
+    assert (out / "config.toml").is_file()
+
+
+def test_ctrl_c_during_optimal_cost_is_a_keyboard_interrupt_not_an_ipopt_failure(
+    monkeypatch,
+) -> None:
+    """CasADi calls Python's handler while IPOPT runs and turns its KeyboardInterrupt into a
+    failed solve: optimal_cost raises it again as a KeyboardInterrupt."""
+    import casadi
+
+    _signal_during(monkeypatch, casadi.Opti, "solve", signal.SIGINT, 0.05)
+    with pytest.raises(KeyboardInterrupt):
+        adparm.optimal_cost(adparm.paper_config())  # IPOPT runs for about 0.7 s
+
+
+def test_a_signal_during_the_summary_keeps_the_run(tmp_path, monkeypatch, capsys) -> None:
+    from adparm import simulation
+
+    _signal_during(monkeypatch, simulation.SimulationResult, "summary", signal.SIGTERM, 0.0)
+    out = tmp_path / "out"
+    status = cli.main(["reproduce", "--out", str(out), "--no-figures", *SHORT])
+    err = capsys.readouterr().err
+    assert status == 143, err
+    assert "Traceback" not in err and "finishing" not in err
+    data = json.loads((out / "summary.json").read_text())
+    assert data["status"] == "finished"
+    assert "stopped by SIGTERM" in data["post_run_errors"][0]
+    assert adparm.load_result(out / "result.npz").status == "finished"
+
+
+# -- 6. --check-dt: after the run's files, and as interruptible as the run -----------------------
+
+CHECK_DT = """
+import sys
+from adparm import cli, truth
+
+check = truth.check_step_size
+# the real check over 2000 s of the run (two runs, dt and dt/2): a check that takes long
+truth.check_step_size = lambda config: check(config.updated({"sim": {"T": 2000.0}}), transient=2e3)
+sys.exit(cli.main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="signals to a child process are POSIX")
+@pytest.mark.parametrize(
+    "signum", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL], ids=["SIGINT", "SIGTERM", "SIGKILL"]
+)
+def test_check_dt_runs_after_the_files_are_written_and_stops_on_a_signal(signum, tmp_path):
+    out = tmp_path / "out"
+    argv = ["reproduce", "--check-dt", "--no-figures", "--no-progress", "--T", "0.2"]
+    process = subprocess.Popen(
+        [sys.executable, "-c", CHECK_DT, *argv, "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        deadline = time.monotonic() + 60.0
+        while not (out / "summary.md").exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        # the run's files are written before the check starts, and say that it is running
+        pending = json.loads((out / "summary.json").read_text())["post_run_errors"]
+        assert pending == [cli.CHECK_PENDING]
+        time.sleep(0.3)  # into the check's first run
+        process.send_signal(signum)
+        _, stderr = process.communicate(timeout=60.0)
+    finally:
+        process.kill()
+    said = stderr.decode(errors="replace")
+    assert adparm.load_result(out / "result.npz").status == "finished"
+    data = json.loads((out / "summary.json").read_text())
+    if signum == signal.SIGKILL:  # the files of the finished run, saying the check did not end
+        assert process.returncode == -signal.SIGKILL
+        assert data["post_run_errors"] == [cli.CHECK_PENDING]
+        return
+    assert process.returncode == 128 + signum, said
+    assert "finishing the files being written" not in said and "Traceback" not in said
+    name = signal.Signals(signum).name
+    assert data["post_run_errors"] == [
+        f"the step-size check (--check-dt) was stopped by {name} before it finished"
+    ]
+    assert "step_size_check" not in data
+    assert "step-size check (--check-dt) was stopped" in (out / "summary.md").read_text()
+
+
+def test_check_dt_still_reports_its_verdict(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    assert cli.main(["reproduce", "--check-dt", "--no-figures", "--out", str(out), *SHORT]) == 0
+    data = json.loads((out / "summary.json").read_text())
+    assert data["post_run_errors"] == [] and "verdict" in data["step_size_check"]
+    said = capsys.readouterr().out
+    assert "step size (first 0.2 s against dt/2)" in said
+    assert said.count("summary.json") == 1  # rewritten with the check, named once
+
+
 # -- 7. one command per folder, and a folder holds one run's files ------------------------------
 
 
@@ -548,7 +679,7 @@ def test_a_manifest_that_is_a_folder_is_refused_before_the_run(tmp_path, monkeyp
     assert f"{out / MANIFEST} exists and is not a regular file" in err
 
 
-# -- 12. leftovers of a killed adparm, save() errors ------------------------------------------
+# -- 12. leftovers of a killed adparm, save() errors, Ctrl-C while reading the config ------------
 
 
 def test_leftovers_of_a_dead_adparm_are_removed_on_the_next_run(tmp_path) -> None:
@@ -587,3 +718,21 @@ def test_save_errors_name_the_file_not_its_temporary(tmp_path, monkeypatch) -> N
     assert caught.value.filename == str(tmp_path / "run.npz") and ".tmp" not in str(caught.value)
     assert caught.value.errno == errno.ENOSPC
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_while_reading_the_config_exits_with_one_line(
+    signum, tmp_path, monkeypatch, capsys
+) -> None:
+    def slow_load(path):
+        os.kill(os.getpid(), signum)
+        time.sleep(5)  # the handler stops it at once
+
+    monkeypatch.setattr(cli, "load_config", slow_load)
+    config = tmp_path / "c.toml"
+    config.write_text("")
+    status = cli.main(["run", str(config), "--out", str(tmp_path / "out"), *SHORT])
+    err = capsys.readouterr().err
+    assert status == 128 + signum
+    name = signal.Signals(signum).name
+    assert err == f"adparm run: stopped by {name} before the run; nothing was written\n"

@@ -22,9 +22,15 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ._files import OutputError, OutputFolder
-from .comparison import DEFAULT_KINDS, Comparison, _controller_configs, compare
+from .comparison import (
+    DEFAULT_KINDS,
+    J_STAR_INTERRUPTED,
+    Comparison,
+    _controller_configs,
+    compare,
+)
 from .config import Config, load_config, paper_config, tomllib
-from .report import FIGURE_FORMATS, check_formats, report_files, write_report
+from .report import FIGURE_FORMATS, _write_summary, check_formats, report_files, write_report
 from .simulation import (
     SimulationDiverged,
     SimulationInterrupted,
@@ -42,30 +48,31 @@ EXIT_WRITE_FAILED = 3
 
 
 class _Signals:
-    """SIGINT and SIGTERM during a command: while computing, either stops the computation (as a
-    KeyboardInterrupt, so the partial results are kept and written); while writing, both are
-    noted and the files being written are finished (never a half-written set). ``received`` is
-    the first signal's number."""
+    """SIGINT and SIGTERM during a command. While computing (the run, and the steps after it:
+    the summary, --check-dt, J*), the first one stops the computation (as a KeyboardInterrupt,
+    so what was done is kept and written); later ones are noted, so that a repeated Ctrl-C
+    cannot cut the stopping short. While ``finishing`` names what is being finished (the files
+    being written), every signal is noted and that is finished (never a half-written set).
+    ``received`` is the first signal's number."""
 
     def __init__(self, command: str) -> None:
         self.command = command
         self.received: int | None = None
-        self.writing = False
+        self.finishing: str | None = None
         self._previous: dict[int, Any] = {}
 
     def _handle(self, signum: int, frame: Any) -> None:
         first = self.received is None
         if first:
             self.received = signum
-        if self.writing:
-            if first or signum == signal.SIGTERM:
-                print(
-                    f"\nadparm {self.command}: {signal.Signals(signum).name} received; finishing "
-                    "the files being written",
-                    file=sys.stderr,
-                )
-            return
-        raise KeyboardInterrupt
+        if self.finishing is None and first:
+            raise KeyboardInterrupt
+        if first or signum == signal.SIGTERM or self.finishing is None:
+            doing = f"finishing {self.finishing}" if self.finishing else "already stopping"
+            print(
+                f"\nadparm {self.command}: {signal.Signals(signum).name} received; {doing}",
+                file=sys.stderr,
+            )
 
     def __enter__(self) -> _Signals:
         if threading.current_thread() is threading.main_thread():
@@ -77,11 +84,22 @@ class _Signals:
         for signum, handler in self._previous.items():
             signal.signal(signum, handler)
 
+    def writing_files(self) -> None:
+        """From here on (to the command's end or the next ``computing``), signals are noted, not
+        raised: the files being written are finished."""
+        self.finishing = "the files being written"
+
     @contextmanager
-    def writing_files(self) -> Iterator[None]:
-        """From here to the command's end, signals are noted, not raised."""
-        self.writing = True
-        yield
+    def computing(self) -> Iterator[None]:
+        """Within: the first signal stops the computation again (as a KeyboardInterrupt)."""
+        finishing, self.finishing = self.finishing, None
+        try:
+            yield
+        finally:
+            self.finishing = finishing
+
+    def name(self) -> str:
+        return signal.Signals(self.received or signal.SIGINT).name
 
     def status(self) -> int:
         return 128 + (self.received or signal.SIGINT)
@@ -336,32 +354,40 @@ def _write_failed(command: str, folder: OutputFolder, error: OSError) -> int:
 def _writing(
     signals: _Signals, folder: OutputFolder, progress: bool, write: Callable[[Callable], None]
 ) -> None:
-    """With signals deferred: removes the files of the earlier run this one replaces, then runs
-    ``write(on_file)`` with a 'writing' progress bar in files."""
-    with (
-        signals.writing_files(),
-        tqdm(total=len(folder.names), disable=not progress, desc="writing", unit="file") as bar,
-    ):
+    """With signals deferred from here on: removes the files of the earlier run this one
+    replaces, then runs ``write(on_file)`` with a 'writing' progress bar in files."""
+    signals.writing_files()
+    with tqdm(total=len(folder.names), disable=not progress, desc="writing", unit="file") as bar:
         folder.remove_previous()
         write(lambda path: bar.update(1))
 
 
 def _interrupted(command: str, signals: _Signals, what: str, kept: str) -> int:
     """Reports a Ctrl-C or SIGTERM after the partial results were written; returns 128 + signal."""
-    name = signal.Signals(signals.received or signal.SIGINT).name
-    _say(command, f"stopped by {name} {what}; wrote what was done: {kept}")
+    _say(command, f"stopped by {signals.name()} {what}; wrote what was done: {kept}")
     return signals.status()
 
 
-def _summary(result: SimulationResult) -> dict[str, Any]:
+def _stopped_before_run(command: str, signals: _Signals) -> int:
+    """A Ctrl-C or SIGTERM while reading the configuration or checking --out: one line."""
+    _say(command, f"stopped by {signals.name()} before the run; nothing was written")
+    return signals.status()
+
+
+def _summary(result: SimulationResult, signals: _Signals) -> dict[str, Any]:
     """result.summary(), which reports a failed post-run step in "post_run_errors"; should the
-    summary itself fail, a minimal one that says so (the run's files are written all the same)."""
+    summary itself fail or be interrupted (a signal stops it as it stops a run), a minimal one
+    that says so (the run's files are written all the same)."""
     try:
         summary = result.summary()
-    except Exception as error:  # noqa: BLE001 - never loses a finished run
+    except (Exception, KeyboardInterrupt) as error:  # noqa: BLE001 - never loses a finished run
         from .summary import _failure
 
-        message = _failure("the summary (adparm.summary.summarize)", error)
+        step = "the summary (adparm.summary.summarize)"
+        if isinstance(error, KeyboardInterrupt):
+            message = f"{step} was stopped by {signals.name()} before it finished"
+        else:
+            message = _failure(step, error)
         t = result.t
         summary = {
             "status": result.status,
@@ -390,6 +416,31 @@ def _say_post_run_errors(command: str, summary: dict[str, Any]) -> None:
         _say(command, f"{problem}; the run and its files are complete (see summary.md)")
 
 
+#: summary.json's post_run_errors line while --check-dt runs (after the run's files are written).
+CHECK_PENDING = (
+    "the step-size check (--check-dt) had not finished when this summary was written (it runs "
+    "after the run's files are written)"
+)
+
+
+def _check_step_size(result: SimulationResult, signals: _Signals) -> tuple[Any, str | None]:
+    """--check-dt after the run's files are written: (step_size_check, None), or (None, why it
+    was not done). A signal stops it as it stops a run."""
+    from .summary import _failure
+    from .truth import check_step_size
+
+    step = "the step-size check (--check-dt)"
+    if signals.received is not None:  # a signal while the files were written: not started
+        return None, f"{step} was not started: {signals.name()} received"
+    try:
+        with signals.computing():
+            return check_step_size(result.config), None
+    except KeyboardInterrupt:
+        return None, f"{step} was stopped by {signals.name()} before it finished"
+    except Exception as error:  # noqa: BLE001 - never loses the finished run
+        return None, _failure(step, error)
+
+
 def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str:
     from .truth import divergence_causes
 
@@ -410,155 +461,168 @@ def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str
 
 def _run(args: argparse.Namespace) -> int:
     command = args.command
-    progress = not args.no_progress
     figures = not args.no_figures
     folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
-    try:
-        config = _config(args)
-        folder.check()  # the folder stays locked to the command's end
-        _check_memory([config], figures=figures)  # the run, its files and figures
-    except (OSError, ValueError, TypeError) as error:
-        folder.close()
-        _say(command, str(error))
-        return EXIT_BAD_INPUT
     with _Signals(command) as signals, folder:
-        interrupt: SimulationInterrupted | None = None
-        diverged: SimulationDiverged | None = None
         try:
-            # diagnose=False: no Python warning; the verdict is printed below in the CLI's words
-            result = simulate(config, progress=progress, diagnose=False)
-        except SimulationDiverged as error:
-            diverged, result = error, error.result
-        except SimulationInterrupted as stopped:
-            interrupt, result = stopped, stopped.result
-        except ValueError as error:  # the memory guard, before the run
+            config = _config(args)
+            folder.check()  # the folder stays locked to the command's end
+            _check_memory([config], figures=figures)  # the run, its files and figures
+        except (OSError, ValueError, TypeError) as error:
             _say(command, str(error))
             return EXIT_BAD_INPUT
-        signals.writing = True  # from here on a signal lets the files be finished
-        if diverged is not None:  # the divergence first: what follows is not a result
-            _say(command, _divergence_text(result, diverged))
-        summary = _summary(result)
-        if getattr(args, "check_dt", False) and interrupt is None:
-            from .summary import _failure
-            from .truth import check_step_size
+        except KeyboardInterrupt:
+            return _stopped_before_run(command, signals)
+        return _run_checked(args, config, folder, signals)
 
-            try:
-                summary["step_size_check"] = check_step_size(result.config)
-            except (KeyboardInterrupt, SimulationInterrupted):
-                raise
-            except Exception as error:  # noqa: BLE001 - never loses the finished run
-                summary["post_run_errors"].append(_failure("the step-size check", error))
-        try:
-            _writing(
-                signals,
-                folder,
-                progress,
-                lambda on_file: write_report(
-                    result,
-                    args.out,
-                    formats=args.formats,
-                    figures=figures,
-                    summary=summary,
-                    folder=folder,
-                    on_file=on_file,
-                ),
-            )
-        except OSError as error:
-            return _write_failed(command, folder, error)
-        written = f"wrote {folder.describe_written()}"
-        if interrupt is not None:
-            what = (
-                f"at t = {interrupt.time:.6g} s of sim.T = {config.sim.T:g} s "
-                f"({result.t.size} rows recorded)"
-            )
-            return _interrupted(command, signals, what, folder.describe_written())
-        print(written)
-        _say_post_run_errors(command, summary)
-        error_value = summary.get("critic_relative_error")
-        if error_value is not None:
-            claim = summary["critic_relative_error_at_claim"]
-            claim_text = "-" if claim is None else f"{claim:.3g}"
-            before = " (the last finite row, before the divergence)" if diverged else ""
-            print(
-                f"critic ||Wc - W*|| / ||W*||: {claim_text} at t = "
-                f"{summary['paper_claim_time']:g} s, {error_value:.3g} at t = "
-                f"{summary['t_end']:g} s{before}; final |e1| = {summary['final_e1_norm']:.3g} rad"
-            )
-        check = summary.get("step_size_check")
-        if check is not None:
-            print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
-        if summary["verdict"] not in ("ok", "not a learning run", "diverged"):
-            _say(command, f"verdict: {summary['verdict']}")
-        if signals.received is not None:  # a signal while writing: the files are complete
-            _say(command, f"{signal.Signals(signals.received).name} received while writing")
-            return signals.status()
-        if diverged is not None:
-            return EXIT_DIVERGED
+
+def _run_checked(
+    args: argparse.Namespace, config: Config, folder: OutputFolder, signals: _Signals
+) -> int:
+    command = args.command
+    progress = not args.no_progress
+    interrupt: SimulationInterrupted | None = None
+    diverged: SimulationDiverged | None = None
+    try:
+        # diagnose=False: no Python warning; the verdict is printed below in the CLI's words
+        result = simulate(config, progress=progress, diagnose=False)
+    except SimulationDiverged as error:
+        diverged, result = error, error.result
+    except SimulationInterrupted as stopped:
+        interrupt, result = stopped, stopped.result
+    except ValueError as error:  # the memory guard, before the run
+        _say(command, str(error))
+        return EXIT_BAD_INPUT
+    if diverged is not None:  # the divergence first: what follows is not a result
+        _say(command, _divergence_text(result, diverged))
+    summary = _summary(result, signals)  # a signal stops it as it stops a run
+    check_dt = getattr(args, "check_dt", False) and interrupt is None
+    check_dt = check_dt and signals.received is None
+    if check_dt:  # the check runs after the run's files are written
+        summary["post_run_errors"].append(CHECK_PENDING)
+    try:
+        _writing(
+            signals,
+            folder,
+            progress,
+            lambda on_file: write_report(
+                result,
+                args.out,
+                formats=args.formats,
+                figures=not args.no_figures,
+                summary=summary,
+                folder=folder,
+                on_file=on_file,
+            ),
+        )
+        if check_dt:  # a signal stops it (the run's files are written), then the summary says so
+            check, problem = _check_step_size(result, signals)
+            summary["post_run_errors"].remove(CHECK_PENDING)
+            if problem is None:
+                summary["step_size_check"] = check
+            else:
+                summary["post_run_errors"].append(problem)
+            _write_summary(folder, summary)
+    except OSError as error:
+        return _write_failed(command, folder, error)
+    if interrupt is not None:
+        what = (
+            f"at t = {interrupt.time:.6g} s of sim.T = {config.sim.T:g} s "
+            f"({result.t.size} rows recorded)"
+        )
+        return _interrupted(command, signals, what, folder.describe_written())
+    print(f"wrote {folder.describe_written()}")
+    _say_post_run_errors(command, summary)
+    error_value = summary.get("critic_relative_error")
+    if error_value is not None:
+        claim = summary["critic_relative_error_at_claim"]
+        claim_text = "-" if claim is None else f"{claim:.3g}"
+        before = " (the last finite row, before the divergence)" if diverged else ""
+        print(
+            f"critic ||Wc - W*|| / ||W*||: {claim_text} at t = "
+            f"{summary['paper_claim_time']:g} s, {error_value:.3g} at t = "
+            f"{summary['t_end']:g} s{before}; final |e1| = {summary['final_e1_norm']:.3g} rad"
+        )
+    check = summary.get("step_size_check")
+    if check is not None:
+        print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
+    if summary["verdict"] not in ("ok", "not a learning run", "diverged"):
+        _say(command, f"verdict: {summary['verdict']}")
+    if signals.received is not None:  # after the run: its files are complete
+        _say(command, f"{signals.name()} received after the run; its files are complete")
+        return signals.status()
+    if diverged is not None:
+        return EXIT_DIVERGED
     return 0
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    command = "sweep"
+    folder = OutputFolder(args.out.parent, [args.out.name], f"sweep:{args.out.name}")
+    with _Signals(command) as signals, folder:
+        try:
+            names = [name for name, _ in args.grid]
+            repeated = sorted({name for name in names if names.count(name) > 1})
+            if repeated:
+                raise ValueError(
+                    f"--grid: {', '.join(repeated)} given more than once; list all its values in "
+                    "one --grid"
+                )
+            if args.out.suffix not in (".csv", ".json", ".md"):
+                raise ValueError(
+                    f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}"
+                )
+            if args.out.is_dir():
+                raise OutputError(f"--out: {args.out} is a folder; give a .csv, .json or .md file")
+            config = _config(args)
+            folder.check()  # the folder stays locked to the command's end
+        except (OSError, ValueError, TypeError) as error:
+            _say(command, str(error))
+            return EXIT_BAD_INPUT
+        except KeyboardInterrupt:
+            return _stopped_before_run(command, signals)
+        return _sweep_checked(args, config, folder, signals)
+
+
+def _sweep_checked(
+    args: argparse.Namespace, config: Config, folder: OutputFolder, signals: _Signals
+) -> int:
     from .sweep import sweep
 
     command = "sweep"
-    folder = OutputFolder(args.out.parent, [args.out.name], f"sweep:{args.out.name}")
+    interrupt: SimulationInterrupted | None = None
     try:
-        names = [name for name, _ in args.grid]
-        repeated = sorted({name for name in names if names.count(name) > 1})
-        if repeated:
-            raise ValueError(
-                f"--grid: {', '.join(repeated)} given more than once; list all its values in one "
-                "--grid"
-            )
-        if args.out.suffix not in (".csv", ".json", ".md"):
-            raise ValueError(f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}")
-        if args.out.is_dir():
-            raise OutputError(f"--out: {args.out} is a folder; give a .csv, .json or .md file")
-        config = _config(args)
-        folder.check()  # the folder stays locked to the command's end
-    except (OSError, ValueError, TypeError) as error:
-        folder.close()
+        table = sweep(config, dict(args.grid), threads=args.threads, progress=not args.no_progress)
+    except SimulationInterrupted as stopped:
+        interrupt, table = stopped, stopped.result
+    except (ValueError, TypeError) as error:
         _say(command, str(error))
         return EXIT_BAD_INPUT
-    with _Signals(command) as signals, folder:
-        interrupt: SimulationInterrupted | None = None
-        try:
-            table = sweep(
-                config, dict(args.grid), threads=args.threads, progress=not args.no_progress
-            )
-        except SimulationInterrupted as stopped:
-            interrupt, table = stopped, stopped.result
-        except (ValueError, TypeError) as error:
-            _say(command, str(error))
-            return EXIT_BAD_INPUT
-        signals.writing = True
-        try:
-            with signals.writing_files():
-                folder.remove_previous(keep=[args.out.name])  # the table: replaced atomically
-                folder.write(args.out.name, table.save)
-        except OSError as error:
-            return _write_failed(command, folder, error)
-        if interrupt is not None:
-            return _interrupted(
-                command,
-                signals,
-                "(the points not done have no row)",
-                f"{args.out} ({len(table)} runs)",
-            )
-        print(table.to_markdown(), end="")
-        print(f"wrote {args.out} ({len(table)} runs)")
-        if signals.received is not None:
-            _say(command, f"{signal.Signals(signals.received).name} received while writing")
-            return signals.status()
-        off = [
-            row["verdict"] for row in table if row["verdict"] not in ("ok", "not a learning run")
-        ]
-        if off:
-            _say(
-                command,
-                f"{len(off)} of {len(table)} runs did not find the optimum (see the verdict "
-                f"column of {args.out}), e.g.: {off[0]}",
-            )
+    signals.writing_files()
+    try:
+        folder.remove_previous(keep=[args.out.name])  # the table itself: replaced atomically
+        folder.write(args.out.name, table.save)
+    except OSError as error:
+        return _write_failed(command, folder, error)
+    if interrupt is not None:
+        return _interrupted(
+            command,
+            signals,
+            "(the points not done have no row)",
+            f"{args.out} ({len(table)} runs)",
+        )
+    print(table.to_markdown(), end="")
+    print(f"wrote {args.out} ({len(table)} runs)")
+    if signals.received is not None:
+        _say(command, f"{signals.name()} received while writing")
+        return signals.status()
+    off = [row["verdict"] for row in table if row["verdict"] not in ("ok", "not a learning run")]
+    if off:
+        _say(
+            command,
+            f"{len(off)} of {len(table)} runs did not find the optimum (see the verdict "
+            f"column of {args.out}), e.g.: {off[0]}",
+        )
     diverged = sum(row["status"] == "diverged" for row in table)
     if diverged:
         _say(
@@ -576,53 +640,67 @@ def _kinds(text: str) -> tuple[str, ...]:
 
 def _compare(args: argparse.Namespace) -> int:
     command = "compare"
-    figures = not args.no_figures
     names = ["compare.csv", "compare.json", "compare.md", "config.toml"]
-    if figures:
+    if not args.no_figures:
         names += [f"compare.{fmt}" for fmt in args.formats]
     folder = OutputFolder(args.out, names, "compare")
-    try:
-        config = _config(args)
-        kinds = _kinds(args.kinds)
-        runs = _controller_configs(config, kinds)  # every check before the first run
-        folder.check()  # the folder stays locked to the command's end
-        # every run is kept (adp twice: learning, then from the learned weights) for the table
-        kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
-        _check_memory(kept, figures=figures)
-    except (OSError, ValueError, TypeError) as error:
-        folder.close()
-        _say(command, str(error))
-        return EXIT_BAD_INPUT
     with _Signals(command) as signals, folder:
-        interrupt: SimulationInterrupted | None = None
         try:
-            comparison = compare(config, kinds, progress=not args.no_progress)
-        except SimulationInterrupted as stopped:
-            interrupt, comparison = stopped, stopped.result
-        except ValueError as error:
+            config = _config(args)
+            kinds = _kinds(args.kinds)
+            runs = _controller_configs(config, kinds)  # every check before the first run
+            folder.check()  # the folder stays locked to the command's end
+            # every run is kept (adp twice: learning, then from the learned weights) for the table
+            kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
+            _check_memory(kept, figures=not args.no_figures)
+        except (OSError, ValueError, TypeError) as error:
             _say(command, str(error))
             return EXIT_BAD_INPUT
-        signals.writing = True
-        try:
-            _writing(
-                signals,
-                folder,
-                not args.no_progress,
-                lambda on_file: _write_comparison(args, folder, config, comparison, on_file),
-            )
-        except OSError as error:
-            return _write_failed(command, folder, error)
-        if interrupt is not None:
-            runs = ", ".join(comparison.results) or "none"
+        except KeyboardInterrupt:
+            return _stopped_before_run(command, signals)
+        return _compare_checked(args, config, kinds, folder, signals)
+
+
+def _compare_checked(
+    args: argparse.Namespace,
+    config: Config,
+    kinds: tuple[str, ...],
+    folder: OutputFolder,
+    signals: _Signals,
+) -> int:
+    command = "compare"
+    interrupt: SimulationInterrupted | None = None
+    try:
+        # a signal during J* (after the runs) keeps the runs: compare raises with all of them
+        comparison = compare(config, kinds, progress=not args.no_progress)
+    except SimulationInterrupted as stopped:
+        interrupt, comparison = stopped, stopped.result
+    except ValueError as error:
+        _say(command, str(error))
+        return EXIT_BAD_INPUT
+    try:
+        _writing(
+            signals,
+            folder,
+            not args.no_progress,
+            lambda on_file: _write_comparison(args, folder, config, comparison, on_file),
+        )
+    except OSError as error:
+        return _write_failed(command, folder, error)
+    if interrupt is not None:
+        runs = ", ".join(comparison.results) or "none"
+        if J_STAR_INTERRUPTED in comparison.post_run_errors:
+            what = f"during J*, after the runs (all complete: {runs}; J* is not in the table)"
+        else:
             what = f"(runs so far, the last one partial: {runs})"
-            return _interrupted(command, signals, what, folder.describe_written())
-        print(comparison.table_markdown(), end="")
-        print(f"wrote {folder.describe_written()}")
-        for problem in comparison.post_run_errors:
-            _say(command, f"{problem}; the runs and their files are complete")
-        if signals.received is not None:
-            _say(command, f"{signal.Signals(signals.received).name} received while writing")
-            return signals.status()
+        return _interrupted(command, signals, what, folder.describe_written())
+    print(comparison.table_markdown(), end="")
+    print(f"wrote {folder.describe_written()}")
+    for problem in comparison.post_run_errors:
+        _say(command, f"{problem}; the runs and their files are complete")
+    if signals.received is not None:
+        _say(command, f"{signals.name()} received while writing")
+        return signals.status()
     if comparison.diverged:
         _say(
             command,

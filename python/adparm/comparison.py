@@ -38,13 +38,25 @@ if TYPE_CHECKING:  # pragma: no cover
     import pandas
     from matplotlib.figure import Figure
 
-__all__ = ["COMPARE_COLUMNS", "DEFAULT_KINDS", "LEARNED_LABEL", "Comparison", "compare"]
+__all__ = [
+    "COMPARE_COLUMNS",
+    "DEFAULT_KINDS",
+    "J_STAR_INTERRUPTED",
+    "LEARNED_LABEL",
+    "Comparison",
+    "compare",
+]
 
 #: The controller kinds :func:`compare` runs by default (all of them).
 DEFAULT_KINDS = ("adp", "rise", "pd", "optimal")
 
 #: Label of the second adp run (final weights of the learning run, no probing, still learning).
 LEARNED_LABEL = "adp (learned)"
+
+#: The post_run_errors line of a comparison whose J* a signal (Ctrl-C, SIGTERM) stopped.
+J_STAR_INTERRUPTED = (
+    "J* (adparm.optimal_cost) was interrupted before it finished; the runs are complete"
+)
 
 #: The keys of each row of :attr:`Comparison.rows`, in column order.
 COMPARE_COLUMNS = (
@@ -297,7 +309,8 @@ def compare(
         ``controller.rise`` is false.
     SimulationInterrupted
         On Ctrl-C; ``.result`` is the Comparison of the runs so far (the one interrupted with
-        status "interrupted").
+        status "interrupted"), or, during J* after the runs, of every run, with
+        :data:`J_STAR_INTERRUPTED` in its ``post_run_errors``.
     """
     configs = _controller_configs(config, kinds)
     _check_steps(list(configs.values()))  # every run's step, before the first one runs
@@ -320,8 +333,17 @@ def compare(
             "exception's .result",
             _comparison(results),
         ) from None
-    # after the runs: Ctrl-C reaches them; a failure of J* loses no run (post_run_errors)
-    best, problem = _optimal_cost(config)
+    # after the runs: a failure of J* loses no run (post_run_errors), nor does Ctrl-C, which
+    # raises SimulationInterrupted with every run and says that J* was interrupted
+    try:
+        best, problem = _optimal_cost(config)
+    except KeyboardInterrupt:
+        stopped = dataclasses.replace(_comparison(results), post_run_errors=(J_STAR_INTERRUPTED,))
+        raise SimulationInterrupted(
+            "comparison interrupted during J* (adparm.optimal_cost), after the runs; every run "
+            "is complete, in the exception's .result",
+            stopped,
+        ) from None
     comparison = _comparison(results, best)
     if problem is not None:
         comparison = dataclasses.replace(comparison, post_run_errors=(problem,))

@@ -57,9 +57,10 @@ def write_report(
 ) -> list[Path]:
     """Write the recorded result, the config, summaries and figures to ``directory``; returns
     the paths written. Each file is written atomically (never a truncated file). ``summary`` is
-    ``summarize(result)`` if the caller already has it; ``folder`` (the command line's
-    OutputFolder of ``directory``) records each file in its manifest; ``on_file(path)`` is
-    called after each file (progress)."""
+    ``summarize(result)`` if the caller already has it (its ``post_run_errors`` gains the
+    figures that could not be drawn); ``folder`` (the command line's OutputFolder of
+    ``directory``) records each file in its manifest; ``on_file(path)`` is called after each
+    file (progress)."""
     formats = check_formats(formats)
     directory = Path(directory)
     if folder is None:
@@ -93,11 +94,16 @@ def write_report(
             for path in paths:
                 done(path)
     if failed:
-        summary = {**summary, "post_run_errors": [*summary.get("post_run_errors", []), *failed]}
-    for name, text in (
-        ("summary.json", json.dumps(summary, indent=2) + "\n"),
-        ("summary.md", summary_markdown(summary)),
-    ):
-        written.append(folder.write_text(name, text))
-        done(written[-1])
+        summary["post_run_errors"] = [*summary.get("post_run_errors", []), *failed]
+    for path in _write_summary(folder, summary):
+        written.append(path)
+        done(path)
     return written
+
+
+def _write_summary(folder: OutputFolder, summary: dict[str, Any]) -> list[Path]:
+    """Write summary.json and summary.md of ``summary`` into ``folder``; returns the paths."""
+    return [
+        folder.write_text("summary.json", json.dumps(summary, indent=2) + "\n"),
+        folder.write_text("summary.md", summary_markdown(summary)),
+    ]

@@ -14,7 +14,11 @@
 from __future__ import annotations
 
 import math
+import signal
+import threading
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -238,11 +242,40 @@ def optimal_cost(
         X, np.outer(x0, np.ones(intervals + 1)) * np.exp(-np.arange(intervals + 1) * step)
     )
     opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
-    try:
-        solution = opti.solve()
-    except RuntimeError as error:  # pragma: no cover - IPOPT failed
-        raise RuntimeError(f"optimal_cost: IPOPT did not converge ({error})") from error
+    with _interrupts() as interrupted:
+        try:
+            solution = opti.solve()
+        except RuntimeError as error:  # IPOPT failed, or was stopped by Ctrl-C
+            if interrupted:
+                raise KeyboardInterrupt("optimal_cost: interrupted") from None
+            raise RuntimeError(f"optimal_cost: IPOPT did not converge ({error})") from error
     return float(solution.value(total))
+
+
+@contextmanager
+def _interrupts() -> Iterator[list[int]]:
+    """The signals whose Python handler raised KeyboardInterrupt (Ctrl-C) within: CasADi calls
+    the handler while IPOPT runs and turns its KeyboardInterrupt into a failed solve, which the
+    caller raises again as a KeyboardInterrupt (not as 'IPOPT did not converge')."""
+    interrupted: list[int] = []
+    previous: dict[int, Any] = {}
+
+    def noting(signum: int, frame: Any) -> None:
+        try:
+            previous[signum](signum, frame)
+        except KeyboardInterrupt:
+            interrupted.append(signum)
+            raise
+
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            if callable(signal.getsignal(signum)):
+                previous[signum] = signal.signal(signum, noting)
+    try:
+        yield interrupted
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def _explored_states(result: SimulationResult, rng: np.random.Generator) -> np.ndarray:
