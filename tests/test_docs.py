@@ -81,7 +81,14 @@ def test_python_blocks_run(path: Path, tmp_path: Path, monkeypatch: pytest.Monke
 @_SHORT_RUNS_WARN
 @pytest.mark.parametrize(
     "module",
-    ["adparm.bases", "adparm.config", "adparm.optimal", "adparm.physical", "adparm.simulation"],
+    [
+        "adparm.bases",
+        "adparm.config",
+        "adparm.optimal",
+        "adparm.physical",
+        "adparm.simulation",
+        "adparm.urdf",
+    ],
 )
 def test_docstring_examples_run(module: str) -> None:
     import doctest
