@@ -1,7 +1,10 @@
 """Sphinx configuration of the adparm documentation.
 
-Build: ``pip install ".[docs]"``, then
-``sphinx-build -W --keep-going -b html docs docs/_build/html``.
+Build: ``sphinx-build -W --keep-going -b html docs docs/_build/html`` after ``pip install
+".[test]"`` (its extra has the documentation tools); the tools alone: see "Building the docs" in
+docs/design.md. The site needs no network, to build or to read: MathJax is served from the site
+(``_ext/local_mathjax.py``), and ``_ext/html_checks.py`` fails the build on a broken anchor or on
+anything loaded from another host.
 """
 
 from __future__ import annotations
@@ -25,10 +28,12 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
-    "sphinx.ext.mathjax",
+    "local_mathjax",  # sphinx.ext.mathjax with a local MathJax 3
     "sphinx.ext.viewcode",
     "sphinx_gallery.gen_gallery",
     "config_reference",
+    "landing_figure",  # draws _static/critic_weights.png from a run
+    "html_checks",  # broken anchors and remote assets are errors
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
@@ -64,4 +69,6 @@ sphinx_gallery_conf = {
     "show_memory": False,
     "plot_gallery": "True",
     "capture_repr": (),  # no "<Figure ...>" lines under the figures
+    # its timing pages load jQuery and DataTables from CDNs: the site stays offline
+    "write_computation_times": False,
 }

@@ -245,6 +245,23 @@ def test_every_example_robot_builds_an_arm(name: str) -> None:
     assert config.dof == arm.dof
 
 
+def test_example_robot_urdf_docstring_says_which_robots_need_locks() -> None:
+    """Every robot of EXAMPLE_ROBOTS is a plant as it is except those of EXAMPLE_LOCKED_JOINTS,
+    which are refused without their locks, naming plant.locked_joints; the docstring names
+    exactly those (it once listed "panda" as if it worked alone)."""
+    example_robot("ur5")
+    doc = adparm.example_robot_urdf.__doc__
+    for name in sorted(EXAMPLE_ROBOTS):
+        plant = {"urdf": f"example-robot-data:{name}"}
+        if name in EXAMPLE_LOCKED_JOINTS:
+            assert f'"{name}"' in doc.split("except three")[1].split("Examples")[0], name
+            with pytest.raises(ValueError, match="plant.locked_joints"):
+                adparm.Config.from_dict({"plant": plant})
+        else:
+            assert adparm.Config.from_dict({"plant": plant}).dof >= 2, name
+    assert "except three" in doc and len(EXAMPLE_LOCKED_JOINTS) == 3
+
+
 @pytest.mark.parametrize("name", ["talos_arm", "baxter"])
 def test_talos_and_baxter_arms_run(name: str) -> None:
     example_robot(name)

@@ -2,8 +2,9 @@
 A 3-link arm from a URDF: the critic learns the arm's inertia
 =============================================================
 
-``examples/planar_3link.toml`` reads a 3-link planar arm from a URDF (Pinocchio computes M, C,
-G). With a cost of the exact family, V* = e1^T K e1 + e2^T M(q) e2, and the default basis of a
+``planar_3link.toml``, one of the example files installed with adparm
+(:func:`adparm.example_path`; the repository's ``examples/``), reads a 3-link planar arm from a
+URDF (Pinocchio computes M, C, G). With a cost of the exact family, V* = e1^T K e1 + e2^T M(q) e2, and the default basis of a
 URDF arm, the structured one, represents it exactly: W* = [K entries; the arm's 7 base inertial
 parameters]. Starting from K = I (the cost's K is diag(2, 1, 0.5)), the critic learns K from
 Bellman-error extrapolation at 50 fixed points, without probing, and keeps the inertia it
@@ -15,7 +16,9 @@ import numpy as np
 
 import adparm
 
-config = adparm.load_config("../../examples/planar_3link.toml").updated({"sim": {"T": 4.0}})
+# the example file installed with adparm: this script runs from any folder
+config = adparm.load_config(adparm.example_path("planar_3link.toml"))
+config = config.updated({"sim": {"T": 4.0}})
 result = adparm.simulate(config)
 w_star = adparm.optimal_weights(config)
 error = np.linalg.norm(result.critic_weights - w_star, axis=1) / np.linalg.norm(w_star)

@@ -6,6 +6,7 @@ runs it and returns NumPy arrays.
 
 # first: finds Pinocchio's libraries where the extension's run path cannot (_libraries.py)
 from . import _libraries  # noqa: F401  # isort: skip
+from ._examples import example_path
 from .bases import ExpressionBasis, basis_terms
 from .comparison import Comparison, compare
 from .config import (
@@ -93,6 +94,7 @@ __all__ = [
     "compare",
     "desired_state",
     "diagnose",
+    "example_path",
     "example_robot_urdf",
     "extrapolation_points",
     "grid_points",

@@ -1550,6 +1550,10 @@ class Config:
         value = getattr(self.init, key)
         if value is not None:
             return np.array(value, dtype=float)
+        return self._default_initial_weights(key)
+
+    def _default_initial_weights(self, key: str) -> np.ndarray:
+        """The basis' default initial weights (InitConfig), whether or not init gives some."""
         if self.controller.is_expression:
             return self._expression_initial_weights(key)
         if self.controller.basis == "structured":
@@ -1602,11 +1606,60 @@ class Config:
             return self.critic.epsilon_T
         return EPSILON_T_EXTRAPOLATION if self.extrapolation.points > 0 else EPSILON_T_PROBING
 
-    def to_toml(self) -> str:
-        """The config as TOML text that load_config reads back to an equal config."""
-        import tomli_w
+    def left_out_values(self) -> dict[str, tuple[Any, str]]:
+        """The value each setting that adparm resolves when it is left out takes for this
+        config, and why, as {"section.key": (value, reason)}, whether or not the config gives
+        it: critic.epsilon_T, init.critic_weights and init.actor_weights, probe.phases, a URDF
+        plant's gravity, and the model's keys (the plant's values: an exact model). The
+        settings of :attr:`derived` are in the config's fields already."""
+        out: dict[str, tuple[Any, str]] = {}
+        epsilon = EPSILON_T_EXTRAPOLATION if self.extrapolation.points > 0 else EPSILON_T_PROBING
+        out["critic.epsilon_T"] = (
+            epsilon,
+            "with Bellman-error extrapolation (extrapolation.points > 0)"
+            if self.extrapolation.points > 0
+            else "learning from the probing signal alone (extrapolation.points = 0)",
+        )
+        for key in ("critic_weights", "actor_weights"):
+            out[f"init.{key}"] = (
+                self._default_initial_weights(key).tolist(),
+                f"the default of controller.basis = {_plain(self.controller.basis)!r}",
+            )
+        out["probe.phases"] = (
+            self.probe.phase_matrix(self.dof).tolist(),
+            "phase k rad for sinusoid k, on every joint",
+        )
+        exact = "the plant's (the controller's model is exact)"
+        if self.plant.urdf is None:
+            for key in _ARM_KEYS:
+                out[f"model.{key}"] = (_plain(getattr(self.plant, key)), exact)
+        else:
+            out["plant.gravity"] = (list(self.plant.resolved_gravity), "the default gravity")
+            for key, value in ModelConfig().resolve_urdf(self.plant).items():
+                if value is not None:
+                    out[f"model.{key}"] = (_plain(value), exact)
+        return out
 
-        return tomli_w.dumps(self.to_dict())
+    def to_toml(self, *, resolved: bool = False) -> str:
+        """The config as TOML text that load_config reads back to an equal config: each section
+        in turn, matrices one row per line.
+
+        With ``resolved=True`` (the config.toml that adparm writes beside a run), also every
+        setting left out that adparm resolved (:meth:`left_out_values`: critic.epsilon_T, the
+        initial weights, the probe phases, the model), each after a ``# resolved:`` comment,
+        and a ``# derived for this arm:`` comment above each setting of :attr:`derived`. A run
+        of that file is the same run: every value it used is written."""
+        data = self.to_dict()
+        notes: dict[str, str] = {
+            name: f"derived for this arm: {reason}" for name, reason in self._derived.items()
+        }
+        if resolved:
+            for name, (value, reason) in self.left_out_values().items():
+                section, key = name.split(".", 1)
+                if key not in data[section]:
+                    data[section][key] = value
+                    notes[name] = f"resolved (left out): {reason}"
+        return toml_text(data, notes)
 
     def updated(self, changes: Mapping[str, Any]) -> Config:
         """A copy with ``changes`` (``{section: {key: value}}``) applied, e.g.
@@ -1726,6 +1779,98 @@ def _plain(value: Any) -> Any:
         fields = {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
         return {"kind": value.kind, **fields}
     return value
+
+
+#: The width toml_text keeps a vector's line within (a longer vector is wrapped).
+_TOML_WIDTH = 100
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _toml_key(key: str) -> str:
+    import json
+
+    return key if _BARE_KEY.match(key) else json.dumps(key)
+
+
+def _toml_scalar(value: Any) -> str:
+    import tomli_w
+
+    return tomli_w.dumps({"v": value}).split("=", 1)[1].strip()
+
+
+def _is_row(value: Any) -> bool:
+    return isinstance(value, list) and not any(isinstance(v, (list, dict)) for v in value)
+
+
+def _toml_value(value: Any, indent: str = "") -> str:
+    """A TOML value: a matrix (a list of flat lists) one row per line, a vector on one line or
+    wrapped within _TOML_WIDTH, a table inline."""
+    if isinstance(value, dict):
+        items = ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items())
+        return "{" + (f" {items} " if items else "") + "}"
+    if not isinstance(value, list):
+        return _toml_scalar(value)
+    inner = indent + "    "
+    if _is_row(value):
+        items = [_toml_scalar(v) for v in value]
+        line = "[" + ", ".join(items) + "]"
+        if len(indent) + len(line) <= _TOML_WIDTH:
+            return line
+        lines, current = [], ""
+        for item in items:
+            if current and len(inner) + len(current) + len(item) + 2 > _TOML_WIDTH:
+                lines.append(inner + current.rstrip().rstrip(","))
+                current = ""
+            current += item + ", "
+        lines.append(inner + current.rstrip().rstrip(","))
+        return "[\n" + ",\n".join(lines) + ",\n" + indent + "]"
+    rows = [inner + _toml_value(v, inner) for v in value]
+    return "[\n" + ",\n".join(rows) + ",\n" + indent + "]"
+
+
+def toml_text(data: Mapping[str, Mapping[str, Any]], notes: Mapping[str, str] = {}) -> str:  # noqa: B006
+    """``{section: {key: value}}`` as TOML: a table per section, the keys whose values are
+    tables of scalars and vectors as sub-tables ([section.key]) after the others, matrices one
+    row per line, and each key named in ``notes`` ("section.key") after a comment line."""
+    import textwrap
+
+    previous: list[str | None] = [None]
+
+    def comment(name: str) -> list[str]:
+        """The note's comment lines, once for consecutive keys with the same note."""
+        note = notes.get(name)
+        if note is None or note == previous[0]:
+            previous[0] = note
+            return []
+        previous[0] = note
+        return textwrap.wrap(
+            notes[name], width=_TOML_WIDTH - 2, initial_indent="# ", subsequent_indent="#   "
+        )
+
+    lines: list[str] = []
+    for section, values in data.items():
+        tables = {
+            key: value
+            for key, value in values.items()
+            if isinstance(value, dict)
+            and value
+            and not any(isinstance(v, dict) for v in value.values())
+        }
+        lines.append(f"[{_toml_key(section)}]")
+        previous[0] = None
+        for key, value in values.items():
+            if key not in tables:
+                lines += comment(f"{section}.{key}")
+                lines.append(f"{_toml_key(key)} = {_toml_value(value)}")
+        lines.append("")
+        for key, value in tables.items():
+            previous[0] = None
+            lines += comment(f"{section}.{key}")
+            lines.append(f"[{_toml_key(section)}.{_toml_key(key)}]")
+            for sub, item in value.items():
+                lines.append(f"{_toml_key(sub)} = {_toml_value(item)}")
+            lines.append("")
+    return "\n".join(lines)
 
 
 def _deep_toml(text: str) -> str:

@@ -316,7 +316,7 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
         if t.size:
             _clip_transient(axes, weights, core)
             _mark_last_row(axes, result, weights[-1])
-        axes.set_ylabel(f"weight ${symbol}$ (-)")
+        axes.set_ylabel(f"weight ${symbol}$\n{WEIGHT_UNIT}")
         axes.set_xlabel("time t (s)")
         _mark_probe_end(axes, result)
         _mark_stop(axes, result)
@@ -324,6 +324,10 @@ def _weights_panel(result: SimulationResult, weights: np.ndarray, symbol: str) -
 
     return panel
 
+
+#: The unit of a weight: V = W^T phi(x), so each weight carries the unit of V (the cost's) over
+#: that of its basis term; the weights of one figure have different units.
+WEIGHT_UNIT = "(unit of V / unit of its term)"
 
 #: Weights named one by one in the legend of a weights figure: more are drawn in groups
 #: (:func:`_weight_groups`) without per-weight legends. Legend rows per column.
@@ -373,7 +377,7 @@ def _block_panel(
             core = np.concatenate([[0.0], values[t.size // 2 :].ravel()])
         else:
             values = block
-            ylabel = f"weight ${symbol}$ (-)"
+            ylabel = f"weight ${symbol}$\n{WEIGHT_UNIT}"
             core = values[t.size // 2 :].ravel() if t.size else np.zeros(1)
         few = index.size <= _MAX_LEGEND_WEIGHTS
         for j, i in enumerate(index):
@@ -650,8 +654,11 @@ def _joint_panel(
     *,
     log: bool = False,
     annotate_probe: bool = False,
+    note: str | None = None,
 ) -> Panel:
     def panel(axes: Axes) -> None:
+        if note:  # above the panel, off the data
+            axes.set_title(note, fontsize=7.5, loc="left", color="0.25")
         for j in range(values.shape[1]):  # one line per joint
             y = np.maximum(np.abs(values[:, j]), _FLOOR) if log else values[:, j]
             axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_joint_style(j))
@@ -705,6 +712,11 @@ def plot_torques(
 ) -> Figure:
     """The applied joint torques tau and the probing signal.
 
+    The probe's panel is drawn on its own scale: with the paper's probe it is several times
+    larger than tau. A note over it (:func:`probe_note`) says why: the probe is part of u and
+    tau = h_hat + mu - u, and the feedforward h_hat and RISE's mu follow the motion it causes and
+    take most of it out of tau (how much, joint by joint, and the RMS of both while probing).
+
     Parameters
     ----------
     result : SimulationResult
@@ -722,10 +734,61 @@ def plot_torques(
         _joint_panel(
             result, result.tau, "torque $\\tau$ (N m)", "$\\tau_{j}$", annotate_probe=True
         ),
-        _joint_panel(result, result.probe, "probing signal (N m)", "probe$_{j}$"),
+        _joint_panel(
+            result, result.probe, "probing signal (N m)", "probe$_{j}$", note=probe_note(result)
+        ),
     ]
     title = _title("Applied torques and probing signal", result)
     return _draw(panels, ax=ax, fig=fig, height=4.2, title=title)
+
+
+def probe_note(result: SimulationResult) -> str | None:
+    """The note over the probing panel of :func:`plot_torques`, which is drawn on its own scale:
+    the probe is part of u and tau = h_hat + mu - u, and the feedforward h_hat and RISE's mu
+    follow the motion the probe causes. When probing lasts at least one period of its slowest
+    sinusoid, how much of the probe they take out of tau, per joint: 1 - the least-squares share
+    of -probe in tau over the probing time (said only when it is within 0-100 %). The RMS of
+    the probe and of tau while probing. None without probing."""
+    config = result.config.probe
+    on = result.t < config.until if result.t.size else np.zeros(0, dtype=bool)
+    probe, tau = result.probe[on], result.tau[on]
+    if probe.shape[0] < 2:
+        return None
+    centred = probe - probe.mean(axis=0)
+    power = np.sum(centred**2, axis=0)
+    joints = power > 0.0
+    if not joints.any():
+        return None
+    kept = -np.sum((tau - tau.mean(axis=0)) * centred, axis=0)[joints] / power[joints]
+    cancelled = 100.0 * (1.0 - kept)
+    slowest = 2.0 * np.pi / min(config.frequencies) if min(config.frequencies) > 0 else np.inf
+    long_enough = float(result.t[on][-1] - result.t[on][0]) >= slowest
+    rms = np.sqrt(np.mean(probe**2, axis=0))[joints]
+    tau_rms = np.sqrt(np.mean(tau**2, axis=0))[joints]
+    if rms.size <= 3:
+        sizes = (
+            "probe "
+            + ", ".join(f"{v:.3g}" for v in rms)
+            + " N m, $\\tau$ "
+            + ", ".join(f"{v:.3g}" for v in tau_rms)
+            + " N m"
+        )
+    else:
+        sizes = f"probe up to {rms.max():.3g} N m, $\\tau$ up to {tau_rms.max():.3g} N m"
+    head = (
+        "The probe is part of u, and $\\tau = \\hat h + \\mu - u$: the feedforward $\\hat h$ "
+        "and RISE's $\\mu$ follow the motion it causes\n"
+    )
+    if long_enough and cancelled.min() >= 0.0 and cancelled.max() <= 100.0:
+        span = (
+            f"{cancelled.min():.0f} %"
+            if round(cancelled.min()) == round(cancelled.max())
+            else f"{cancelled.min():.0f}-{cancelled.max():.0f} %"
+        )
+        return (
+            head + f"and cancel {span} of it in $\\tau$ (least squares while probing; RMS: {sizes})"
+        )
+    return head + f"(RMS while probing: {sizes})"
 
 
 #: Line style of each controller in :func:`plot_comparison`: colour, dashes and width differ, and

@@ -75,7 +75,7 @@ def write_report(
     for name, writer in (("result.npz", _write_npz), ("result.csv", _write_csv)):
         written.append(folder.write(name, lambda temporary, w=writer: w(result, temporary)))
         done(written[-1])
-    written.append(folder.write_text("config.toml", result.config.to_toml()))
+    written.append(folder.write_text("config.toml", result.config.to_toml(resolved=True)))
     done(written[-1])
     # the figures before the summaries, so that a figure that cannot be drawn is reported in them;
     # a failure to draw (not to write) loses neither the run nor the other files

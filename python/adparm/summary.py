@@ -102,18 +102,31 @@ _REASONS: dict[str, str] = {
 }
 
 
-def _flatten(config: Config) -> dict[str, Any]:
+def _flatten(config: Config, left_out: dict[str, tuple[Any, str]]) -> dict[str, Any]:
+    """Every setting as "section.key": value, with the value adparm resolved for each one left
+    out (Config.left_out_values; the model's keys only where given: left out, the model is the
+    plant)."""
+    import dataclasses
+
+    from .config import _SECTIONS
+
+    given = config.to_dict()
     flat = {}
-    for section, values in config.to_dict().items():
-        if section == "init":  # the basis' default when left out
-            values = {key: config.initial_weights(key).tolist() for key in values or _INIT_KEYS}
-        for key, value in values.items():
-            flat[f"{section}.{key}"] = value
-    flat["critic.epsilon_T"] = config.resolved_epsilon_T
+    for section, cls in _SECTIONS.items():  # in the order of the sections and their fields
+        for field in dataclasses.fields(cls):
+            name = f"{section}.{field.name}"
+            if field.name in given[section]:
+                flat[name] = given[section][field.name]
+            elif name in left_out and section != "model":
+                flat[name] = left_out[name][0]
     return flat
 
 
-_INIT_KEYS = ("critic_weights", "actor_weights")
+def _equal(a: Any, b: Any) -> bool:
+    try:
+        return bool(a == b)
+    except ValueError:  # arrays of different shapes
+        return False
 
 
 def _same(printed: Any, value: Any) -> bool:
@@ -129,14 +142,21 @@ def deviations(config: Config) -> list[dict[str, Any]]:
     leaves open, as rows {parameter, paper, used, reason}."""
     from .config import paper_config
 
-    used = _flatten(config)
-    default = _flatten(paper_config())
+    left_out = config.left_out_values()
+    used = _flatten(config, left_out)
+    paper = paper_config()
+    default = _flatten(paper, paper.left_out_values())
     rows = []
     first_of_section: dict[str, str] = {}
     for name, value in used.items():
         section = name.split(".")[0]
         printed = _PAPER_PRINTED.get(name)
         if printed is not None and _same(printed, value):
+            continue
+        # the value adparm takes when the setting is left out: given or not, the same run (a
+        # model key equal to the plant's is the exact model, no deviation)
+        resolved = name in left_out and _equal(left_out[name][0], value)
+        if resolved and name.startswith("model."):
             continue
         reason = _REASONS.get(name)
         if reason is None and section in _REASONS:
@@ -146,7 +166,7 @@ def deviations(config: Config) -> list[dict[str, Any]]:
             first_of_section.setdefault(section, name)
         if name in config.derived:  # left out, derived for this arm (rates.urdf_defaults)
             reason = f"Derived for this arm: {config.derived[name]}."
-        elif value != default.get(name):
+        elif not resolved and not _equal(value, default.get(name)):
             reason = "Set by this configuration (differs from adparm's default)."
         elif printed is None and reason is None:
             continue
@@ -319,6 +339,19 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+def claim_text(summary: dict[str, Any], name: str = "critic", fmt: str = ".6g") -> str:
+    """The relative error of ``name`` ("critic" or "actor") at the paper's 110 s, "<error> at
+    t = 110 s", or that the run did not reach 110 s: a time beyond the run's end is never
+    quoted with a value."""
+    claim = summary.get("paper_claim_time", PAPER_CLAIM_TIME)
+    value = summary.get(f"{name}_relative_error_at_claim")
+    end = summary.get("t_end")
+    if value is None or end is None or end < claim - 1e-9:
+        ends = f"the run ends at t = {_fmt(end)} s" if end is not None else "nothing recorded"
+        return f"t = {claim:g} s (the paper's claim) not reached: {ends}"
+    return f"{format(value, fmt)} at t = {claim:g} s"
+
+
 def _diagnostics_lines(d: dict[str, Any] | None) -> list[str]:
     if not d:
         return []
@@ -330,18 +363,31 @@ def _diagnostics_lines(d: dict[str, Any] | None) -> list[str]:
             "",
             f"- HJB residual of the final weights, rms(eps) / rms(x^T Q x): "
             f"{_fmt(d['hjb_residual_explored'])} over the explored region, "
-            f"{_fmt(d['hjb_residual_box'])} over the extrapolation box, "
-            f"{_fmt(d['hjb_residual_trajectory'])} along the end of the trajectory"
+            + (
+                f"{_fmt(d['hjb_residual_box'])} over the extrapolation box, "
+                if d.get("hjb_residual_box") is not None
+                else "none over an extrapolation box (extrapolation.points = 0), "
+            )
+            + f"{_fmt(d['hjb_residual_trajectory'])} along the end of the trajectory"
             + (
                 f"; the least any weights reach: {_fmt(d['hjb_residual_best'])}"
                 if d.get("hjb_residual_best") is not None
                 else ""
             ),
-            f"- learned V against {d['value_yardstick'] or '-'}: relative error "
-            f"{_fmt(d['value_error'])}",
-            f"- smallest eigenvalue of the e2 block of V (over q): critic "
-            f"{_fmt(d['e2_block_min_eigenvalue'])}, actor "
-            f"{_fmt(d['actor_e2_block_min_eigenvalue'])}",
+            (
+                f"- learned V against {d['value_yardstick']}: relative error "
+                f"{_fmt(d['value_error'])}"
+                if d.get("value_yardstick")
+                else "- learned V: no yardstick for this run (W* unknown, and no LQR value for "
+                "its basis or task)"
+            ),
+            (
+                f"- smallest eigenvalue of the e2 block of V (over q): critic "
+                f"{_fmt(d['e2_block_min_eigenvalue'])}, actor "
+                f"{_fmt(d['actor_e2_block_min_eigenvalue'])}"
+                if d.get("e2_block_min_eigenvalue") is not None
+                else "- smallest eigenvalue of the e2 block of V: not computed for this basis"
+            ),
         ]
     return lines
 
@@ -432,8 +478,7 @@ def summary_markdown(summary: dict[str, Any]) -> str:
                 settled = f"no time within {tol:g} %: the run {summary['status']}"
             lines.append(
                 f"- {name}: ||W - W*|| / ||W*|| = {_fmt(summary[f'{name}_relative_error'])} {end}, "
-                f"{_fmt(summary[f'{name}_relative_error_at_claim'])} at t = "
-                f"{_fmt(summary['paper_claim_time'])} s; {settled}"
+                f"{claim_text(summary, name)}; {settled}"
             )
         lines += [
             "",

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _core
 
-__all__ = ["UrdfArm", "example_robot_urdf", "EXAMPLE_ROBOTS"]
+__all__ = ["UrdfArm", "example_robot_urdf", "EXAMPLE_LOCKED_JOINTS", "EXAMPLE_ROBOTS"]
 
 #: Names accepted by example_robot_urdf, and their files under example-robot-data's robots/:
 #: every fixed-base arm of the package (4.x). The Panda needs its fingers locked (they mimic
@@ -411,8 +411,27 @@ def _example_robot_data_root() -> Path | None:
 
 def example_robot_urdf(name: str) -> Path:
     """The path of a URDF of the ``example-robot-data`` package (``pip install
-    example-robot-data``): one of EXAMPLE_ROBOTS ("ur5", "panda", ...), or a path relative to
-    its robots/ folder (e.g. "ur_description/urdf/ur3_robot.urdf")."""
+    example-robot-data``): a name of EXAMPLE_ROBOTS, or a path relative to its robots/ folder
+    (e.g. "ur_description/urdf/ur3_robot.urdf"). In a config, ``[plant] urdf =
+    "example-robot-data:NAME"`` names the same file.
+
+    Every robot of EXAMPLE_ROBOTS is a plant as it is ("ur3", "ur5", "ur10", "kinova", "z1",
+    "xarm7", "talos_arm", ...) except three, which need joints locked: "panda" and
+    "panda_collision" (their finger joints mimic each other) and "baxter" (two arms and a head
+    on one tree: all but the left arm). ``EXAMPLE_LOCKED_JOINTS[name]`` gives the joints to lock
+    as ``plant.locked_joints``; without them the config is refused, naming plant.locked_joints.
+
+    Examples
+    --------
+    >>> import adparm
+    >>> from adparm.urdf import EXAMPLE_LOCKED_JOINTS
+    >>> adparm.example_robot_urdf("ur5").name
+    'ur5_robot.urdf'
+    >>> lock = EXAMPLE_LOCKED_JOINTS["panda"]
+    >>> plant = {"urdf": "example-robot-data:panda", "locked_joints": lock}
+    >>> adparm.Config.from_dict({"plant": plant}).dof
+    7
+    """
     root = _example_robot_data_root()
     if root is None:
         raise ModuleNotFoundError(
