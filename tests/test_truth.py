@@ -214,3 +214,48 @@ def test_diagnostics_cover_the_extrapolation_box() -> None:
         adparm.diagnose(adparm.simulate(config.updated({"controller": {"kind": "pd"}})))["verdict"]
         == "not a learning run"
     )
+
+
+def _double_pendulum_off_w_star(T: float, **sections: dict) -> tuple[adparm.Config, np.ndarray]:
+    """The double pendulum of example-robot-data with a cost of the exact family other than the
+    default (K, alpha1, R drawn once) and both weight sets 20 % off W*."""
+    rng = np.random.default_rng(0)
+    base = {"plant": {"urdf": "example-robot-data:double_pendulum"}}
+    R0 = np.array(adparm.Config.from_dict(base).cost.R)
+    A = rng.normal(size=(2, 2))
+    K = (A @ A.T / 2 + 0.3 * np.eye(2)) / R0.max()
+    alpha1 = np.diag([1.5, 2.5])
+    R = R0 @ np.diag([0.8, 1.5])
+    config = {
+        **base,
+        "cost": {"Q": adparm.solvable_cost(K, alpha1, R).tolist(), "R": R.tolist()},
+        "control": {"alpha1": alpha1.tolist()},
+        "sim": {"T": T},
+        **sections,
+    }
+    W = adparm.optimal_weights(adparm.Config.from_dict(config))
+    W0 = (W * (1 + 0.2 * rng.choice([-1.0, 1.0], size=W.shape))).tolist()
+    config["init"] = {"critic_weights": W0, "actor_weights": W0}
+    return adparm.Config.from_dict(config), W
+
+
+def test_the_suggested_longer_run_reaches_the_tolerance() -> None:
+    # "run longer" names a sim.T from the run's own progress, and that sim.T works
+    config, W = _double_pendulum_off_w_star(1.5)
+    result = adparm.simulate(config, progress=False, diagnose=False)
+    diagnosis = adparm.diagnose(result)
+    assert diagnosis["verdict"] != "ok"
+    estimate = adparm.truth.longer_run_estimate(result, W, 0.01)
+    assert 1.5 < estimate["T"] <= 30.0
+    assert any(f"sim.T = {estimate['T']:g} s reaches" in text for text in diagnosis["advice"])
+    longer = adparm.simulate(config.updated({"sim": {"T": estimate["T"]}}), progress=False)
+    assert adparm.diagnose(longer)["verdict"] == "ok"
+
+
+def test_no_progress_is_not_answered_with_run_longer() -> None:
+    # learning switched off: the weights stay 20 % off W*, and a longer run would not help
+    frozen = {"critic": {"eta_c": 0.0}, "actor": {"eta_a1": 0.0, "eta_a2": 0.0}}
+    config, W = _double_pendulum_off_w_star(1.0, **frozen)
+    result = adparm.simulate(config, progress=False, diagnose=False)
+    advice = " ".join(adparm.diagnose(result)["advice"])
+    assert "a longer run will not help" in advice and "sim.T =" not in advice

@@ -344,6 +344,75 @@ def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
     return math.sqrt(float(np.mean((u_hat - u_star) ** 2))) / scale
 
 
+def _nice_ceil(value: float) -> float:
+    """The smallest 1, 2 or 5 x 10^k at or above value."""
+    exponent = math.floor(math.log10(value))
+    for mantissa in (1.0, 2.0, 5.0, 10.0):
+        if mantissa * 10.0**exponent >= value * (1 - 1e-12):
+            return mantissa * 10.0**exponent
+    return 10.0 ** (exponent + 1)  # pragma: no cover
+
+
+def longer_run_estimate(
+    result: SimulationResult, target: np.ndarray | None, tolerance: float
+) -> dict[str, float] | None:
+    """How much longer learning needs, from the run's own progress (W* known): the larger of the
+    critic's and the actor's relative weight errors, e(t), falls from e(t_mid) to e(t_end) over
+    the second half of the run; at that exponential rate it reaches ``tolerance`` after
+    ``needed`` = ln(e(t_end) / tolerance) / rate more seconds, and ``T`` = a round horizon of at
+    least t_end + 1.5 needed (a margin: learning slows near the end). ``needed`` is inf when the
+    error did not fall. None without W* or rows."""
+    if target is None or result.t.size < 4:
+        return None
+    norm = float(np.linalg.norm(target))
+    error = np.maximum(
+        np.linalg.norm(result.critic_weights - target, axis=1),
+        np.linalg.norm(result.actor_weights - target, axis=1),
+    ) / max(norm, 1e-300)
+    t = result.t
+    t_end = float(t[-1])
+    middle = int(np.searchsorted(t, t[0] + 0.5 * (t_end - t[0])))
+    e_mid, e_end = float(error[middle]), float(error[-1])
+    out = {"error_mid": e_mid, "error_end": e_end, "t_mid": float(t[middle]), "t_end": t_end}
+    if not (e_end < e_mid) or not math.isfinite(e_end) or t_end <= t[middle]:
+        return {**out, "needed": math.inf, "T": math.inf}
+    rate = math.log(e_mid / e_end) / (t_end - float(t[middle]))
+    needed = max(0.0, math.log(e_end / tolerance) / rate)
+    return {**out, "needed": needed, "T": _nice_ceil(t_end + 1.5 * needed)}
+
+
+#: A longer run is suggested only up to this many times the run's horizon (beyond, learning is
+#: too slow for a longer run to be the remedy).
+LONGER_RUN_LIMIT = 20.0
+
+
+def _longer_run_advice(
+    result: SimulationResult, target: np.ndarray | None, tolerance: float
+) -> str:
+    estimate = longer_run_estimate(result, target, tolerance)
+    if estimate is None:
+        return "run longer (sim.T)"
+    progress = (
+        f"the weights' error went from {estimate['error_mid']:.3g} at t = "
+        f"{estimate['t_mid']:.3g} s to {estimate['error_end']:.3g} at {estimate['t_end']:.3g} s"
+    )
+    if math.isfinite(estimate["T"]) and estimate["T"] <= LONGER_RUN_LIMIT * result.config.sim.T:
+        return (
+            f"run longer: {progress}; at that rate sim.T = {estimate['T']:g} s reaches the "
+            "tolerance (an estimate with a margin of 1.5)"
+        )
+    if not math.isfinite(estimate["T"]):
+        return (
+            f"a longer run will not help: {progress} (no progress over the second half of the run)"
+        )
+    return (
+        f"learning is slow: {progress}; at that rate the tolerance needs about "
+        f"{estimate['needed']:.3g} s more (sim.T = {estimate['T']:g} s, over "
+        f"{LONGER_RUN_LIMIT:g} times this run's); likely some direction of the weights is "
+        "barely informed by the samples (the cost R, the extrapolation box or the basis)"
+    )
+
+
 def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
     """The truth about a run (plain JSON-ready data; summary.json's ``diagnostics``):
 
@@ -519,7 +588,7 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
                 f"{best:.3g}"
             )
             advice.append(
-                "run longer (sim.T)"
+                _longer_run_advice(result, target, tolerance)
                 + (
                     ", excite more (probe.amplitude) or add Bellman-error extrapolation "
                     "(extrapolation.points)"
@@ -530,7 +599,7 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     elif short:
         out["approximation"] = "not converged"
         advice.append(
-            "run longer (sim.T)"
+            _longer_run_advice(result, target, tolerance)
             + (
                 ", or add Bellman-error extrapolation (extrapolation.points)"
                 if config.extrapolation.points == 0
