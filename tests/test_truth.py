@@ -115,6 +115,47 @@ def test_optimal_cost_equals_the_analytic_value_on_errata_instances(seed) -> Non
     assert adparm.optimal_cost(config, x0) == pytest.approx(expected, rel=5e-3)
 
 
+# A held-out cost and set-point on which 400 intervals leave J* 1.9e-3 low (issue 22, item 14).
+HELD_OUT = {
+    "cost": {
+        "Q": [
+            [23.753, -0.961, -0.943, 2.292],
+            [-0.961, 25.104, 0.283, 0.71],
+            [-0.943, 0.283, 6.494, 0.635],
+            [2.292, 0.71, 0.635, 34.425],
+        ],
+        "R": [[0.922, 0.0], [0.0, 0.567]],
+    },
+    "task": {"qd": [0.488, 0.894]},
+}
+
+
+def test_optimal_cost_refines_until_the_change_is_below_its_tolerance() -> None:
+    config = adparm.paper_config().updated(HELD_OUT)
+    best = adparm.optimal_cost(config)  # 400, 800, 1600 intervals: about 4 s
+    reference = adparm.optimal_cost(config, intervals=3200, max_intervals=3200)
+    coarse_intervals, coarse = best.history[0]
+    assert coarse_intervals == 400 and abs(coarse / reference - 1.0) > 1e-3  # the old default
+    assert best.converged and best.rtol == 1e-4 and best.error <= 1e-4
+    assert best.intervals == best.history[-1][0] > 400 and float(best) == best.history[-1][1]
+    assert abs(best / reference - 1.0) <= best.error  # the stated error holds
+    assert "relative error <= 1e-04" in best.note and best.note in repr(best)
+    # one solve states no error; a cap below what the tolerance needs says so
+    assert np.isnan(reference.error) and "no error estimate" in reference.note
+    capped = adparm.optimal_cost(adparm.paper_config(), rtol=1e-9, max_intervals=800)
+    assert not capped.converged and capped.intervals == 800
+    assert capped.note.startswith("not converged to 1e-09: relative change")
+    # a float that keeps its attributes through pickle and JSON
+    import pickle
+
+    again = pickle.loads(pickle.dumps(best))
+    assert again == best and again.history == best.history and json.loads(json.dumps(best)) == best
+    with pytest.raises(ValueError, match="max_intervals: expected at least intervals = 400"):
+        adparm.optimal_cost(config, max_intervals=200)
+    with pytest.raises(ValueError, match=r"rtol: expected a number in \(0, 1\)"):
+        adparm.optimal_cost(config, rtol=0.0)
+
+
 def test_no_controller_beats_the_optimal_cost() -> None:
     config = adparm.paper_config().updated(
         {
