@@ -10,7 +10,7 @@ import pytest
 
 import adparm
 from adparm.cli import main
-from adparm.comparison import COMPARE_COLUMNS, LEARNED_LABEL
+from adparm.comparison import COMPARE_COLUMNS, LEARNED_LABEL, applied_cost, applied_input
 from adparm.config import tomllib
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
@@ -82,16 +82,82 @@ def test_optimal_baseline_costs_the_optimal_value() -> None:
     assert abs(disturbed.rows[0]["accumulated_cost"] / value - 1.0) > 0.1
 
 
+def test_no_controller_beats_the_optimum_on_the_compare_example() -> None:
+    """Issue 22, item 13: rise and pd read J/J* - 1 = -0.5 and optimal itself -0.29 when RISE's
+    effort was free. J now charges the applied input u = h + tau_d - tau, on which J* of the
+    plant's error system is a lower bound."""
+    config = adparm.load_config("examples/compare.toml")
+    c = adparm.compare(config)
+    best = c.optimal_cost
+    assert best.converged and best.terminal and best.error <= best.rtol == 1e-4
+    slack = best.error + c.quadrature_error
+    rows = {row["controller"]: row for row in c.rows}
+    for label, row in rows.items():
+        assert row["status"] == "finished"
+        assert row["cost_vs_optimal_cost"] >= -slack, label
+    # RISE's mu adds to every input: even u* with mu is above J*, and rise and pd more so
+    assert rows["pd"]["cost_vs_optimal_cost"] > rows["optimal"]["cost_vs_optimal_cost"] > 0.1
+    assert rows["rise"]["cost_vs_optimal_cost"] > rows["optimal"]["cost_vs_optimal_cost"]
+    assert "J (eq. 10, applied u)" in c.table_markdown() and best.note in c.table_markdown()
+    assert c.to_json()["optimal_cost"]["intervals"] == best.intervals
+    # without RISE and disturbance the optimal controller is the optimum: J / J* - 1 ~ 0
+    exact = adparm.compare(
+        config.updated({"controller": {"rise": False}, "plant": {"disturbance": [0.0, 0.0]}}),
+        ["pd", "optimal"],
+    )
+    rows = {row["controller"]: row for row in exact.rows}
+    assert abs(rows["optimal"]["cost_vs_optimal_cost"]) <= exact.optimal_cost.error
+    assert rows["pd"]["cost_vs_optimal_cost"] > 0.1 and exact.quadrature_error == 0.0
+
+
+def test_a_run_shorter_than_the_horizon_meets_the_optimum_over_its_own_time(
+    short_comparison,
+) -> None:
+    """T = 3 s is shorter than J*'s default horizon (23 s): J* is then the optimum over [0, T]
+    without a terminal cost, and no row is below it."""
+    best = short_comparison.optimal_cost
+    assert not best.terminal and best.horizon == 3.0 and best.converged
+    assert "over [0, 3 s]" in short_comparison.table_markdown()
+    slack = best.error + short_comparison.quadrature_error
+    assert min(row["cost_vs_optimal_cost"] for row in short_comparison.rows) >= -slack
+
+
+def test_applied_input_obeys_the_plant_error_system() -> None:
+    """M de2 = -C e2 + u along the run (plant's M, C) for u = applied_input, with a model error
+    (h - h_hat enters u), RISE and the disturbance."""
+    config = adparm.paper_config().updated(
+        {
+            "sim": {"T": 1.0, "record_every": 1},
+            "plant": {"coulomb": 0.0},  # de2 jumps where dq changes sign
+            "model": {"p1": 6.0, "p3": 0.8},
+            "controller": {"kind": "pd"},
+        }
+    )
+    r = adparm.simulate(config, diagnose=False)
+    u = applied_input(r)
+    de2 = np.gradient(r.e2, r.t, axis=0)  # central differences at dt = 1 ms
+    for i in range(1, r.t.size - 1, 50):
+        terms = adparm.arm_terms(config, r.q[i], r.dq[i])
+        np.testing.assert_allclose(
+            terms["M"] @ de2[i] + terms["C"] @ r.e2[i], u[i], rtol=1e-3, atol=1e-4
+        )
+    # the model's error is part of u: an exact model gives a different u
+    exact = config.updated({"model": {"p1": None, "p3": None}})
+    assert np.abs(applied_input(adparm.simulate(exact, diagnose=False)) - u).max() > 0.1
+
+
 def test_rows_agree_with_the_arrays(short_comparison) -> None:
     c = short_comparison
     assert list(c.results) == LABELS
-    optimal = c.results["optimal"].cost[-1]
+    optimal = applied_cost(c.results["optimal"])[0]
     trapezoid = getattr(np, "trapezoid", None) or np.trapz  # noqa: NPY201 (NumPy < 2)
     for row in c.rows:
         r = c.results[row["controller"]]
         assert list(row) == list(COMPARE_COLUMNS)
-        assert row["accumulated_cost"] == r.cost[-1]
-        assert row["cost_vs_optimal"] == pytest.approx(r.cost[-1] / optimal - 1.0, rel=1e-14)
+        assert row["accumulated_cost"] == applied_cost(r)[0]
+        assert row["cost_vs_optimal"] == pytest.approx(
+            row["accumulated_cost"] / optimal - 1.0, rel=1e-14
+        )
         e1_norm = np.linalg.norm(r.e1, axis=1)
         rms = np.sqrt(trapezoid(e1_norm**2, r.t) / (r.t[-1] - r.t[0]))
         assert row["rms_e1"] == pytest.approx(rms, rel=1e-12)
@@ -117,13 +183,13 @@ def test_table_dataframe_and_files_hold_the_rows(short_comparison, tmp_path) -> 
     text = c.table_markdown()
     lines = text.splitlines()
     assert (
-        lines[0].startswith("| controller | J (eq. 10) |")
+        lines[0].startswith("| controller | J (eq. 10, applied u) |")
         and len(lines[0].split("|")) == len(COMPARE_COLUMNS) + 2
     )
     for row, line in zip(c.rows, lines[2:7], strict=True):
         assert line.startswith(f"| {row['controller']} | {row['accumulated_cost']:.6g} |")
         assert f"| {row['rms_e1']:.3g} |" in line and line.endswith("| finished |")
-    assert "RISE term mu is on" in text
+    assert "less the RISE term mu" in text and "lower bound of every J" in text
 
     frame = c.to_dataframe()
     assert list(frame.index) == LABELS and list(frame.columns) == list(COMPARE_COLUMNS[1:])
@@ -149,7 +215,7 @@ def test_diverged_run_is_a_row_not_an_exception() -> None:
     assert rows["adp"]["cost_vs_optimal"] is None  # its J covers 1 ms
     assert rows["optimal"]["status"] == "finished" and rows["optimal"]["t_end"] == 0.5
     assert "adp" in c.diverged and "optimal" not in c.diverged
-    assert rows["adp"]["accumulated_cost"] == c.results["adp"].cost[-1]
+    assert rows["adp"]["accumulated_cost"] == applied_cost(c.results["adp"])[0]
 
 
 def test_kinds_are_validated() -> None:

@@ -6,10 +6,12 @@ off), ``rise`` (RISE feedback alone, u = 0), ``pd`` and ``optimal`` (u* = -R^-1 
 optimal policy), and tabulates the accumulated cost of eq. (10), tracking errors and torques of each
 run.
 
-The cost J = int_0^T x^T Q x + u^T R u charges the controller's input u only. The RISE term mu
-(``controller.rise``, on by default) also feeds back and rejects the disturbance, and its effort
-is not charged, so with RISE on a controller that leaves the work to mu (``rise``, ``pd``) can
-show a lower J than ``optimal``, which is optimal for the error system without mu.
+Every row's cost J = int_0^T x^T Q x + u^T R u charges the input the error system receives,
+u = h + tau_d - tau (eq. 4, h of the plant; :func:`applied_input`): with tau = h_hat + mu - u_c
+that is the controller's u_c less the RISE term mu, plus the disturbance and the model's error.
+Along the run M de2 = -C e2 + u holds for that u, so the optimum J* of the same cost on the
+plant's error system (adparm.optimal_cost) is a lower bound of every row's J. ``result.cost``
+charges u_c alone (the input the ADP controller optimises); RISE's effort would be free there.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from .simulation import (
     _check_steps,
     _simulate_keeping_divergence,
 )
-from .table import rows_dataframe, rows_json, rows_markdown, write_csv
+from .table import plain, rows_dataframe, rows_json, rows_markdown, write_csv
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
@@ -44,6 +46,8 @@ __all__ = [
     "J_STAR_INTERRUPTED",
     "LEARNED_LABEL",
     "Comparison",
+    "applied_cost",
+    "applied_input",
     "compare",
 ]
 
@@ -75,7 +79,7 @@ COMPARE_COLUMNS = (
 # column -> (markdown header, format)
 _MARKDOWN = {
     "controller": ("controller", "{}"),
-    "accumulated_cost": ("J (eq. 10)", "{:.6g}"),
+    "accumulated_cost": ("J (eq. 10, applied u)", "{:.6g}"),
     "cost_vs_optimal": ("J / J_optimal - 1", "{:.3g}"),
     "cost_vs_optimal_cost": ("J / J* - 1", "{:.3g}"),
     "rms_e1": ("e1 RMS (rad)", "{:.3g}"),
@@ -158,14 +162,90 @@ def _rms_norm(t: np.ndarray, values: np.ndarray) -> float:
     return float(np.sqrt(integral / span))
 
 
+def applied_input(result: SimulationResult) -> np.ndarray:
+    """The input u = h + tau_d - tau (eq. 4, h of the plant) the error system received at each
+    recorded row, (rows, n): M de2 = -C e2 + u along the run. With tau = h_hat + mu - u_c it is
+    u_c - mu + tau_d + (h - h_hat): the controller's input u_c less the RISE term mu, plus the
+    disturbance tau_d = [d1 sin t, d2 cos t, d3 sin t, ...] and the error of the believed
+    feedforward h_hat (zero for an exact model)."""
+    t = result.t
+    amplitude = np.array(result.config.plant.disturbance, dtype=float)
+    waves = np.where(np.arange(amplitude.size) % 2 == 0, np.sin(t)[:, None], np.cos(t)[:, None])
+    u = result.u - result.mu + amplitude * waves
+    from .config import ModelConfig
+
+    if result.config.model != ModelConfig() and t.size:  # h - h_hat: the model's error
+        u = u + _feedforward(result, model=False) - _feedforward(result, model=True)
+    return u
+
+
+def _feedforward(result: SimulationResult, *, model: bool) -> np.ndarray:
+    """h = M (ddqd + alpha1 de1) + C (dqd + alpha1 e1) + G + F with de1 = dqd - dq (eq. 5 in
+    full) of the plant (or, ``model``, the believed arm) at the recorded rows."""
+    from .optimal import arm_terms
+    from .simulation import desired_state
+    from .urdf import config_arm
+
+    config = result.config
+    alpha1 = np.array(config.control.alpha1)
+    desired = desired_state(config, result.t)
+    if config.plant.urdf is not None:  # read the URDF once
+        terms = config_arm(config, model=model).terms
+    else:
+
+        def terms(q: np.ndarray, dq: np.ndarray) -> dict[str, np.ndarray]:
+            return arm_terms(config, q, dq, model=model)
+
+    h = np.empty_like(result.q)
+    for i, (q, dq, e1, (_, dqd, ddqd)) in enumerate(
+        zip(result.q, result.dq, result.e1, desired, strict=True)
+    ):
+        T = terms(q, dq)
+        M, C = np.asarray(T["M"]), np.asarray(T["C"])
+        h[i] = M @ (ddqd + alpha1 @ (dqd - dq)) + C @ (dqd + alpha1 @ e1) + T["G"] + T["F"]
+    return h
+
+
+def _simpson(values: np.ndarray, t: np.ndarray) -> float:
+    from scipy.integrate import simpson
+
+    if t.size < 2:
+        return 0.0
+    return float(simpson(values, x=t))
+
+
+def applied_cost(result: SimulationResult) -> tuple[float, float]:
+    """J = int_0^T x^T Q x + u^T R u dt with u = :func:`applied_input`, and its estimated relative
+    quadrature error.
+
+    ``result.cost`` (RK4 with the state) charges the controller's input u_c; the difference
+    u^T R u - u_c^T R u_c is integrated over the recorded rows by Simpson's rule. The error
+    estimate is the change of that integral from every other row to every row, relative to J
+    (0 when u = u_c: no RISE, no disturbance, an exact model)."""
+    t = result.t
+    if t.size == 0:
+        return math.nan, math.nan
+    R = np.array(result.config.cost.R)
+    u, u_c = applied_input(result), result.u
+    extra = np.einsum("ri,ij,rj->r", u, R, u) - np.einsum("ri,ij,rj->r", u_c, R, u_c)
+    cost = float(result.cost[-1] - result.cost[0]) + _simpson(extra, t)
+    if not np.any(extra):
+        return cost, 0.0
+    every_other = np.unique(np.r_[np.arange(0, t.size, 2), t.size - 1])
+    if every_other.size < 3:
+        return cost, math.nan
+    change = abs(_simpson(extra, t) - _simpson(extra[every_other], t[every_other]))
+    return cost, change / abs(cost) if cost else math.nan
+
+
 def _row(
     label: str,
     result: SimulationResult,
+    cost: float,
     optimal_cost: float | None,
     best_cost: float | None = None,
 ) -> dict[str, Any]:
     empty = result.t.size == 0
-    cost = math.nan if empty else float(result.cost[-1])
     return {
         "controller": label,
         "accumulated_cost": cost,
@@ -193,13 +273,17 @@ class Comparison:
     ``results``: label -> SimulationResult (labels: the kinds, plus ``"adp (learned)"`` after
     ``"adp"``). ``rows``: one dict per label, keys :data:`COMPARE_COLUMNS`:
 
-    - accumulated_cost: J = cost[-1], eq. (10);
+    - accumulated_cost: J of eq. (10) on the applied input u = h + tau_d - tau
+      (:func:`applied_cost`: the controller's input less the RISE term, plus the disturbance
+      and the model's error), the input the error system received;
     - cost_vs_optimal: J / J_optimal - 1; None when ``optimal`` did not run, did not finish or
       cost 0, and for a diverged run (its J covers a shorter time);
-    - cost_vs_optimal_cost: J / J* - 1 with J* = adparm.optimal_cost(config), the numerically
-      optimal cost from the same x(0) for the believed model without disturbance, for any cost
-      (``optimal_cost`` holds J*; None for a moving qd or when IPOPT fails). Below 0 only where
-      the run is not that problem: RISE effort is not charged, a disturbance or model error acts;
+    - cost_vs_optimal_cost: J / J* - 1 with J* (``optimal_cost``, an
+      :class:`adparm.truth.OptimalCost`) the least cost any input reaches over the same time
+      from the same x(0) on the plant's error system (adparm.optimal_cost with model=False;
+      over sim.T without a terminal cost when sim.T is shorter than its default horizon). It is
+      a lower bound of every row's J: a row is below 0 by at most J*'s stated error (None for
+      a moving qd, a URDF arm or when IPOPT fails);
     - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
     - final_e1: ``|e1|`` at the last row, rad;
     - peak_torque: max ``|tau|`` over both joints and all rows, N m;
@@ -211,26 +295,60 @@ class Comparison:
     optimal_cost: float | None = None
     #: The steps after the runs that failed (e.g. J*), one line each; the runs are complete.
     post_run_errors: tuple[str, ...] = ()
+    #: The largest estimated relative quadrature error of a row's J (applied_cost).
+    quadrature_error: float = 0.0
 
     @property
     def diverged(self) -> list[str]:
         """Labels of the runs that diverged."""
         return [row["controller"] for row in self.rows if row["status"] == "diverged"]
 
+    def cost_note(self) -> str:
+        """What J and J* are, with J*'s tolerance (the note under the Markdown table)."""
+        rise = self._rise()
+        quadrature = (
+            f" (the part beyond u_c by Simpson's rule on the recorded rows, estimated relative "
+            f"error <= {self.quadrature_error:.1e})"
+            if self.quadrature_error
+            else ""
+        )
+        text = (
+            "J = int_0^T x^T Q x + u^T R u (eq. 10) charges the input the error system "
+            "received, u = h + tau_d - tau = u_c - mu + tau_d + (h - h_hat): the controller's "
+            "input u_c (adp: u_hat + probe)"
+            + (", less the RISE term mu" if rise else "")
+            + ", plus the disturbance and the model's error"
+            + quadrature
+            + ". "
+        )
+        best = self.optimal_cost
+        if best is None:
+            text += "J* = - (not computed: a moving qd, a URDF arm or a failed solve). "
+        else:
+            note = getattr(best, "note", "")
+            horizon = (
+                f"over [0, {best.horizon:g} s]"
+                if not getattr(best, "terminal", True)
+                else "over an infinite horizon"
+                if hasattr(best, "terminal")
+                else ""
+            )
+            text += (
+                f"J* = {float(best):.6g} is the least cost any input reaches from x(0) on the "
+                f"plant's error system {horizon} (adparm.optimal_cost, model=False), a lower "
+                "bound of every J" + (f"; its {note}. " if note else ". ")
+            )
+            if rise:
+                text += "RISE adds mu to every controller's input, so even optimal is above J*. "
+        return text + (
+            "e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, tau peak = max |tau_j| "
+            "over both joints."
+        )
+
     def table_markdown(self) -> str:
         """The rows as a Markdown table (``-`` for a missing value), with a note on the cost."""
         lines = [rows_markdown(COMPARE_COLUMNS, self.rows, _MARKDOWN).rstrip("\n")]
-        lines += [
-            "",
-            "J = int_0^T x^T Q x + u^T R u (eq. 10) charges the controller's input u (adp: "
-            "u_hat + probe); the RISE term mu is "
-            + ("on and is not charged." if self._rise() else "off.")
-            + " J* = "
-            + ("-" if self.optimal_cost is None else f"{self.optimal_cost:.6g}")
-            + " is the numerically optimal cost from x(0) (adparm.optimal_cost: believed model, no "
-            "disturbance, infinite horizon). e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, "
-            "tau peak = max |tau_j| over both joints.",
-        ]
+        lines += ["", self.cost_note()]
         if self.post_run_errors:  # the runs are complete; a step after them failed
             lines += ["", *(f"Not computed: {problem}" for problem in self.post_run_errors)]
         return "\n".join(lines) + "\n"
@@ -243,10 +361,16 @@ class Comparison:
         return rows_dataframe(COMPARE_COLUMNS, self.rows).set_index("controller")
 
     def to_json(self) -> dict[str, Any]:
-        """The content of compare.json: {"columns", "rows", "post_run_errors"}, non-finite
-        numbers as null."""
+        """The content of compare.json: {"columns", "rows", "cost", "optimal_cost",
+        "post_run_errors"}, non-finite numbers as null. "cost" says what J is (cost_note);
+        "optimal_cost" is J* with its error, tolerance, intervals, horizon and terminal flag
+        (null when not computed)."""
+        best = self.optimal_cost
         return {
             **rows_json(COMPARE_COLUMNS, self.rows),
+            "cost": self.cost_note(),
+            "quadrature_error": plain(self.quadrature_error),
+            "optimal_cost": None if best is None else plain(_optimal_cost_json(best)),
             "post_run_errors": list(self.post_run_errors),
         }
 
@@ -338,7 +462,9 @@ def compare(
     try:
         best, problem = _optimal_cost(config)
     except KeyboardInterrupt:
-        stopped = dataclasses.replace(_comparison(results), post_run_errors=(J_STAR_INTERRUPTED,))
+        stopped = _comparison(results)
+        problems = (*stopped.post_run_errors, J_STAR_INTERRUPTED)
+        stopped = dataclasses.replace(stopped, post_run_errors=problems)
         raise SimulationInterrupted(
             "comparison interrupted during J* (adparm.optimal_cost), after the runs; every run "
             "is complete, in the exception's .result",
@@ -346,20 +472,30 @@ def compare(
         ) from None
     comparison = _comparison(results, best)
     if problem is not None:
-        comparison = dataclasses.replace(comparison, post_run_errors=(problem,))
+        problems = (*comparison.post_run_errors, problem)
+        comparison = dataclasses.replace(comparison, post_run_errors=problems)
     return comparison
 
 
+def _optimal_cost_json(best: float) -> dict[str, Any]:
+    keys = ("error", "rtol", "converged", "intervals", "horizon", "terminal")
+    return {"value": float(best), **{key: getattr(best, key, None) for key in keys}}
+
+
 def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
-    """J* of adparm.optimal_cost, or None where it does not apply (moving qd, a URDF arm) or
-    fails; and the failure (one line) or None."""
+    """J* on the same footing as the rows' J: adparm.optimal_cost on the plant's error system
+    (model=False), over sim.T without a terminal cost when sim.T is shorter than its default
+    horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*); or None where
+    it does not apply (moving qd, a URDF arm) or fails; and the failure (one line) or None."""
     from .summary import _failure
-    from .truth import optimal_cost
+    from .truth import _plant_config, default_horizon, optimal_cost
 
     if not config.task.is_set_point or config.plant.urdf is not None:  # two-link arm only
         return None, None
     try:
-        return optimal_cost(config), None
+        if config.sim.T < default_horizon(_plant_config(config)):
+            return optimal_cost(config, model=False, horizon=config.sim.T, terminal=False), None
+        return optimal_cost(config, model=False), None
     except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
         return None, _failure("J* (adparm.optimal_cost)", error)
 
@@ -369,10 +505,31 @@ def _run(config: Config, progress: bool) -> SimulationResult:
 
 
 def _comparison(results: dict[str, SimulationResult], best: float | None = None) -> Comparison:
+    from .summary import _failure
+
+    costs: dict[str, tuple[float, float]] = {}
+    problems: list[str] = []
+    for label, result in results.items():
+        try:
+            costs[label] = applied_cost(result)
+        except Exception as error:  # noqa: BLE001 - the run is kept, its J is not known
+            costs[label] = (math.nan, math.nan)
+            problems.append(_failure(f"J of {label!r} (applied_cost)", error))
     optimal = results.get("optimal")
     optimal_cost = None
-    if optimal is not None and optimal.status == "finished" and optimal.cost[-1] > 0.0:
-        optimal_cost = float(optimal.cost[-1])
+    if optimal is not None and optimal.status == "finished" and costs["optimal"][0] > 0.0:
+        optimal_cost = costs["optimal"][0]
     best = best if best is not None and best > 0.0 else None
-    rows = [_row(label, result, optimal_cost, best) for label, result in results.items()]
-    return Comparison(results=results, rows=rows, optimal_cost=best)
+    rows = [
+        _row(label, result, costs[label][0], optimal_cost, best)
+        for label, result in results.items()
+    ]
+    # rows too short for an estimate (fewer than 3 rows every other row) give none
+    errors = [error for _, error in costs.values() if not math.isnan(error)]
+    return Comparison(
+        results=results,
+        rows=rows,
+        optimal_cost=best,
+        post_run_errors=tuple(problems),
+        quadrature_error=max(errors, default=0.0),
+    )
