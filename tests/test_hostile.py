@@ -257,12 +257,73 @@ def test_terms_inside_the_bounds_still_work() -> None:
 
 
 def test_a_negative_square_root_names_the_term_not_lapack(capfd) -> None:
+    # x1(0) = -0.16: refused with the config, whatever the initial weights, naming the state
+    weights = [1.0] * 10 + [0.0]
+    for term, init in (("sqrt(x1)", {}), ("log(x1)", {"critic_weights": weights})):
+        with pytest.raises(ValueError) as error:
+            adparm.paper_config().updated(
+                {"controller": {"basis": ["quadratic", term]}, "init": init}
+            )
+        message = str(error.value)
+        assert message.startswith("controller.basis: at the initial state (task.q0, task.qd)")
+        assert f"basis term {term!r}: not finite at x = [-0.16, -0.226" in message
+    # finite at x(0), not at the default initial weights' sample states
     config = adparm.paper_config().updated(
-        {"controller": {"basis": ["quadratic", "sqrt(x1)"]}, "sim": {"T": 0.01}}
+        {"controller": {"basis": ["quadratic", "sqrt(x1+0.5)"]}, "sim": {"T": 0.01}}
     )
-    with pytest.raises(ValueError, match=r"basis term 'sqrt\(x1\)': not finite at x"):
+    with pytest.raises(ValueError, match=r"basis term 'sqrt\(x1\+0.5\)': not finite at x"):
         adparm.simulate(config)
     assert "SVD" not in capfd.readouterr().err
+
+
+def test_a_divergence_names_the_term_that_is_not_finite() -> None:
+    """sqrt of a negative value at an extrapolation point (t = 0), or where the trajectory
+    crosses x1 = x2 (t = 0.046 s): the divergence names the term and the state, before the
+    rates."""
+    weights = [1.0] * 10 + [0.0]
+    init = {"critic_weights": weights, "actor_weights": weights}
+    base = adparm.paper_config().updated({"sim": {"T": 0.5}})
+    cases = (
+        ("sqrt(x1+0.5)", {"points": 30}, "at an extrapolation point, basis term 'sqrt(x1+0.5)'"),
+        ("sqrt(x1-x2)", {}, "just after t = 0.045 s, basis term 'sqrt(x1-x2)': not finite"),
+    )
+    for term, extrapolation, cause in cases:
+        config = base.updated(
+            {
+                "controller": {"basis": ["quadratic", term]},
+                "init": init,
+                "extrapolation": extrapolation,
+            }
+        )
+        with pytest.raises(adparm.SimulationDiverged) as error:
+            adparm.simulate(config)
+        assert f"likely cause: {cause}" in str(error.value), str(error.value)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(st.complex_numbers(allow_nan=False, allow_infinity=False), min_size=4, max_size=4),
+    st.sampled_from(["evaluate", "qd", "P", "basis", "arm_terms", "critic_weights"]),
+)
+def test_complex_input_is_refused_not_truncated(values, where) -> None:
+    """Property: complex numbers (even with a zero imaginary part) are refused with a TypeError
+    naming the argument, never cast to their real part."""
+    basis = adparm.ExpressionBasis(["x1^2", "x2*x3", "x4*q1"], joints=2)
+    x = np.array(values)
+    calls = {
+        "evaluate": ("x", lambda: basis.evaluate(x)),
+        "qd": ("qd", lambda: basis.evaluate(x.real, qd=x[:2])),
+        "P": ("P", lambda: basis.quadratic_form_weights(np.diag(x))),
+        "basis": ("x", lambda: adparm.basis(adparm.paper_config(), x)),
+        "arm_terms": ("q", lambda: adparm.arm_terms(adparm.paper_config(), x[:2], [0.0, 0.0])),
+        "critic_weights": (
+            "critic_weights",
+            lambda: adparm.hjb_residual(adparm.paper_config(), x.real, np.r_[x, x], np.ones(8)),
+        ),
+    }
+    name, call = calls[where]
+    with pytest.raises(TypeError, match=f"^{name}: expected real numbers, got complex values"):
+        call()
 
 
 def test_a_result_file_with_a_hostile_basis_is_refused_quickly(tmp_path) -> None:

@@ -364,12 +364,12 @@ class ExpressionBasis:
         Returns arrays of shapes (..., N), (..., N, 2n) and (..., N).
         """
         n, n_x = self.joints, 2 * self.joints
-        x = np.asarray(x, dtype=np.float64)
+        x = _real_array(x, "x")
         if x.ndim == 0 or x.shape[-1] != n_x:
             raise ValueError(f"x: expected shape (..., {n_x}), got {x.shape}")
         lead = x.shape[:-1]
-        qd = np.broadcast_to(np.zeros(n) if qd is None else np.asarray(qd, float), lead + (n,))
-        dqd = np.broadcast_to(np.zeros(n) if dqd is None else np.asarray(dqd, float), lead + (n,))
+        qd = np.broadcast_to(np.zeros(n) if qd is None else _real_array(qd, "qd"), lead + (n,))
+        dqd = np.broadcast_to(np.zeros(n) if dqd is None else _real_array(dqd, "dqd"), lead + (n,))
         phi, jacobian, rate = self.core.evaluate_rows(
             x.reshape(-1, n_x), qd.reshape(-1, n), dqd.reshape(-1, n)
         )
@@ -388,7 +388,7 @@ class ExpressionBasis:
         quadratic monomials it lacks).
         """
         n_x = 2 * self.joints
-        P = np.asarray(P, dtype=np.float64)
+        P = _real_array(P, "P")
         if P.shape != (n_x, n_x) or not np.all(np.isfinite(P)):
             raise ValueError(f"P: expected a finite ({n_x}, {n_x}) matrix, got shape {P.shape}")
         P = 0.5 * (P + P.T)
@@ -396,16 +396,10 @@ class ExpressionBasis:
         count = 4 * self.size + 20
         x = rng.uniform(-1.0, 1.0, (count, n_x))
         qd = rng.uniform(-np.pi, np.pi, (count, self.joints))
-        with np.errstate(all="ignore"):
-            phi, _, _ = self.evaluate(x, qd)
-        finite = np.isfinite(phi)
-        if not finite.all():  # e.g. sqrt or log of a negative value: name the term, not LAPACK's
-            row, column = np.argwhere(~finite)[0]
-            raise ValueError(
-                f"basis term {_short(repr(self.terms[column]))}: not finite at x = "
-                f"{np.round(x[row], 3).tolist()}, qd = {np.round(qd[row], 3).tolist()} (sqrt and "
-                "log need positive arguments, 1/f and tan finite values)"
-            )
+        problem = self.nonfinite(x, qd, jacobian=False)
+        if problem is not None:  # e.g. sqrt or log of a negative value: name the term, not LAPACK's
+            raise ValueError(problem)
+        phi, _, _ = self.evaluate(x, qd)
         V = np.einsum("ni,ij,nj->n", x, P, x)
         weights, *_ = np.linalg.lstsq(phi, V, rcond=None)
         scale = max(float(np.linalg.norm(V)), 1e-300)
@@ -425,14 +419,60 @@ class ExpressionBasis:
         weights[np.abs(weights) < 1e-12 * max(np.abs(weights).max(), 1.0)] = 0.0
         return weights
 
+    def nonfinite(
+        self, x: ArrayLike, qd: ArrayLike | None = None, *, jacobian: bool = True
+    ) -> str | None:
+        """None when every function (and, ``jacobian``, its d phi / dx) is finite at the states
+        x (..., 2n) with desired positions qd; else a message naming the first term that is not
+        and the state, e.g. ``basis term 'sqrt(x1)': not finite at x = [-0.16, ...], qd = [...]``
+        (check before any linear algebra: LAPACK would only say "SVD did not converge")."""
+        x = _real_array(x, "x")
+        with np.errstate(all="ignore"):
+            phi, dphi, _ = self.evaluate(x, qd)
+        bad = ~np.isfinite(phi)
+        what = "not finite"
+        if jacobian and bad.sum() == 0:
+            bad, what = ~np.isfinite(dphi).all(axis=-1), "its derivative d phi / dx is not finite"
+        if not bad.any():
+            return None
+        index = tuple(np.argwhere(bad)[0])
+        row, column = index[:-1], index[-1]
+        desired = np.broadcast_to(
+            np.zeros(self.joints) if qd is None else _real_array(qd, "qd"),
+            x.shape[:-1] + (self.joints,),
+        )
+        return (
+            f"basis term {_short(repr(self.terms[column]))}: {what} at x = "
+            f"{np.round(x[row], 3).tolist()}, qd = {np.round(desired[row], 3).tolist()} (sqrt "
+            "and log need positive arguments, 1/f and tan finite values)"
+        )
+
     def desired_jacobian(self, x: ArrayLike, qd: ArrayLike | None = None) -> NDArray[np.float64]:
         """d phi / d qd (N, n) at one point x (2n,), qd (n,)."""
         n = self.joints
-        qd = np.zeros(n) if qd is None else np.asarray(qd, dtype=np.float64)
-        return self.core.evaluate(np.asarray(x, dtype=np.float64), qd, np.zeros(n))[3]
+        qd = np.zeros(n) if qd is None else _real_array(qd, "qd")
+        return self.core.evaluate(_real_array(x, "x"), qd, np.zeros(n))[3]
 
 
 # --- internals ------------------------------------------------------------------------------------
+
+
+def _real_array(value: Any, name: str) -> NDArray[np.float64]:
+    """``value`` as a float64 array; a complex one is refused (_check_real)."""
+    array = np.asarray(value)
+    _check_real(array, name)
+    return np.asarray(array, dtype=np.float64)
+
+
+def _check_real(array: np.ndarray, name: str) -> None:
+    """TypeError for complex values: NumPy would drop the imaginary part with a warning only."""
+    if np.iscomplexobj(array) or (
+        array.dtype == object and any(isinstance(item, complex) for item in array.flat)
+    ):
+        raise TypeError(
+            f"{name}: expected real numbers, got complex values (the imaginary part would be "
+            "dropped)"
+        )
 
 
 def _repr(value: Any) -> str:

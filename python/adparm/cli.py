@@ -445,7 +445,7 @@ def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str
     from .truth import divergence_causes
 
     config = result.config
-    causes = divergence_causes(config)
+    causes = divergence_causes(config, result)
     if result.t.size:
         e1 = float(np.linalg.norm(result.e1[-1]))
         last = f"final |e1| = {e1:.3g} rad at the last finite row (t = {result.t[-1]:.6g} s); "

@@ -1398,6 +1398,8 @@ class Config:
                     f"init.{key}: expected shape ({size},), one weight per function of "
                     f"controller.basis = {_plain(self.controller.basis)!r}, got ({len(value)},)"
                 )
+        if self.controller.is_expression:
+            self._check_basis_at_start()
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
                 f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
@@ -1409,6 +1411,19 @@ class Config:
                 f"task.qd: the samples end at t = {qd.t[-1]:g} s, before sim.T = {self.sim.T:g} s"
             )
         self._resolve_step()
+
+    def _check_basis_at_start(self) -> None:
+        """An expression basis and its d phi / dx must be finite at the initial state: sqrt or
+        log of a negative value there ends the run at t = 0 (or leaves V(x(0)) undefined)."""
+        from .optimal import desired_state, initial_error_state
+
+        problem = self.controller.expression_basis(self.dof).nonfinite(
+            initial_error_state(self), desired_state(self, 0.0)[0]
+        )
+        if problem is not None:
+            raise ValueError(
+                f"controller.basis: at the initial state (task.q0, task.qd), {problem}"
+            )
 
     def _resolve_step(self) -> None:
         """sim.dt = "auto" (a URDF arm's default, or given so): the largest 1, 2 or 5 x 10^k s

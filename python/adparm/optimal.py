@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from .bases import _check_real, _real_array
 from .config import Config
 from .simulation import core_settings, desired_state
 from .urdf import config_arm
@@ -72,7 +73,12 @@ def _urdf_structured(config: Config) -> bool:
 
 def _states(x: Any, size: int, name: str = "x") -> np.ndarray:
     try:
-        states = np.asarray(x, dtype=float)
+        array = np.asarray(x)
+    except ValueError as error:  # ragged
+        raise TypeError(f"{name}: expected an array of shape (..., {size}), got {x!r}") from error
+    _check_real(array, name)  # complex refused: NumPy would drop the imaginary part
+    try:
+        states = np.asarray(array, dtype=float)
     except (TypeError, ValueError) as error:
         raise TypeError(f"{name}: expected an array of shape (..., {size}), got {x!r}") from error
     if states.ndim == 0 or states.shape[-1] != size:
@@ -162,10 +168,10 @@ def policy(config: Config, x: Any, t: Any, weights: Any) -> np.ndarray:
     _check_config(config)
     n = config.dof
     states = np.atleast_2d(_states(x, 2 * n))
-    times = np.broadcast_to(np.asarray(t, dtype=float), (len(states),))
+    times = np.broadcast_to(_real_array(t, "t"), (len(states),))
     desired = desired_state(config, times)[:, 0, :]
     _, jacobian = basis(config, states, desired)
-    W = np.broadcast_to(np.asarray(weights, dtype=float), (len(states), jacobian.shape[1]))
+    W = np.broadcast_to(_real_array(weights, "weights"), (len(states), jacobian.shape[1]))
     gradient_e2 = np.einsum("mkx,mk->mx", jacobian, W)[:, n:]
     masses = inertia_matrices(config, desired - states[:, :n], model=True)
     R_inverse = np.linalg.inv(np.array(config.cost.R))
@@ -343,7 +349,7 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
         raise TypeError(f"s: expected a number > 0, got {s!r}")
     if not (np.isfinite(s) and s > 0.0):
         raise ValueError(f"s: expected a finite number > 0, got {s!r}")
-    K, alpha1, R = (np.asarray(v, dtype=float) for v in (K, alpha1, R))
+    K, alpha1, R = (_real_array(v, name) for v, name in ((K, "K"), (alpha1, "alpha1"), (R, "R")))
     n = K.shape[0] if K.ndim == 2 else 0
     for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
         if n < 1 or value.shape != (n, n) or not np.all(np.isfinite(value)):
@@ -364,6 +370,7 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
 
 
 def _weights(value: Any, name: str, size: int = 8) -> np.ndarray:
+    _check_real(np.asarray(value), name)
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
@@ -460,7 +467,7 @@ def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
     weights = optimal_weights(config)
     x = initial_error_state(config) if x is None else x
     n = config.dof
-    states = np.asarray(x, dtype=float)
+    states = _real_array(x, "x")
     if states.shape != (2 * n,) or not np.all(np.isfinite(states)):
         raise ValueError(f"x: expected {2 * n} finite numbers, got {x!r}")
     qd = desired_state(config, t)[0]

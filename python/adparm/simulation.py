@@ -450,10 +450,11 @@ def _result(run: _core.Simulation, config: Config, wall_time: float) -> Simulati
     )
 
 
-def _divergence_message(run: _core.Simulation, config: Config) -> str:
+def _divergence_message(run: _core.Simulation, result: SimulationResult) -> str:
     from .truth import divergence_causes
 
-    causes = divergence_causes(config)
+    config = result.config
+    causes = divergence_causes(config, result)
     return (
         f"simulation diverged at t = {run.divergence_time:.6g} s (state or a recorded output "
         f"non-finite, or beyond sim.divergence_bound = {config.sim.divergence_bound:g})"
@@ -747,7 +748,7 @@ def _simulate(config: Config, progress: bool, diagnose: bool) -> SimulationResul
     run = runs[0]
     result = _result(run, config, batch.seconds(0))
     if run.status == "diverged":
-        raise SimulationDiverged(_divergence_message(run, config), result, run.divergence_time)
+        raise SimulationDiverged(_divergence_message(run, result), result, run.divergence_time)
     if diagnose:
         from .truth import warn_if_approximate
 
@@ -855,7 +856,7 @@ def simulate_batch(
         pending[i] = run
         done_runs[i] = _result(run, configs[i], batch.seconds(i))
         if run.status == "diverged":
-            divergence[i] = (_divergence_message(run, configs[i]), run.divergence_time)
+            divergence[i] = (_divergence_message(run, done_runs[i]), run.divergence_time)
         del pending[i]
 
     try:

@@ -650,7 +650,9 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
             and min(out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"]) <= 0.0
         ):
             out["problems"].append("the e2 block of the learned V is not positive definite")
-        out["problems"].extend(divergence_causes(config))  # what the config shows beforehand
+        out["problems"].extend(
+            divergence_causes(config, result)
+        )  # what the config shows beforehand
         out["verdict"] = "; ".join(out["problems"])
         return out
     try:
@@ -946,15 +948,58 @@ def structured_e2_block_min_eigenvalue(config: Config, weights: Any, e1: Any) ->
     return _e2_block_min_eigenvalues(config, [weights], e1)[0]
 
 
-def divergence_causes(config: Config) -> list[str]:
+def _basis_problem_at_points(config: Config) -> str | None:
+    """The first term of an expression basis that is not finite (or whose d phi / dx is not) at
+    a fixed or grid extrapolation point, named with the point; None otherwise (the initial
+    state is checked by Config)."""
+    from .simulation import extrapolation_points
+
+    extrapolation = config.extrapolation
+    if not config.controller.is_expression or not extrapolation.points:
+        return None
+    if extrapolation.mode == "local":  # drawn anew at each step
+        return None
+    qd = desired_state(config, 0.0)[0]
+    problem = config.controller.expression_basis(config.dof).nonfinite(
+        extrapolation_points(config), qd
+    )
+    return None if problem is None else f"at an extrapolation point, {problem}"
+
+
+def _basis_problem_near_end(result: SimulationResult) -> str | None:
+    """The first term of an expression basis that is not finite (or whose d phi / dx is not)
+    just after the last recorded row of a diverged run: x extrapolated along its last recorded
+    velocity over two recording intervals."""
+    config = result.config
+    if not config.controller.is_expression or result.t.size < 2:
+        return None
+    t = result.t
+    x = np.hstack([result.e1[-2:], result.e2[-2:]])
+    step = t[-1] - t[-2]
+    if not step > 0.0:
+        return None
+    states = x[-1] + np.linspace(0.0, 2.0, 41)[:, None] * (x[-1] - x[-2])
+    problem = config.controller.expression_basis(config.dof).nonfinite(states, result.qd[-1])
+    return None if problem is None else f"just after t = {t[-1]:.6g} s, {problem}"
+
+
+def divergence_causes(config: Config, result: SimulationResult | None = None) -> list[str]:
     """Likely causes of a divergence that the config shows before any run, each with a change
     that is not already in effect: the measured fast rates of the closed loop against RK4's limit
     at sim.dt (rates.closed_loop_rates; a smaller sim.dt that keeps them inside it), initial
     actor weights of the structured basis of a URDF arm whose e2 block is not positive definite
-    (only when init.actor_weights is set), fewer extrapolation points than basis functions."""
+    (only when init.actor_weights is set), fewer extrapolation points than basis functions, and
+    first an expression basis term that is not finite at a fixed extrapolation point or (given
+    the diverged run's partial ``result``) just after its last recorded row."""
     from .rates import AUTO_MARGIN, auto_step, closed_loop_rates, rates_text
 
     causes = []
+    for problem in (
+        _basis_problem_at_points(config),
+        None if result is None else _basis_problem_near_end(result),
+    ):
+        if problem is not None:  # the first thing to fix: no step size helps
+            causes.append(problem)
     rates = closed_loop_rates(config)
     dt = config.sim.dt
     fast = [entry for entry in rates if entry["rate"] * dt > AUTO_MARGIN * RK4_STABILITY_LIMIT]
