@@ -223,8 +223,10 @@ def test_unreadable_trajectory_file_is_a_value_error_naming_the_point(tmp_path) 
         adparm.sweep(BASE, {"task.qd": [{"kind": "samples", "file": str(binary)}]})
 
 
-def test_cli_sweep_reports_bad_grids(capsys) -> None:
+def test_cli_sweep_reports_bad_grids(capsys, tmp_path, monkeypatch) -> None:
     from adparm.cli import main
+
+    monkeypatch.chdir(tmp_path)  # the default --out is ./sweep.csv (its folder gets the lock file)
 
     assert main(["sweep", "--grid", "critic.eta=1,2"]) == 2
     assert "did you mean 'eta_c'" in capsys.readouterr().err
