@@ -50,9 +50,15 @@ def test_defaults_follow_the_rule_of_the_docs() -> None:
     smallest, _ = inertia_range(config.plant.urdf)
     n = config.dof
     assert config.control.ks == pytest.approx(max(0.0, 30.0 * smallest - 1.0))
-    # no cost given: R = I / (10 lambda_min), Q of the exact family, so W* is known
-    assert np.allclose(config.cost.R, np.eye(n) / (10.0 * smallest))
+    # no cost given: R = diag(1 / (10 M_ii(qd))), K = alpha / 2 R^-1, Q of the exact family
+    M = adparm.optimal.inertia_matrices(config, [config.task.qd], model=True)[0]
+    assert np.allclose(config.cost.R, np.diag(1.0 / (10.0 * np.diag(M))))
+    Q = np.array(config.cost.Q)
+    assert np.allclose(-Q[:n, n:], np.linalg.inv(config.cost.R))  # alpha = 2
     adparm.optimal_weights(config)
+    # the actor's ball holds W*, and the e2 margin lies well below the arm's inertia
+    assert config.actor.weight_bound >= 10.0 * np.linalg.norm(adparm.optimal_weights(config))
+    assert config.actor.e2_margin == pytest.approx(0.1 * smallest)
     assert config.extrapolation.points == 2 * config.basis_size
     assert config.probe.until == 0.0
     assert config.sim.T == 10.0
@@ -206,9 +212,10 @@ def test_a_random_cost_is_learned_from_weights_20_percent_off(seed: int) -> None
     assert diagnostics["verdict"] == "ok", diagnostics["verdict"]
 
 
-def test_an_inadmissible_start_is_named() -> None:
-    # seed 3 draws 20 %-off weights whose e2 block is indefinite at qd: the run ends at a
-    # non-stabilising solution, and the verdict says so
+def test_an_inadmissible_start_is_lifted_by_the_projection_or_named() -> None:
+    # seed 3 draws 20 %-off weights whose e2 block is indefinite at qd: actor.positive_e2 (the
+    # default) lifts the block back to the margin and learning ends at W*; without it the run
+    # ends at a non-stabilising solution, and the verdict says so
     from adparm.truth import initial_actor_e2_block
 
     config, rng = _random_exact_cost(PLANAR, 3)
@@ -216,8 +223,10 @@ def test_an_inadmissible_start_is_named() -> None:
     start = (w_star * (1 + 0.2 * rng.choice([-1, 1], size=w_star.size))).tolist()
     config = config.updated({"init": {"critic_weights": start, "actor_weights": start}})
     assert initial_actor_e2_block(config)["min_eigenvalue"] < 0.0
+    assert adparm.simulate(config).diagnostics["verdict"] == "ok"
+    unprojected = config.updated({"actor": {"positive_e2": False}})
     try:
-        verdict = adparm.simulate(config).diagnostics["verdict"]
+        verdict = adparm.simulate(unprojected).diagnostics["verdict"]
     except adparm.SimulationDiverged as error:
         verdict = str(error)
     assert "not positive definite" in verdict

@@ -279,3 +279,36 @@ def test_a_policy_too_fast_for_the_step_is_refused_saying_why() -> None:
     assert fine.status == "finished"
     # the causes a divergence would list suggest no step: the one in effect is inside the limit
     assert not any("use sim.dt" in cause for cause in divergence_causes(auto))
+
+
+def test_the_structured_e2_block_is_kept_positive_at_the_check_positions() -> None:
+    # weights whose e2 block starts far below the margin (5 % of the arm's inertia; margin
+    # lambda_min(M) / 2): the projection lifts it to the margin at every check position within a
+    # fraction of a second and keeps it there, and learning still ends at W* (without the
+    # projection this run ends at a non-stabilising solution, lambda_min = -0.012)
+    from adparm.rates import check_positions, inertia_range
+
+    base = adparm.Config.from_dict({"plant": {"urdf": "examples/arms/planar_3link.urdf"}})
+    smallest, _ = inertia_range(base.plant.urdf)
+    margin = 0.5 * smallest
+    n = base.dof
+    W = adparm.optimal_weights(base)
+    start = W.copy()
+    start[n * (n + 1) // 2 :] *= 0.05
+    config = base.updated(
+        {
+            "actor": {"e2_margin": margin},
+            "init": {"critic_weights": start.tolist(), "actor_weights": start.tolist()},
+        }
+    )
+    positions = check_positions(config)
+    e1 = positions[0] - positions  # q = qd - e1 at each check position
+    assert structured_e2_block_min_eigenvalue(config, start, e1) < 0.1 * margin
+    result = adparm.simulate(config, progress=False)
+    later = result.t >= 0.2
+    for weights in (result.critic_weights, result.actor_weights):
+        lowest = min(
+            structured_e2_block_min_eigenvalue(config, w, e1) for w in weights[later][::50]
+        )
+        assert lowest >= 0.99 * margin
+    assert result.diagnostics["verdict"] == "ok", result.diagnostics["verdict"]

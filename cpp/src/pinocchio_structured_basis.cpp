@@ -227,7 +227,32 @@ PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
 }
 
 PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioStructuredBasis& other)
-    : impl_(std::make_unique<Impl>(*other.impl_)), joints_(other.joints_), size_(other.size_) {}
+    : impl_(std::make_unique<Impl>(*other.impl_)),
+      joints_(other.joints_),
+      size_(other.size_),
+      check_blocks_(other.check_blocks_) {}
+
+void PinocchioStructuredBasis::set_check_positions(
+    const PinocchioArm& arm, const Eigen::Ref<const Eigen::MatrixXd>& positions) {
+  const int n = joints_;
+  if (arm.dof() != n || positions.rows() != n)
+    throw std::invalid_argument("actor.e2_check_positions: expected " + std::to_string(n) +
+                                " rows (one per joint), got " + std::to_string(positions.rows()));
+  if (!positions.allFinite())
+    throw std::invalid_argument("actor.e2_check_positions: every value must be finite");
+  const BaseParameters& base = impl_->base;
+  const Eigen::Index r = static_cast<Eigen::Index>(base.columns.size());
+  Eigen::MatrixXd regressor(n, static_cast<Eigen::Index>(n) * arm.parameter_count());
+  check_blocks_.assign(static_cast<std::size_t>(positions.cols()), Eigen::MatrixXd(n * n, r));
+  for (Eigen::Index s = 0; s < positions.cols(); ++s) {
+    arm.mass_regressor(positions.col(s), regressor);
+    for (Eigen::Index b = 0; b < r; ++b) {
+      const auto M_b = regressor.middleCols(static_cast<Eigen::Index>(base.columns[b]) * n, n);
+      check_blocks_[static_cast<std::size_t>(s)].col(b) =
+          Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(M_b).data(), n * n);
+    }
+  }
+}
 
 PinocchioStructuredBasis& PinocchioStructuredBasis::operator=(
     const PinocchioStructuredBasis& other) {
@@ -235,6 +260,7 @@ PinocchioStructuredBasis& PinocchioStructuredBasis::operator=(
     impl_ = std::make_unique<Impl>(*other.impl_);
     joints_ = other.joints_;
     size_ = other.size_;
+    check_blocks_ = other.check_blocks_;
   }
   return *this;
 }

@@ -94,8 +94,9 @@ DESCRIPTIONS = {
     ("actor", "eta_a1"): "Actor gain on the HJB-error gradient (eq. 26).",
     ("actor", "eta_a2"): "Actor gain pulling Wa towards Wc (eq. 26).",
     ("actor", "positive_e2"): "Not in the paper: the projection also keeps the e2 block of the "
-    "actor's (and critic's) value positive definite at cos q2 = +-1, which keeps learning away "
-    "from the anti-stabilising HJB solution (see the truth guide).",
+    "actor's (and critic's) value positive definite at cos q2 = +-1 (the structured basis of a "
+    "URDF arm: at qd(0), q(0) and the joint positions of the extrapolation box), which keeps "
+    "learning away from the anti-stabilising HJB solution (see the truth guide).",
     ("actor", "e2_margin"): "The smallest eigenvalue the e2 block keeps when positive_e2 is on "
     "(units of M).",
     ("actor", "weight_bound"): "The projection keeps ||Wa|| <= weight_bound (the paper's "

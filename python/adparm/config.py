@@ -928,8 +928,10 @@ class ActorConfig:
     actor's value, e2^T P(cos q2) e2, positive definite with lambda_min(P) >= e2_margin at
     cos q2 = +-1 (hence at every q), for the paper and augmented bases. Without it, about one run
     in four with other probe phases or q(0) ends at the anti-stabilising solution of the HJB
-    equation (the e2 block negated; docs/guide/truth.md). e2_margin is in the units of M
-    (kg m^2)."""
+    equation (the e2 block negated; docs/guide/truth.md). For the structured basis of a URDF
+    arm the block is sum_b W_b M_b(q), kept positive definite at qd(0), q(0) and the joint
+    positions of the extrapolation box (rates.check_positions). e2_margin is in the units of M
+    (kg m^2); a URDF arm derives it (a tenth of lambda_min(M)) and weight_bound (10 ||W*||)."""
 
     eta_a1: float = 0.01
     eta_a2: float = 1.0

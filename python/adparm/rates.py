@@ -49,9 +49,9 @@ AUTO_MARGIN = 0.6
 #: The largest step "auto" chooses (the paper loop's step).
 AUTO_MAX_STEP = 1e-3
 
-#: The e2 rates the derived defaults aim at on the lightest direction of the arm (1/s): RISE's
-#: (ks + 1) / lambda_min(M) and the optimal policy's 1 / (r lambda_min(M)). On the paper's arm
-#: (lambda_min(M) = 0.39 kg m^2, ks = 10, R = 0.25 I) they are 28/s and 10/s.
+#: The e2 rates the derived defaults aim at (1/s): RISE's (ks + 1) / lambda_min(M) on the
+#: lightest direction of the arm and the optimal policy's 1 / (r_i M_ii) on every joint. On the
+#: paper's arm (lambda_min(M) = 0.39 kg m^2, ks = 10, R = 0.25 I) they are 28/s and 10/s.
 RISE_RATE = 30.0
 POLICY_RATE = 10.0
 #: alpha1 of a URDF arm (1/s), as the n-joint default before.
@@ -108,11 +108,14 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
       dq0 = 0; plant.disturbance 0.1 N m per joint;
     - control.alpha1 = 2 I; control.ks = max(0, RISE_RATE lambda_min - 1), so that RISE's rate
       (ks + 1) / lambda_min is RISE_RATE = 30/s, or 1 / lambda_min where ks = 0 is still faster;
-    - cost (when neither Q nor R is given): R = r I with r = 1 / (POLICY_RATE lambda_min) (the
-      optimal policy u* = -R^-1 e2 then acts at 10/s on the lightest direction), K = k I with
-      k = alpha / (2 r) (the e1 and e2 costs balanced where e2 ~ alpha1 e1) and
-      Q = solvable_cost(K, alpha1, R): of the exact family, so W* is known. With Q given and R
-      left out, R = I (as before);
+    - cost (when neither Q nor R is given): R = diag(1 / (POLICY_RATE M_ii(qd))) (the optimal
+      policy u* = -R^-1 e2 then acts at about 10/s on every joint, heavy or light: with one r for
+      all joints the heavy joints' policy is so slow that the scale of the inertia weights is
+      barely informed and learning stalls), K = alpha / 2 R^-1 (the e1 and e2 costs balanced
+      where e2 ~ alpha1 e1; the cost is in units of energy) and Q = solvable_cost(K, alpha1, R):
+      of the exact family, so W* is known. With R given, K = alpha / (2 r_max) I; with Q given
+      and R left out, R = I (as before);
+    - actor.e2_margin = lambda_min / 10 and actor.weight_bound = max(100, 10 ||W*||);
     - learning: Bellman-error extrapolation at 2 K points (K basis functions) in a fixed box of
       half-widths ``b1 = max(1, 2 max|e1(0)|)`` rad on e1 and alpha b1 rad/s on e2, no probing
       signal (probe.until = 0; the amplitude, if it is turned on, 0.1 (ks + 1 + 1 / r) N m per
@@ -162,23 +165,33 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
         ks,
         f"RISE acts at (ks + 1) / lambda_min(M) = {(ks + 1) / smallest:.3g}/s; {inertia}",
     )
-    r = 1.0 / (POLICY_RATE * smallest)
+    from .optimal import inertia_matrices
+
+    joint_inertia = np.diag(inertia_matrices(config, qd[None, :], model=True)[0]).copy()
     if "cost.R" in explicit:
         R = np.array(config.cost.R)
     elif "cost.Q" in explicit:
         R = eye
         put("cost.R", tuple(map(tuple, R)), "I (cost.Q is given)")
     else:
-        R = r * eye
-        put("cost.R", tuple(map(tuple, R)), "u* = -R^-1 e2 acts at 10/s on lambda_min(M)")
+        R = np.diag(1.0 / (POLICY_RATE * joint_inertia))
+        put(
+            "cost.R",
+            tuple(map(tuple, R)),
+            "diag(1 / (10 M_ii(qd))): u* = -R^-1 e2 acts at about 10/s on every joint",
+        )
     if "cost.Q" not in explicit:
         alpha = float(np.linalg.eigvals(alpha1).real.min())
-        r_max = float(np.linalg.eigvalsh(0.5 * (R + R.T)).max())
-        K = alpha / (2.0 * r_max) * eye
+        if "cost.R" in explicit:  # a K that keeps Q positive definite for any R
+            r_max = float(np.linalg.eigvalsh(0.5 * (R + R.T)).max())
+            K = alpha / (2.0 * r_max) * eye
+        else:
+            K = alpha / 2.0 * np.linalg.inv(R)
         put(
             "cost.Q",
             tuple(map(tuple, solvable_cost(K, alpha1, R))),
-            f"solvable_cost(K = {K[0, 0]:.3g} I, alpha1, R): W* is known",
+            f"solvable_cost(K = diag({', '.join(f'{k:.3g}' for k in np.diag(K))}), alpha1, R): "
+            "W* is known",
         )
     r_min = float(np.linalg.eigvalsh(0.5 * (R + R.T)).min())
     put(
@@ -187,7 +200,30 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
         "0.1 (ks + 1 + 1/r) N m: moves e2 by about 0.1 rad/s",
     )
     put("probe.until", 0.0, "no probing: Bellman-error extrapolation excites the critic")
+    # the actor's ball ||Wa|| <= weight_bound must hold W*: about [K; beta] (K = -Q12 of the
+    # exact family, beta the model's base parameters), and the initial weights
+    Q = np.array(values.get(("cost", "Q"), config.cost.Q), dtype=float)
+    K = -Q[:n, n:]
+    rows, cols = np.triu_indices(n)
+    k_entries = np.where(rows == cols, K[rows, cols], (K + K.T)[rows, cols])
+    beta = np.asarray(config_arm(config, model=True).base_parameters()[0], dtype=float)
+    size = math.sqrt(float(np.sum(k_entries**2) + np.sum(beta**2)))
+    for key in ("critic_weights", "actor_weights"):
+        given = getattr(config.init, key)
+        if given is not None:
+            size = max(size, float(np.linalg.norm(np.asarray(given, dtype=float))))
+    put(
+        "actor.weight_bound",
+        max(100.0, 10.0 * size),
+        f"10 times ||W*|| = {size:.3g} (K and the base parameters), at least 100",
+    )
     put("extrapolation.points", 2 * config.basis_size, "twice the basis functions")
+    put(
+        "actor.e2_margin",
+        0.1 * smallest,
+        "a tenth of lambda_min(M): the e2 block of the learned V stays positive definite, "
+        "well below the arm's own",
+    )
     e1_0 = float(np.abs(qd - q0).max())
     b1 = max(1.0, 2.0 * e1_0)
     b2 = float(np.abs(np.linalg.eigvals(alpha1)).max()) * b1
@@ -211,6 +247,13 @@ def _positions(config: Config) -> np.ndarray:
         rng = np.random.default_rng(_SEED)
         rows += list(qd - rng.uniform(-box, box, size=(32, n)))
     return np.array(rows)
+
+
+def check_positions(config: Config) -> np.ndarray:
+    """The joint positions (S, n) where actor.positive_e2 keeps the structured basis' e2 block
+    sum_b W_b M_b(q) positive definite on a URDF arm: qd(0), q(0) and, with extrapolation,
+    qd(0) - e1 at 32 seeded samples of the e1 box (the positions the rates are taken at)."""
+    return _positions(config)
 
 
 def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:

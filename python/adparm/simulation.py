@@ -96,6 +96,15 @@ def core_settings(config: Config) -> _core.Settings:
     actor = _core.ActorSettings()
     for key in ("eta_a1", "eta_a2", "weight_bound", "positive_e2", "e2_margin"):
         setattr(actor, key, getattr(config.actor, key))
+    if (
+        config.actor.positive_e2
+        and config.plant.urdf is not None
+        and config.controller.basis == "structured"
+        and config.controller.kind == "adp"
+    ):  # where the structured basis keeps its e2 block positive (not in the paper)
+        from .rates import check_positions
+
+        actor.e2_check_positions = np.asfortranarray(check_positions(config).T)
     settings.actor = actor
 
     controller = _core.ControllerSettings()

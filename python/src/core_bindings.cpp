@@ -76,7 +76,8 @@ void bind_settings(py::module_& m) {
       .def_readwrite("eta_a2", &ActorSettings::eta_a2)
       .def_readwrite("weight_bound", &ActorSettings::weight_bound)
       .def_readwrite("positive_e2", &ActorSettings::positive_e2)
-      .def_readwrite("e2_margin", &ActorSettings::e2_margin);
+      .def_readwrite("e2_margin", &ActorSettings::e2_margin)
+      .def_readwrite("e2_check_positions", &ActorSettings::e2_check_positions);
   py::class_<ProbeSettings>(m, "ProbeSettings",
                             "amplitude (n, k), until, ramp, frequencies (k,), phases (n, k) for n "
                             "joints and k sinusoids.")

@@ -20,6 +20,9 @@ struct ActorSettings {
   double weight_bound = 100.0;
   bool positive_e2 = true;  // keep the e2 block of Wa positive definite (positive_block.hpp)
   double e2_margin = 0.01;  // ... with lambda_min >= e2_margin
+  // The joint positions (n x S) where the structured basis of a URDF arm checks its e2 block
+  // sum_b W_b M_b(q) (pinocchio_structured_basis.hpp); empty: that basis is not projected.
+  Eigen::MatrixXd e2_check_positions;
 };
 
 template <class Basis, int Inputs>
@@ -58,16 +61,19 @@ class Actor {
   }
 
   // eq. (26): dWa = proj{gradient - eta_a2 (Wa - Wc)}, difference = Wa - Wc.
-  Vector weight_rate(const Vector& gradient, const Vector& difference, const Vector& Wa) const {
-    return project(Wa, gradient - settings_.eta_a2 * difference);
+  Vector weight_rate(const Basis& basis, const Vector& gradient, const Vector& difference,
+                     const Vector& Wa) const {
+    return project(basis, Wa, gradient - settings_.eta_a2 * difference);
   }
 
   // proj{}: on or outside the ball ||Wa|| <= weight_bound, drop the outward radial component;
-  // with positive_e2, first keep lambda_min of the e2 block >= e2_margin (positive_block.hpp).
-  Vector project(const Vector& Wa, const Vector& unprojected) const {
-    const Vector rate = settings_.positive_e2
-                            ? keep_e2_block_positive<Basis>(Wa, unprojected, settings_.e2_margin)
-                            : unprojected;
+  // with positive_e2, first keep lambda_min of the e2 block >= e2_margin (positive_block.hpp;
+  // the structured basis of a URDF arm at its check positions, pinocchio_structured_basis.hpp).
+  Vector project(const Basis& basis, const Vector& Wa, const Vector& unprojected) const {
+    const Vector rate =
+        settings_.positive_e2
+            ? keep_e2_block_positive(basis, Wa, unprojected, settings_.e2_margin, IdentityMetric{})
+            : unprojected;
     const double norm_squared = Wa.squaredNorm();
     const double outward = Wa.dot(rate);
     if (norm_squared >= settings_.weight_bound * settings_.weight_bound && outward > 0.0)

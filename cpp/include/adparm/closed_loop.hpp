@@ -277,10 +277,10 @@ class ClosedLoop {
                               learn);
       if constexpr (kBasisSize == Dynamic) critic_.flush(gamma, critic_rate, gamma_rate);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
-        critic_rate = keep_e2_block_positive<Basis>(critic_weights, critic_rate,
-                                                    actor_.settings().e2_margin, gamma);
+        critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
+                                             actor_.settings().e2_margin, gamma);
       rate.template segment<kBasisSize>(actor_offset(), k) =
-          actor_.weight_rate(actor_gradient, difference, actor_weights);  // eq. (26)
+          actor_.weight_rate(basis_, actor_gradient, difference, actor_weights);  // eq. (26)
     } else {
       rate.template segment<kBasisSize>(actor_offset(), k).setZero();
     }

@@ -30,8 +30,11 @@
 // kSize = kStateDim = Dynamic, Vector, Jacobian, size(), evaluate(x, desired, [terms,] phi,
 // jacobian, desired_rate). The arm's terms are not used (the basis runs its own kinematics).
 // It has no paper e2 block (positive_block.hpp's HasPaperE2Block is false): its e2 block,
-// e2^T (sum_b W_b M_b(q)) e2, is not affine in one cos q2, so positivity at every q cannot be
-// checked at two end points, and the projection leaves its weights alone.
+// e2^T M_W(q) e2 with M_W(q) = sum_b W_b M_b(q), is not affine in one cos q2, so positivity at
+// every q cannot be checked at two end points. Instead (not in the paper), with actor.positive_e2
+// the projection keeps lambda_min(M_W(q_s)) >= e2_margin at the check positions q_s given before
+// the run (set_check_positions; the run's: qd(0), q(0) and the joint positions of the
+// extrapolation box), as positive_block.hpp does at c = +-1, one constraint after the other.
 //
 // This header does not include Pinocchio (pimpl, as pinocchio_arm.hpp); the implementation is in
 // cpp/src/pinocchio_structured_basis.cpp. Not thread-safe: evaluate() works in buffers the basis
@@ -39,13 +42,16 @@
 // thread its own copy (a copy builds a fresh work space).
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "adparm/pinocchio_arm.hpp"
+#include "adparm/positive_block.hpp"
 #include "adparm/types.hpp"
 
 namespace adparm {
@@ -126,12 +132,62 @@ class PinocchioStructuredBasis {
     evaluate(x, desired, phi, jacobian, desired_rate);
   }
 
+  // The check positions of the positive_e2 projection (n x S, S >= 0) with `arm` the arm whose
+  // inertial parameters this basis was built from (its kinematics); allocates, once before a run.
+  // Throws std::invalid_argument (naming actor.e2_check_positions) for a wrong row count or
+  // values that are not finite.
+  void set_check_positions(const PinocchioArm& arm,
+                           const Eigen::Ref<const Eigen::MatrixXd>& positions);
+  Eigen::Index check_count() const { return static_cast<Eigen::Index>(check_blocks_.size()); }
+  // vec(M_b(q_s)) of every base parameter b in columns: (n^2, size() - e1_size()).
+  const Eigen::MatrixXd& check_block(Eigen::Index s) const {
+    return check_blocks_[static_cast<std::size_t>(s)];
+  }
+
   struct Impl;  // opaque: Pinocchio's model, data and the work space
 
  private:
   std::unique_ptr<Impl> impl_;
   int joints_ = 0;
   int size_ = 0;
+  std::vector<Eigen::MatrixXd> check_blocks_;
 };
+
+// actor.positive_e2 on the structured basis (see above): `rate` (dW/dt) changed least, in the
+// metric of `metric` (identity for the actor, Gamma for the critic), so that at every check
+// position s with lambda_min(M_W(q_s)) <= margin, d lambda_min / dt >= kE2Recovery (margin -
+// lambda_min); the gradient of lambda_min is n_b = v^T M_b(q_s) v (v its unit eigenvector).
+// Positions inside the margin cost one n x n Cholesky each; no heap allocation.
+template <class Vector, class Metric>
+Vector keep_e2_block_positive(const PinocchioStructuredBasis& basis, const Vector& W,
+                              const Vector& rate, double margin, const Metric& metric) {
+  const Eigen::Index count = basis.check_count();
+  if (count == 0) return rate;
+  using Block = JointMatrix<Dynamic>;  // n x n, bounded: no heap
+  const Eigen::Index n = basis.joints(), e1 = basis.e1_size(), r = basis.size() - e1;
+  Vector projected = rate;
+  Block M(n, n), outer(n, n);
+  for (Eigen::Index s = 0; s < count; ++s) {
+    const Eigen::MatrixXd& blocks = basis.check_block(s);
+    Eigen::Map<Eigen::VectorXd>(M.data(), n * n).noalias() = blocks * W.tail(r);
+    Block shifted = M;
+    shifted.diagonal().array() -= margin;
+    if (Eigen::LLT<Block>(shifted).info() == Eigen::Success) continue;  // inside: lambda > margin
+    const Eigen::SelfAdjointEigenSolver<Block> eigen(M);
+    const double lambda = eigen.eigenvalues()[0];
+    outer.noalias() = eigen.eigenvectors().col(0) * eigen.eigenvectors().col(0).transpose();
+    Vector normal = Vector::Zero(W.size());
+    normal.tail(r).noalias() =
+        blocks.transpose() * Eigen::Map<const Eigen::VectorXd>(outer.data(), n * n);
+    const double floor = kE2Recovery * (margin - lambda);
+    const double slope = normal.dot(projected);
+    if (!(slope < floor)) continue;
+    const Vector metric_normal = metric * normal;
+    const double g = normal.dot(metric_normal);
+    if (!(g > 0.0)) continue;
+    projected += ((floor - slope) / g) * metric_normal;
+  }
+  return projected;
+}
 
 }  // namespace adparm

@@ -130,4 +130,12 @@ Vector keep_e2_block_positive(const Vector& W, const Vector& rate, double margin
   return keep_e2_block_positive<Basis>(W, rate, margin, IdentityMetric{});
 }
 
+// The same, given the basis object: a basis with data of its own (the structured basis of a URDF
+// arm, pinocchio_structured_basis.hpp) overloads this; the others are projected as above.
+template <class Basis, class Vector, class Metric>
+Vector keep_e2_block_positive(const Basis&, const Vector& W, const Vector& rate, double margin,
+                              const Metric& metric) {
+  return keep_e2_block_positive<Basis>(W, rate, margin, metric);
+}
+
 }  // namespace adparm

@@ -104,7 +104,11 @@ inline bool settings_model_is_plant(ArmTag<UrdfLoopArm>, const Settings& setting
 template <>
 inline PinocchioStructuredBasis settings_basis<PinocchioStructuredBasis>(const Settings& settings,
                                                                          Eigen::Index) {
-  return PinocchioStructuredBasis(settings_arm(ArmTag<UrdfLoopArm>(), settings, true).arm());
+  const UrdfLoopArm model = settings_arm(ArmTag<UrdfLoopArm>(), settings, true);
+  PinocchioStructuredBasis basis(model.arm());
+  if (settings.actor.positive_e2)  // not in the paper: pinocchio_structured_basis.hpp
+    basis.set_check_positions(model.arm(), settings.actor.e2_check_positions);
+  return basis;
 }
 
 }  // namespace adparm
