@@ -54,6 +54,7 @@ class ActorSettings:
     weight_bound: float
     positive_e2: bool
     e2_margin: float
+    e2_check_positions: np.ndarray
     def __init__(self) -> None: ...
 
 class ProbeSettings:
