@@ -459,21 +459,43 @@ def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str
     )
 
 
-def _run(args: argparse.Namespace) -> int:
-    command = args.command
-    figures = not args.no_figures
-    folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
+def _locked(
+    command: str,
+    folder: OutputFolder,
+    prepare: Callable[[], Any],
+    proceed: Callable[[Any, _Signals], int],
+) -> int:
+    """A command's frame: with its signals handled and its output folder locked to its end,
+    ``prepare()`` reads and checks the input (calling folder.check(), which takes the lock), then
+    ``proceed(prepared, signals)`` runs. Bad input is exit 2 before anything is computed; a
+    signal while preparing gives one line (exit 130 or 143)."""
     with _Signals(command) as signals, folder:
         try:
-            config = _config(args)
-            folder.check()  # the folder stays locked to the command's end
-            _check_memory([config], figures=figures)  # the run, its files and figures
+            prepared = prepare()
         except (OSError, ValueError, TypeError) as error:
             _say(command, str(error))
             return EXIT_BAD_INPUT
         except KeyboardInterrupt:
             return _stopped_before_run(command, signals)
-        return _run_checked(args, config, folder, signals)
+        return proceed(prepared, signals)
+
+
+def _run(args: argparse.Namespace) -> int:
+    figures = not args.no_figures
+    folder = OutputFolder(args.out, report_files(args.formats, figures), "report")
+
+    def prepare() -> Config:
+        config = _config(args)
+        folder.check()  # the folder stays locked to the command's end
+        _check_memory([config], figures=figures)  # the run, its files and figures
+        return config
+
+    return _locked(
+        args.command,
+        folder,
+        prepare,
+        lambda config, signals: _run_checked(args, config, folder, signals),
+    )
 
 
 def _run_checked(
@@ -562,29 +584,29 @@ def _run_checked(
 def _sweep(args: argparse.Namespace) -> int:
     command = "sweep"
     folder = OutputFolder(args.out.parent, [args.out.name], f"sweep:{args.out.name}")
-    with _Signals(command) as signals, folder:
-        try:
-            names = [name for name, _ in args.grid]
-            repeated = sorted({name for name in names if names.count(name) > 1})
-            if repeated:
-                raise ValueError(
-                    f"--grid: {', '.join(repeated)} given more than once; list all its values in "
-                    "one --grid"
-                )
-            if args.out.suffix not in (".csv", ".json", ".md"):
-                raise ValueError(
-                    f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}"
-                )
-            if args.out.is_dir():
-                raise OutputError(f"--out: {args.out} is a folder; give a .csv, .json or .md file")
-            config = _config(args)
-            folder.check()  # the folder stays locked to the command's end
-        except (OSError, ValueError, TypeError) as error:
-            _say(command, str(error))
-            return EXIT_BAD_INPUT
-        except KeyboardInterrupt:
-            return _stopped_before_run(command, signals)
-        return _sweep_checked(args, config, folder, signals)
+
+    def prepare() -> Config:
+        names = [name for name, _ in args.grid]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            raise ValueError(
+                f"--grid: {', '.join(repeated)} given more than once; list all its values in "
+                "one --grid"
+            )
+        if args.out.suffix not in (".csv", ".json", ".md"):
+            raise ValueError(f"--out: expected a .csv, .json or .md file, got {str(args.out)!r}")
+        if args.out.is_dir():
+            raise OutputError(f"--out: {args.out} is a folder; give a .csv, .json or .md file")
+        config = _config(args)
+        folder.check()  # the folder stays locked to the command's end
+        return config
+
+    return _locked(
+        command,
+        folder,
+        prepare,
+        lambda config, signals: _sweep_checked(args, config, folder, signals),
+    )
 
 
 def _sweep_checked(
@@ -647,21 +669,23 @@ def _compare(args: argparse.Namespace) -> int:
     if not args.no_figures:
         names += [f"compare.{fmt}" for fmt in args.formats]
     folder = OutputFolder(args.out, names, "compare")
-    with _Signals(command) as signals, folder:
-        try:
-            config = _config(args)
-            kinds = _kinds(args.kinds)
-            runs = _controller_configs(config, kinds)  # every check before the first run
-            folder.check()  # the folder stays locked to the command's end
-            # every run is kept (adp twice: learning, then from the learned weights) for the table
-            kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
-            _check_memory(kept, figures=not args.no_figures)
-        except (OSError, ValueError, TypeError) as error:
-            _say(command, str(error))
-            return EXIT_BAD_INPUT
-        except KeyboardInterrupt:
-            return _stopped_before_run(command, signals)
-        return _compare_checked(args, config, kinds, folder, signals)
+
+    def prepare() -> tuple[Config, tuple[str, ...]]:
+        config = _config(args)
+        kinds = _kinds(args.kinds)
+        runs = _controller_configs(config, kinds)  # every check before the first run
+        folder.check()  # the folder stays locked to the command's end
+        # every run is kept (adp twice: learning, then from the learned weights) for the table
+        kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
+        _check_memory(kept, figures=not args.no_figures)
+        return config, kinds
+
+    return _locked(
+        command,
+        folder,
+        prepare,
+        lambda prepared, signals: _compare_checked(args, *prepared, folder, signals),
+    )
 
 
 def _compare_checked(
