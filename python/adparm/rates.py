@@ -235,8 +235,11 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
 # --- rates ----------------------------------------------------------------------------------
 
 
-def _positions(config: Config) -> np.ndarray:
-    """qd(0), q(0) and, with extrapolation, qd(0) - e1 over 32 seeded samples of its e1 box."""
+def check_positions(config: Config) -> np.ndarray:
+    """The joint positions (S, n) of a run that matter before it starts: qd(0), q(0) and, with
+    extrapolation, qd(0) - e1 at 32 seeded samples of its e1 box. The rates are taken there, and
+    actor.positive_e2 keeps the structured basis' e2 block sum_b W_b M_b(q) of a URDF arm positive
+    definite there."""
     from .simulation import desired_state
 
     n = config.dof
@@ -247,13 +250,6 @@ def _positions(config: Config) -> np.ndarray:
         rng = np.random.default_rng(_SEED)
         rows += list(qd - rng.uniform(-box, box, size=(32, n)))
     return np.array(rows)
-
-
-def check_positions(config: Config) -> np.ndarray:
-    """The joint positions (S, n) where actor.positive_e2 keeps the structured basis' e2 block
-    sum_b W_b M_b(q) positive definite on a URDF arm: qd(0), q(0) and, with extrapolation,
-    qd(0) - e1 at 32 seeded samples of the e1 box (the positions the rates are taken at)."""
-    return _positions(config)
 
 
 def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:
@@ -308,7 +304,7 @@ def closed_loop_rates(config: Config) -> list[dict[str, Any]]:
     eye = np.eye(n)
     alpha1 = np.array(config.control.alpha1, dtype=float)
     rise_gain = (config.control.ks + 1.0) if config.controller.rise else 0.0
-    positions = _positions(config)
+    positions = check_positions(config)
     # the controller computes its policy from the believed model; every torque acts through the
     # plant's M^-1, whose rates the step must resolve
     from .optimal import inertia_matrices
@@ -365,6 +361,16 @@ def _nice_floor(value: float) -> float:
         if candidate <= value * (1.0 + 1e-12):
             return float(f"{candidate:.1g}")
     return float(f"{10.0 ** (exponent - 1) * 5:.1g}")  # pragma: no cover
+
+
+def nice_ceil(value: float) -> float:
+    """The smallest 1, 2 or 5 times a power of ten at or above value (a horizon to suggest)."""
+    exponent = math.floor(math.log10(value))
+    for mantissa in (1.0, 2.0, 5.0, 10.0):
+        candidate = mantissa * 10.0**exponent
+        if candidate >= value * (1.0 - 1e-12):
+            return float(f"{candidate:.1g}")
+    return float(f"{10.0 ** (exponent + 1):.1g}")  # pragma: no cover
 
 
 def auto_step(rates: list[dict[str, Any]], T: float = math.inf) -> float:

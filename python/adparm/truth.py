@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .optimal import basis, hjb_residual, initial_error_state, optimal_weights
-from .rates import RK4_STABILITY_LIMIT
+from .rates import RK4_STABILITY_LIMIT, nice_ceil
 from .simulation import desired_state
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -530,15 +530,6 @@ def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
     return math.sqrt(float(np.mean((u_hat - u_star) ** 2))) / scale
 
 
-def _nice_ceil(value: float) -> float:
-    """The smallest 1, 2 or 5 x 10^k at or above value."""
-    exponent = math.floor(math.log10(value))
-    for mantissa in (1.0, 2.0, 5.0, 10.0):
-        if mantissa * 10.0**exponent >= value * (1 - 1e-12):
-            return mantissa * 10.0**exponent
-    return 10.0 ** (exponent + 1)  # pragma: no cover
-
-
 def longer_run_estimate(
     result: SimulationResult, target: np.ndarray | None, tolerance: float
 ) -> dict[str, float] | None:
@@ -564,7 +555,7 @@ def longer_run_estimate(
         return {**out, "needed": math.inf, "T": math.inf}
     rate = math.log(e_mid / e_end) / (t_end - float(t[middle]))
     needed = max(0.0, math.log(e_end / tolerance) / rate)
-    return {**out, "needed": needed, "T": _nice_ceil(t_end + 1.5 * needed)}
+    return {**out, "needed": needed, "T": nice_ceil(t_end + 1.5 * needed)}
 
 
 #: A longer run is suggested only up to this many times the run's horizon (beyond, learning is
