@@ -159,7 +159,7 @@ def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
         for i in batch.wait(0.05):
             ended.append(i)
             run = batch.take(i)
-            result = adparm.simulation._result(run, configs[i], batch.seconds(i))
+            result = adparm.simulation.make_result(run, configs[i], batch.seconds(i))
             assert_same_run(one_by_one[i], result)
     assert sorted(ended) == list(range(len(configs)))
     assert batch.steps_done == batch.total_steps

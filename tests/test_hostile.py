@@ -455,7 +455,7 @@ def test_threads_that_cannot_start_exit_2(tmp_path, monkeypatch, capsys) -> None
 
     batch = NoThreads()
     with pytest.raises(ValueError, match="could not start 3 worker threads"):
-        simulation._run_batch(batch, 3, lambda i, run: None, lambda: None)
+        simulation.run_batch(batch, 3, lambda i, run: None, lambda: None)
     assert batch.stopped
 
     def refuse(batch, threads, window):
@@ -660,7 +660,7 @@ def test_a_failed_write_leaves_only_the_new_runs_complete_files(tmp_path, monkey
     def full_disk(result, path):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr(storage, "_write_csv", full_disk)
+    monkeypatch.setattr(storage, "write_result_csv", full_disk)
     argv = ["reproduce", "--out", str(out), "--no-figures", "--T", "0.3", "--no-progress"]
     assert cli.main(argv) == cli.EXIT_WRITE_FAILED
     err = capsys.readouterr().err
@@ -773,7 +773,7 @@ def test_save_errors_name_the_file_not_its_temporary(tmp_path, monkeypatch) -> N
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
     result = adparm.simulate(adparm.paper_config().updated({"sim": {"T": 0.01}}), diagnose=False)
-    monkeypatch.setattr(storage, "_write_npz", full_disk)
+    monkeypatch.setattr(storage, "write_result_npz", full_disk)
     with pytest.raises(OSError) as caught:
         result.save(tmp_path / "run.npz")
     assert caught.value.filename == str(tmp_path / "run.npz") and ".tmp" not in str(caught.value)

@@ -138,7 +138,7 @@ def test_disk_full_leaves_no_truncated_file_and_says_what_was_kept(
         path.write_text("t,q1\n0.0,0.1\n")  # a partial file, then the disk is full
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr(storage, "_write_csv", full_disk)
+    monkeypatch.setattr(storage, "write_result_csv", full_disk)
     out = tmp_path / "out"
     assert run_cli("reproduce", "--out", str(out), "--no-figures", *SHORT) == cli.EXIT_WRITE_FAILED
     err = capsys.readouterr().err
@@ -179,14 +179,14 @@ def test_load_result_says_a_truncated_file_is_truncated(tmp_path, suffix) -> Non
 
 
 def test_a_second_ctrl_c_while_writing_finishes_the_files(tmp_path, monkeypatch, capsys) -> None:
-    write_npz = storage._write_npz
+    write_npz = storage.write_result_npz
 
     def interrupted_write(result, path):
         os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while the result is being written
         time.sleep(0.05)
         write_npz(result, path)
 
-    monkeypatch.setattr(storage, "_write_npz", interrupted_write)
+    monkeypatch.setattr(storage, "write_result_npz", interrupted_write)
     out = tmp_path / "out"
     assert run_cli("reproduce", "--out", str(out), "--no-figures", *SHORT) == 130
     assert "finishing the files being written" in capsys.readouterr().err
@@ -401,7 +401,7 @@ def test_a_million_points_on_the_ur5_are_refused_before_the_run(monkeypatch) -> 
     )
     assert memory_needed([config]) > 20 * 2**30
     monkeypatch.setattr(adparm.simulation, "available_memory", lambda: 16 * 2**30)
-    monkeypatch.setattr(adparm.simulation, "_run_batch", no_computation)
+    monkeypatch.setattr(adparm.simulation, "run_batch", no_computation)
     with pytest.raises(ValueError, match="^extrapolation.points: .*fewer extrapolation.points"):
         adparm.simulate(config)
 

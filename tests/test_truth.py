@@ -99,9 +99,9 @@ def test_lqr_value_agrees_with_scipy_and_with_the_analytic_solution(rng) -> None
 
 
 def _linear(config):
-    from adparm.truth import _linearisation
+    from adparm.optimal import linearisation
 
-    return _linearisation(config)
+    return linearisation(config)
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -34,7 +34,6 @@ from .optimal import (
     arm_terms,
     basis,
     basis_names,
-    hjb_residual,
     initial_error_state,
     optimal_value,
     optimal_weights,
@@ -42,7 +41,9 @@ from .optimal import (
     value_scale,
 )
 from .physical import two_link_parameters
+from .plotting import FIGURES  # noqa: F401 - registers SimulationResult.plot
 from .report import write_report
+from .residual import hjb_residual
 from .simulation import (
     SimulationDiverged,
     SimulationInterrupted,
@@ -53,6 +54,7 @@ from .simulation import (
     simulate_batch,
 )
 from .storage import load_result
+from .summary import summarize  # noqa: F401 - registers SimulationResult.summary
 from .sweep import SweepResult, grid_points, sweep
 from .truth import ApproximationWarning, check_step_size, diagnose, lqr_value, optimal_cost
 from .urdf import EXAMPLE_ROBOTS, UrdfArm, example_robot_urdf

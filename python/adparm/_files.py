@@ -305,8 +305,6 @@ class OutputFolder:
     def _write_figures(
         self, figures: dict[str, Figure], formats: Iterable[str], staging: Path, paths: list[Path]
     ) -> None:
-        from .plotting import save_figures
-
         for path in save_figures(figures, staging, formats):
             with open(path, "rb+") as stream:
                 os.fsync(stream.fileno())
@@ -363,3 +361,43 @@ def _running(pid: int) -> bool:
     except (OSError, OverflowError):  # another user's process (EPERM), or not a pid
         return pid > 0
     return pid > 0
+
+
+def save_figures(
+    figures: dict[str, Figure], directory: str | Path, formats: Iterable[str] = ("png", "svg")
+) -> list[Path]:
+    """Write each figure as ``<directory>/<name>.<format>``.
+
+    Parameters
+    ----------
+    figures : dict of str to Figure
+        As :meth:`adparm.SimulationResult.plot` returns.
+    directory : str or Path
+        Created if missing.
+    formats : iterable of str
+        Any format matplotlib writes (png, svg, pdf, ...). PNGs at 200 dpi; no creation dates,
+        so the same run writes the same files.
+
+    Returns
+    -------
+    list of Path
+        The paths written.
+    """
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, figure in figures.items():
+        for fmt in formats:
+            path = directory / f"{name}.{fmt}"
+            figure.savefig(path, dpi=200, metadata=_figure_metadata(fmt))
+            written.append(path)
+    return written
+
+
+def _figure_metadata(fmt: str) -> dict[str, Any] | None:
+    # Leave out creation dates so that the same run writes the same files.
+    if fmt == "svg":
+        return {"Date": None}
+    if fmt == "pdf":
+        return {"CreationDate": None}
+    return None

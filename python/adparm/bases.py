@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _core
+import adparm._core as _core
 
 if TYPE_CHECKING:
     import sympy
@@ -364,12 +364,12 @@ class ExpressionBasis:
         Returns arrays of shapes (..., N), (..., N, 2n) and (..., N).
         """
         n, n_x = self.joints, 2 * self.joints
-        x = _real_array(x, "x")
+        x = real_array(x, "x")
         if x.ndim == 0 or x.shape[-1] != n_x:
             raise ValueError(f"x: expected shape (..., {n_x}), got {x.shape}")
         lead = x.shape[:-1]
-        qd = np.broadcast_to(np.zeros(n) if qd is None else _real_array(qd, "qd"), lead + (n,))
-        dqd = np.broadcast_to(np.zeros(n) if dqd is None else _real_array(dqd, "dqd"), lead + (n,))
+        qd = np.broadcast_to(np.zeros(n) if qd is None else real_array(qd, "qd"), lead + (n,))
+        dqd = np.broadcast_to(np.zeros(n) if dqd is None else real_array(dqd, "dqd"), lead + (n,))
         phi, jacobian, rate = self.core.evaluate_rows(
             x.reshape(-1, n_x), qd.reshape(-1, n), dqd.reshape(-1, n)
         )
@@ -388,7 +388,7 @@ class ExpressionBasis:
         quadratic monomials it lacks).
         """
         n_x = 2 * self.joints
-        P = _real_array(P, "P")
+        P = real_array(P, "P")
         if P.shape != (n_x, n_x) or not np.all(np.isfinite(P)):
             raise ValueError(f"P: expected a finite ({n_x}, {n_x}) matrix, got shape {P.shape}")
         P = 0.5 * (P + P.T)
@@ -426,7 +426,7 @@ class ExpressionBasis:
         x (..., 2n) with desired positions qd; else a message naming the first term that is not
         and the state, e.g. ``basis term 'sqrt(x1)': not finite at x = [-0.16, ...], qd = [...]``
         (check before any linear algebra: LAPACK would only say "SVD did not converge")."""
-        x = _real_array(x, "x")
+        x = real_array(x, "x")
         with np.errstate(all="ignore"):
             phi, dphi, _ = self.evaluate(x, qd)
         bad = ~np.isfinite(phi)
@@ -438,7 +438,7 @@ class ExpressionBasis:
         index = tuple(np.argwhere(bad)[0])
         row, column = index[:-1], index[-1]
         desired = np.broadcast_to(
-            np.zeros(self.joints) if qd is None else _real_array(qd, "qd"),
+            np.zeros(self.joints) if qd is None else real_array(qd, "qd"),
             x.shape[:-1] + (self.joints,),
         )
         return (
@@ -450,21 +450,21 @@ class ExpressionBasis:
     def desired_jacobian(self, x: ArrayLike, qd: ArrayLike | None = None) -> NDArray[np.float64]:
         """d phi / d qd (N, n) at one point x (2n,), qd (n,)."""
         n = self.joints
-        qd = np.zeros(n) if qd is None else _real_array(qd, "qd")
-        return self.core.evaluate(_real_array(x, "x"), qd, np.zeros(n))[3]
+        qd = np.zeros(n) if qd is None else real_array(qd, "qd")
+        return self.core.evaluate(real_array(x, "x"), qd, np.zeros(n))[3]
 
 
 # --- internals ------------------------------------------------------------------------------------
 
 
-def _real_array(value: Any, name: str) -> NDArray[np.float64]:
-    """``value`` as a float64 array; a complex one is refused (_check_real)."""
+def real_array(value: Any, name: str) -> NDArray[np.float64]:
+    """``value`` as a float64 array; a complex one is refused (check_real)."""
     array = np.asarray(value)
-    _check_real(array, name)
+    check_real(array, name)
     return np.asarray(array, dtype=np.float64)
 
 
-def _check_real(array: np.ndarray, name: str) -> None:
+def check_real(array: np.ndarray, name: str) -> None:
     """TypeError for complex values: NumPy would drop the imaginary part with a warning only."""
     if np.iscomplexobj(array) or (
         array.dtype == object and any(isinstance(item, complex) for item in array.flat)

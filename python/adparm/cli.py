@@ -26,16 +26,17 @@ from .comparison import (
     DEFAULT_KINDS,
     J_STAR_INTERRUPTED,
     Comparison,
-    _controller_configs,
     compare,
+    controller_configs,
 )
 from .config import Config, load_config, paper_config, tomllib
-from .report import FIGURE_FORMATS, _write_summary, check_formats, report_files, write_report
+from .report import FIGURE_FORMATS, check_formats, report_files, write_report, write_summary
+from .result import post_run_failure
 from .simulation import (
     SimulationDiverged,
     SimulationInterrupted,
     SimulationResult,
-    _check_memory,
+    check_memory,
     simulate,
 )
 
@@ -381,13 +382,11 @@ def _summary(result: SimulationResult, signals: _Signals) -> dict[str, Any]:
     try:
         summary = result.summary()
     except (Exception, KeyboardInterrupt) as error:  # noqa: BLE001 - never loses a finished run
-        from .summary import _failure
-
         step = "the summary (adparm.summary.summarize)"
         if isinstance(error, KeyboardInterrupt):
             message = f"{step} was stopped by {signals.name()} before it finished"
         else:
-            message = _failure(step, error)
+            message = post_run_failure(step, error)
         t = result.t
         summary = {
             "status": result.status,
@@ -426,7 +425,6 @@ CHECK_PENDING = (
 def _check_step_size(result: SimulationResult, signals: _Signals) -> tuple[Any, str | None]:
     """--check-dt after the run's files are written: (step_size_check, None), or (None, why it
     was not done). A signal stops it as it stops a run."""
-    from .summary import _failure
     from .truth import check_step_size
 
     step = "the step-size check (--check-dt)"
@@ -438,7 +436,7 @@ def _check_step_size(result: SimulationResult, signals: _Signals) -> tuple[Any, 
     except KeyboardInterrupt:
         return None, f"{step} was stopped by {signals.name()} before it finished"
     except Exception as error:  # noqa: BLE001 - never loses the finished run
-        return None, _failure(step, error)
+        return None, post_run_failure(step, error)
 
 
 def _divergence_text(result: SimulationResult, error: SimulationDiverged) -> str:
@@ -487,7 +485,7 @@ def _run(args: argparse.Namespace) -> int:
     def prepare() -> Config:
         config = _config(args)
         folder.check()  # the folder stays locked to the command's end
-        _check_memory([config], figures=figures)  # the run, its files and figures
+        check_memory([config], figures=figures)  # the run, its files and figures
         return config
 
     return _locked(
@@ -544,7 +542,7 @@ def _run_checked(
                 summary["step_size_check"] = check
             else:
                 summary["post_run_errors"].append(problem)
-            _write_summary(folder, summary)
+            write_summary(folder, summary)
     except OSError as error:
         return _write_failed(command, folder, error)
     if interrupt is not None:
@@ -673,11 +671,11 @@ def _compare(args: argparse.Namespace) -> int:
     def prepare() -> tuple[Config, tuple[str, ...]]:
         config = _config(args)
         kinds = _kinds(args.kinds)
-        runs = _controller_configs(config, kinds)  # every check before the first run
+        runs = controller_configs(config, kinds)  # every check before the first run
         folder.check()  # the folder stays locked to the command's end
         # every run is kept (adp twice: learning, then from the learned weights) for the table
         kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
-        _check_memory(kept, figures=not args.no_figures)
+        check_memory(kept, figures=not args.no_figures)
         return config, kinds
 
     return _locked(
@@ -753,9 +751,10 @@ def _write_comparison(
         try:
             drawn = comparison.plot()
         except Exception as error:  # noqa: BLE001 - drawing never loses the runs' tables
-            from .summary import _failure
-
-            _say("compare", f"{_failure('the figure compare', error)}; the tables are written")
+            _say(
+                "compare",
+                f"{post_run_failure('the figure compare', error)}; the tables are written",
+            )
             return
         for path in folder.write_figures({"compare": drawn}, args.formats):
             on_file(path)

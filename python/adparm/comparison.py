@@ -26,13 +26,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._fields import check_known
 from ._files import write_text
-from .config import CONTROLLER_KINDS, Config, _check_known
+from ._sections import CONTROLLER_KINDS
+from .config import Config
+from .result import post_run_failure, presenter
 from .simulation import (
     SimulationInterrupted,
     SimulationResult,
-    _check_steps,
-    _simulate_keeping_divergence,
+    check_steps,
+    simulate_keeping_divergence,
 )
 from .table import plain, rows_dataframe, rows_json, rows_markdown, write_csv
 
@@ -103,7 +106,7 @@ def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
     if not kinds:
         raise ValueError(f"kinds: expected at least one of {', '.join(CONTROLLER_KINDS)}")
     for kind in kinds:
-        _check_known(
+        check_known(
             kind,
             CONTROLLER_KINDS,
             strings="kinds: controller kinds must be strings",
@@ -117,7 +120,7 @@ def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
     return kinds
 
 
-def _controller_configs(
+def controller_configs(
     config: Config, kinds: str | Iterable[str] = DEFAULT_KINDS
 ) -> dict[str, Config]:
     """The config of each kind (controller.kind replaced), checked before anything runs.
@@ -182,8 +185,8 @@ def applied_input(result: SimulationResult) -> np.ndarray:
 def _feedforward(result: SimulationResult, *, model: bool) -> np.ndarray:
     """h = M (ddqd + alpha1 de1) + C (dqd + alpha1 e1) + G + F with de1 = dqd - dq (eq. 5 in
     full) of the plant (or, ``model``, the believed arm) at the recorded rows."""
+    from .desired import desired_state
     from .optimal import arm_terms
-    from .simulation import desired_state
     from .urdf import config_arm
 
     config = result.config
@@ -391,9 +394,7 @@ class Comparison:
         the learning run in its own column, the other controllers together, each in its own
         colour and line style. ``time_scale`` (``"symlog"`` or ``"linear"``) sets the time axis
         of the controllers' column; ``ax`` (a 4 x n grid of Axes) or ``fig`` draw into yours."""
-        from .plotting import plot_comparison
-
-        return plot_comparison(self, time_scale=time_scale, ax=ax, fig=fig)
+        return presenter("plot_comparison")(self, time_scale=time_scale, ax=ax, fig=fig)
 
 
 def compare(
@@ -436,8 +437,8 @@ def compare(
         status "interrupted"), or, during J* after the runs, of every run, with
         :data:`J_STAR_INTERRUPTED` in its ``post_run_errors``.
     """
-    configs = _controller_configs(config, kinds)
-    _check_steps(list(configs.values()))  # every run's step, before the first one runs
+    configs = controller_configs(config, kinds)
+    check_steps(list(configs.values()))  # every run's step, before the first one runs
     results: dict[str, SimulationResult] = {}
     label = ""
     try:
@@ -448,7 +449,7 @@ def compare(
                 label = LEARNED_LABEL
                 # from the learning run's final weights: not the user's step to check
                 learned = _learned_config(kind_config, results[kind])
-                results[label] = _simulate_keeping_divergence(learned, progress, check=False)[0]
+                results[label] = simulate_keeping_divergence(learned, progress, check=False)[0]
     except KeyboardInterrupt as interrupt:
         if isinstance(interrupt, SimulationInterrupted):
             results[label] = interrupt.result
@@ -487,25 +488,23 @@ def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
     (model=False), over sim.T without a terminal cost when sim.T is shorter than its default
     horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*); or None where
     it does not apply (moving qd, a URDF arm) or fails; and the failure (one line) or None."""
-    from .summary import _failure
-    from .truth import _plant_config, default_horizon, optimal_cost
+    from .truth import default_horizon, optimal_cost, plant_config
 
     if not config.task.is_set_point or config.plant.urdf is not None:  # two-link arm only
         return None, None
     try:
-        if config.sim.T < default_horizon(_plant_config(config)):
+        if config.sim.T < default_horizon(plant_config(config)):
             return optimal_cost(config, model=False, horizon=config.sim.T, terminal=False), None
         return optimal_cost(config, model=False), None
     except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
-        return None, _failure("J* (adparm.optimal_cost)", error)
+        return None, post_run_failure("J* (adparm.optimal_cost)", error)
 
 
 def _run(config: Config, progress: bool) -> SimulationResult:
-    return _simulate_keeping_divergence(config, progress)[0]
+    return simulate_keeping_divergence(config, progress)[0]
 
 
 def _comparison(results: dict[str, SimulationResult], best: float | None = None) -> Comparison:
-    from .summary import _failure
 
     costs: dict[str, tuple[float, float]] = {}
     problems: list[str] = []
@@ -514,7 +513,7 @@ def _comparison(results: dict[str, SimulationResult], best: float | None = None)
             costs[label] = applied_cost(result)
         except Exception as error:  # noqa: BLE001 - the run is kept, its J is not known
             costs[label] = (math.nan, math.nan)
-            problems.append(_failure(f"J of {label!r} (applied_cost)", error))
+            problems.append(post_run_failure(f"J of {label!r} (applied_cost)", error))
     optimal = results.get("optimal")
     optimal_cost = None
     if optimal is not None and optimal.status == "finished" and costs["optimal"][0] > 0.0:

@@ -1,15 +1,19 @@
-"""The analytic optimum V*, W* (docs: "The paper and its corrections") and the HJB residual (21)."""
+"""The analytic optimum V*, W* (docs: "The paper and its corrections"), the basis at given states,
+the arm's terms, and the Riccati value of the linearised error system (lqr_value). The HJB
+residual (21), which needs the core's settings of a run, is adparm.residual."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
-from . import _core
-from .bases import _check_real, _real_array
-from .config import Config
-from .simulation import core_settings, desired_state
+import adparm._core as _core
+
+from ._schema import ConfigSchema
+from .bases import check_real, real_array
+from .desired import desired_state
 from .urdf import config_arm
 
 __all__ = [
@@ -18,7 +22,8 @@ __all__ = [
     "arm_terms",
     "basis",
     "basis_names",
-    "hjb_residual",
+    "linearisation",
+    "lqr_value",
     "initial_error_state",
     "optimal_value",
     "optimal_weights",
@@ -51,14 +56,14 @@ STRUCTURED_BASIS_NAMES = (
 )
 
 
-def _check_config(config: Any) -> None:
-    if not isinstance(config, Config):
+def check_config(config: Any) -> None:
+    if not isinstance(config, ConfigSchema):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
 
 
-def basis_names(config: Config) -> tuple[str, ...]:
+def basis_names(config: ConfigSchema) -> tuple[str, ...]:
     """The names of the functions of ``config.controller.basis``, in the order of the weights."""
-    _check_config(config)
+    check_config(config)
     if config.controller.is_expression:  # the terms' text, after expansion of the families
         return config.controller.expression_basis(config.dof).terms
     if _urdf_structured(config):
@@ -66,17 +71,17 @@ def basis_names(config: Config) -> tuple[str, ...]:
     return STRUCTURED_BASIS_NAMES if config.controller.basis == "structured" else BASIS_NAMES
 
 
-def _urdf_structured(config: Config) -> bool:
+def _urdf_structured(config: ConfigSchema) -> bool:
     """Whether the config runs the structured basis of a URDF arm (the believed model's)."""
     return config.plant.urdf is not None and config.controller.basis == "structured"
 
 
-def _states(x: Any, size: int, name: str = "x") -> np.ndarray:
+def error_states(x: Any, size: int, name: str = "x") -> np.ndarray:
     try:
         array = np.asarray(x)
     except ValueError as error:  # ragged
         raise TypeError(f"{name}: expected an array of shape (..., {size}), got {x!r}") from error
-    _check_real(array, name)  # complex refused: NumPy would drop the imaginary part
+    check_real(array, name)  # complex refused: NumPy would drop the imaginary part
     try:
         states = np.asarray(array, dtype=float)
     except (TypeError, ValueError) as error:
@@ -88,16 +93,16 @@ def _states(x: Any, size: int, name: str = "x") -> np.ndarray:
     return states
 
 
-def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarray]:
+def basis(config: ConfigSchema, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """The basis of ``config.controller.basis`` and its exact Jacobian at error states x of shape
     (..., 2n) (n joints): phi (..., K) and d phi / dx (..., K, 2n), computed by the C++ core.
     ``qd`` is the desired position (n,) or (..., n) the basis may depend on (augmented and
     structured bases: through q = qd - e1); default the config's qd at t = 0. The structured
     basis of a URDF arm is the believed model's (``UrdfArm.structured_basis``)."""
-    _check_config(config)
+    check_config(config)
     n = config.dof
-    states = _states(x, 2 * n)
-    desired = desired_state(config, 0.0)[0] if qd is None else _states(qd, n, "qd")
+    states = error_states(x, 2 * n)
+    desired = desired_state(config, 0.0)[0] if qd is None else error_states(qd, n, "qd")
     desired = np.broadcast_to(desired, states.shape[:-1] + (n,))
     if config.controller.is_expression:
         phi, jacobian, _ = config.controller.expression_basis(n).evaluate(states, desired)
@@ -120,13 +125,15 @@ def basis(config: Config, x: Any, qd: Any = None) -> tuple[np.ndarray, np.ndarra
     )
 
 
-def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[str, np.ndarray]:
+def arm_terms(
+    config: ConfigSchema, q: Any, dq: Any, *, model: bool = False
+) -> dict[str, np.ndarray]:
     """The terms of eq. (1) of the plant (``model=True``: the arm the controller believes) at
     joint position q and velocity dq (n,): {"M": (n, n) inertia, "C": (n, n) Coriolis matrix with
     dM/dt - 2C skew-symmetric, "G": (n,) gravity, "F": (n,) friction}."""
-    _check_config(config)
+    check_config(config)
     n = config.dof
-    q_array, dq_array = _states(q, n, "q"), _states(dq, n, "dq")
+    q_array, dq_array = error_states(q, n, "q"), error_states(dq, n, "dq")
     if q_array.shape != (n,) or dq_array.shape != (n,):
         raise ValueError(
             f"q, dq: expected shape ({n},) each, got {q_array.shape}, {dq_array.shape}"
@@ -149,7 +156,7 @@ def arm_terms(config: Config, q: Any, dq: Any, *, model: bool = False) -> dict[s
     return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
 
 
-def inertia_matrices(config: Config, positions: Any, *, model: bool = False) -> np.ndarray:
+def inertia_matrices(config: ConfigSchema, positions: Any, *, model: bool = False) -> np.ndarray:
     """M(q) (m, n, n) of the plant (``model=True``: the believed model) at each row of
     ``positions`` (m, n); a URDF arm is read once for all of them."""
     n = config.dof
@@ -160,18 +167,18 @@ def inertia_matrices(config: Config, positions: Any, *, model: bool = False) -> 
     return np.array([arm_terms(config, q, np.zeros(n), model=model)["M"] for q in rows])
 
 
-def policy(config: Config, x: Any, t: Any, weights: Any) -> np.ndarray:
+def policy(config: ConfigSchema, x: Any, t: Any, weights: Any) -> np.ndarray:
     """The actor's input u = -1/2 R^-1 g(x)^T (d phi / dx)^T W (eq. 20) at error states x (m, 2n)
     and times t (m,) (qd(t) enters the basis and q = qd - e1 the inertia of g = [0; M^-1]), with
     weights W (K,) or one row per state (m, K); the believed model's M. With W = W* it is the
     optimal input u* = -R^-1 e2 of the exact family. Returns (m, n)."""
-    _check_config(config)
+    check_config(config)
     n = config.dof
-    states = np.atleast_2d(_states(x, 2 * n))
-    times = np.broadcast_to(_real_array(t, "t"), (len(states),))
+    states = np.atleast_2d(error_states(x, 2 * n))
+    times = np.broadcast_to(real_array(t, "t"), (len(states),))
     desired = desired_state(config, times)[:, 0, :]
     _, jacobian = basis(config, states, desired)
-    W = np.broadcast_to(_real_array(weights, "weights"), (len(states), jacobian.shape[1]))
+    W = np.broadcast_to(real_array(weights, "weights"), (len(states), jacobian.shape[1]))
     gradient_e2 = np.einsum("mkx,mk->mx", jacobian, W)[:, n:]
     masses = inertia_matrices(config, desired - states[:, :n], model=True)
     R_inverse = np.linalg.inv(np.array(config.cost.R))
@@ -180,7 +187,7 @@ def policy(config: Config, x: Any, t: Any, weights: Any) -> np.ndarray:
     )
 
 
-def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
+def optimal_weights(config: ConfigSchema, *, rtol: float = 1e-9) -> np.ndarray:
     """The exact weights W* of V*(x) = x^T blockdiag(K, M(q)) x in the config's basis.
 
     They exist when K = -Q12 is symmetric positive definite, Q11 = K alpha1 + alpha1^T K and
@@ -217,7 +224,7 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     >>> adparm.optimal_weights(adparm.paper_config())
     array([ 4.,  6., -8.,  5.,  2.,  1.,  2.,  2.])
     """
-    if not isinstance(config, Config):
+    if not isinstance(config, ConfigSchema):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     if config.controller.is_expression:
         return _expression_optimal_weights(config)
@@ -276,12 +283,10 @@ def optimal_weights(config: Config, *, rtol: float = 1e-9) -> np.ndarray:
     )
 
 
-def _expression_optimal_weights(config: Config) -> np.ndarray:
+def _expression_optimal_weights(config: ConfigSchema) -> np.ndarray:
     """W* of an expression basis: on a linear believed arm (p3 = 0, no gravity, no friction) V* =
     x^T P x with P of the Riccati equation (adparm.lqr_value), in the basis' weights when it can
     represent it (e.g. "quadratic")."""
-    from .truth import lqr_value
-
     if config.plant.urdf is not None:
         raise ValueError(
             "controller.basis: no known W* for an expression basis on a URDF arm (plant.urdf): "
@@ -302,7 +307,7 @@ def _expression_optimal_weights(config: Config) -> np.ndarray:
         raise ValueError(f"controller.basis: cannot represent V* = x^T P x ({error})") from None
 
 
-def value_scale(config: Config, *, rtol: float = 1e-9) -> float | None:
+def value_scale(config: ConfigSchema, *, rtol: float = 1e-9) -> float | None:
     """s > 0 with Q22 = s^2 R^-1 (to relative tolerance rtol), or None when there is none.
 
     In the exact family V* = e1^T K e1 + s e2^T M(q) e2 and u* = -s R^-1 e2 (s = 1: the paper's
@@ -349,7 +354,7 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
         raise TypeError(f"s: expected a number > 0, got {s!r}")
     if not (np.isfinite(s) and s > 0.0):
         raise ValueError(f"s: expected a finite number > 0, got {s!r}")
-    K, alpha1, R = (_real_array(v, name) for v, name in ((K, "K"), (alpha1, "alpha1"), (R, "R")))
+    K, alpha1, R = (real_array(v, name) for v, name in ((K, "K"), (alpha1, "alpha1"), (R, "R")))
     n = K.shape[0] if K.ndim == 2 else 0
     for name, value in (("K", K), ("alpha1", alpha1), ("R", R)):
         if n < 1 or value.shape != (n, n) or not np.all(np.isfinite(value)):
@@ -369,8 +374,8 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
     return Q
 
 
-def _weights(value: Any, name: str, size: int = 8) -> np.ndarray:
-    _check_real(np.asarray(value), name)
+def weight_vector(value: Any, name: str, size: int = 8) -> np.ndarray:
+    check_real(np.asarray(value), name)
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
@@ -382,56 +387,9 @@ def _weights(value: Any, name: str, size: int = 8) -> np.ndarray:
     return array
 
 
-def residual_settings(config: Config) -> _core.Settings:
-    """The core settings of ``config`` for evaluating the HJB error at given states: without
-    extrapolation points, which that evaluation does not use (N of them would be drawn and
-    prepared at every call)."""
-    settings = core_settings(config)
-    settings.extrapolation.points = 0
-    return settings
-
-
-def hjb_residual(
-    config: Config, x: Any, critic_weights: Any, actor_weights: Any, *, t: float = 0.0
-) -> np.ndarray | float:
-    """The HJB error of eq. (21) at states x = [e1; e2], computed by the C++ core.
-
-    Parameters
-    ----------
-    config : Config
-        Cost, alpha1, basis and the arm the controller believes.
-    x : array_like, shape (2n,) or (..., 2n)
-        One state or a batch (n joints; 4 for the two-link arm).
-    critic_weights, actor_weights : array_like, shape (K,)
-        Wc and Wa, in the order of ``adparm.basis_names(config)``.
-    t : float, optional
-        Time at which the desired state (qd, dqd) is taken.
-
-    Returns
-    -------
-    float or ndarray
-        A float for one state, else an array of x's leading shape. At Wc = Wa = W* it vanishes
-        to round-off at every state.
-    """
-    _check_config(config)
-    n_x = 2 * config.dof
-    states = _states(x, n_x)
-    size = len(basis_names(config))
-    residual = _core.hjb_residual(
-        residual_settings(config),
-        np.ascontiguousarray(states.reshape(-1, n_x)),
-        _weights(critic_weights, "critic_weights", size),
-        _weights(actor_weights, "actor_weights", size),
-        float(t),
-    )
-    if states.ndim == 1:
-        return float(residual[0])
-    return residual.reshape(states.shape[:-1])
-
-
-def initial_error_state(config: Config) -> np.ndarray:
+def initial_error_state(config: ConfigSchema) -> np.ndarray:
     """x(0) = [e1(0); e2(0)] of ``config``: e1 = qd(0) - q0, e2 = dqd(0) - dq0 + alpha1 e1."""
-    if not isinstance(config, Config):
+    if not isinstance(config, ConfigSchema):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     desired = desired_state(config, 0.0)
     alpha1 = np.array(config.control.alpha1)
@@ -440,7 +398,7 @@ def initial_error_state(config: Config) -> np.ndarray:
     return np.concatenate([e1, e2])
 
 
-def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
+def optimal_value(config: ConfigSchema, x: Any = None, *, t: float = 0.0) -> float:
     """The optimal value V*(x) = e1^T K e1 + e2^T M(q) e2, with q = qd(t) - e1.
 
     The optimal cost-to-go of eq. (10) from x for the disturbance-free error system, on the
@@ -467,7 +425,7 @@ def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
     weights = optimal_weights(config)
     x = initial_error_state(config) if x is None else x
     n = config.dof
-    states = _real_array(x, "x")
+    states = real_array(x, "x")
     if states.shape != (2 * n,) or not np.all(np.isfinite(states)):
         raise ValueError(f"x: expected {2 * n} finite numbers, got {x!r}")
     qd = desired_state(config, t)[0]
@@ -477,3 +435,41 @@ def optimal_value(config: Config, x: Any = None, *, t: float = 0.0) -> float:
         kind = "structured" if config.controller.basis == "structured" else "augmented"
         phi, _, _ = _core.basis(getattr(_core.BasisKind, kind), states, qd, np.zeros(2))
     return float(weights @ np.asarray(phi))
+
+
+def two_link_mass(config: ConfigSchema, q2: float) -> np.ndarray:
+    p = config.model.resolve(config.plant)
+    c = math.cos(q2)
+    m12 = p["p2"] + p["p3"] * c
+    return np.array([[p["p1"] + 2.0 * p["p3"] * c, m12], [m12, p["p2"]]])
+
+
+def linearisation(config: ConfigSchema) -> tuple[np.ndarray, np.ndarray]:
+    """A, B of dx = A x + B u at x = 0 for the set-point qd(0): de1 = -alpha1 e1 + e2,
+    M(qd) de2 = u (C e2 is quadratic in x and the feedforward cancels G and F)."""
+    alpha1 = np.array(config.control.alpha1)
+    qd = desired_state(config, 0.0)[0]
+    n = config.dof
+    if config.plant.urdf is None:
+        M = two_link_mass(config, qd[1])
+    else:
+        M = arm_terms(config, qd, np.zeros(n), model=True)["M"]
+    A = np.block([[-alpha1, np.eye(n)], [np.zeros((n, n)), np.zeros((n, n))]])
+    B = np.vstack([np.zeros((n, n)), np.linalg.inv(M)])
+    return A, B
+
+
+def lqr_value(config: ConfigSchema) -> np.ndarray:
+    """P (4 x 4) of the algebraic Riccati equation A^T P + P A - P B R^-1 B^T P + Q = 0 of the
+    error system linearised at the set-point qd(0) (believed model, A = [[-alpha1, I], [0, 0]],
+    B = [0; M(qd)^-1]), solved by python-control (control.care). x^T P x is V* exactly for a
+    linear arm (p3 = 0) and the local V* near the set-point otherwise; on the exact instances
+    P = blockdiag(K, s M(qd))."""
+    import control
+
+    check_config(config)
+    A, B = linearisation(config)
+    Q, R = np.array(config.cost.Q), np.array(config.cost.R)
+    P, _, _ = control.care(A, B, Q, R)
+    P = np.asarray(P)
+    return 0.5 * (P + P.T)

@@ -27,19 +27,19 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterable, Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._files import save_figures
 from .optimal import basis_names, optimal_weights
+from .result import register, stop_time
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .comparison import Comparison
-    from .simulation import SimulationResult
+    from .result import SimulationResult
 
 __all__ = [
     "FIGURES",
@@ -176,8 +176,6 @@ STOP_COLOR = "#C00000"
 
 def _stop(result: SimulationResult) -> tuple[str, float] | None:
     """(status, time) of a run that did not finish, None for a finished one."""
-    from .summary import stop_time
-
     time = stop_time(result)
     return None if time is None else (result.status, time)
 
@@ -811,7 +809,7 @@ def _compare_panels(joints: int) -> list[tuple[str, int, str]]:
 
 
 def plot_comparison(
-    comparison: Comparison,
+    comparison: Any,
     *,
     time_scale: str = "symlog",
     ax: Sequence[Axes] | np.ndarray | None = None,
@@ -963,41 +961,5 @@ def plot_result(
     return {name: FIGURES[name](result) for name in names}
 
 
-def save_figures(
-    figures: dict[str, Figure], directory: str | Path, formats: Iterable[str] = ("png", "svg")
-) -> list[Path]:
-    """Write each figure as ``<directory>/<name>.<format>``.
-
-    Parameters
-    ----------
-    figures : dict of str to Figure
-        As :meth:`adparm.SimulationResult.plot` returns.
-    directory : str or Path
-        Created if missing.
-    formats : iterable of str
-        Any format matplotlib writes (png, svg, pdf, ...). PNGs at 200 dpi; no creation dates,
-        so the same run writes the same files.
-
-    Returns
-    -------
-    list of Path
-        The paths written.
-    """
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, figure in figures.items():
-        for fmt in formats:
-            path = directory / f"{name}.{fmt}"
-            figure.savefig(path, dpi=200, metadata=_metadata(fmt))
-            written.append(path)
-    return written
-
-
-def _metadata(fmt: str) -> dict[str, Any] | None:
-    # Leave out creation dates so that the same run writes the same files.
-    if fmt == "svg":
-        return {"Date": None}
-    if fmt == "pdf":
-        return {"CreationDate": None}
-    return None
+register("plot", lambda result, which=None, **kwargs: plot_result(result, which, **kwargs))
+register("plot_comparison", lambda comparison, **kwargs: plot_comparison(comparison, **kwargs))

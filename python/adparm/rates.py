@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .config import Config
+    from ._schema import ConfigSchema
 
 __all__ = [
     "AUTO_MARGIN",
@@ -98,7 +98,7 @@ def inertia_range(urdf: str, locked_joints: dict[str, float] | None = None) -> t
     return _inertia_range(str(urdf), stat.st_mtime_ns, stat.st_size, locked)
 
 
-def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
+def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
     """The settings of a URDF arm derived from its believed model (``[model]``, by default the
     plant), for the keys the config leaves out, and the reason for each (for the summary).
 
@@ -148,7 +148,7 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
     qd = np.clip(np.zeros(n), low, high)
     put("task.qd", tuple(qd), "0 within the joint limits")
     if "task.qd" in explicit:
-        from .simulation import desired_state
+        from .desired import desired_state
 
         qd = desired_state(config, 0.0)[0]
     q0 = np.where(qd + 0.1 <= high, qd + 0.1, qd - 0.1)
@@ -235,12 +235,12 @@ def urdf_defaults(config: Config) -> tuple[dict[tuple[str, str], Any], dict[str,
 # --- rates ----------------------------------------------------------------------------------
 
 
-def check_positions(config: Config) -> np.ndarray:
+def check_positions(config: ConfigSchema) -> np.ndarray:
     """The joint positions (S, n) of a run that matter before it starts: qd(0), q(0) and, with
     extrapolation, qd(0) - e1 at 32 seeded samples of its e1 box. The rates are taken there, and
     actor.positive_e2 keeps the structured basis' e2 block sum_b W_b M_b(q) of a URDF arm positive
     definite there."""
-    from .simulation import desired_state
+    from .desired import desired_state
 
     n = config.dof
     qd = desired_state(config, 0.0)[0]
@@ -252,7 +252,7 @@ def check_positions(config: Config) -> np.ndarray:
     return np.array(rows)
 
 
-def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:
+def _value_hessians(config: ConfigSchema, positions: np.ndarray) -> np.ndarray:
     """d(dV/de2)/dx (positions, n, 2n) of the actor's initial V = Wa^T phi at x = 0 with
     qd = each position, by central differences of the basis' exact Jacobian (exact for the
     quadratic bases)."""
@@ -271,7 +271,7 @@ def _value_hessians(config: Config, positions: np.ndarray) -> np.ndarray:
     return np.swapaxes(difference, 1, 2)
 
 
-def _policy_gains(config: Config, positions: np.ndarray, masses: np.ndarray) -> np.ndarray:
+def _policy_gains(config: ConfigSchema, positions: np.ndarray, masses: np.ndarray) -> np.ndarray:
     """G (positions, n, 2n) of the policy u = -G x linearised at x = 0 at each joint position."""
     n = config.dof
     kind = config.controller.kind
@@ -296,7 +296,7 @@ def _spectral_radius(matrices: np.ndarray) -> float:
     return float(np.abs(np.linalg.eigvals(matrices)).max())
 
 
-def closed_loop_rates(config: Config) -> list[dict[str, Any]]:
+def closed_loop_rates(config: ConfigSchema) -> list[dict[str, Any]]:
     """The fast rates (1/s) of the closed loop of ``config`` before it runs: a list of
     ``{"term", "rate", "fields"}`` (fields: the settings that set the rate), the largest over the
     sampled joint positions (module docstring)."""
@@ -397,7 +397,7 @@ def rates_text(rates: list[dict[str, Any]]) -> str:
     return "; ".join(f"{entry['term']}: {entry['rate']:.4g}/s" for entry in rates)
 
 
-def check_step(config: Config) -> None:
+def check_step(config: ConfigSchema) -> None:
     """Refuses (ValueError naming sim.dt) a step at which a fast rate of the closed loop is beyond
     RK4's stability limit, naming the term, its rate and a dt that works."""
     rates = closed_loop_rates(config)

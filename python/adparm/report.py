@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ._files import OutputFolder
-from .summary import _failure, summarize, summary_markdown
+from .result import post_run_failure
+from .summary import summarize, summary_markdown
 
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import SimulationResult
@@ -69,10 +70,10 @@ def write_report(
     if summary is None:
         summary = summarize(result)
     done = on_file or (lambda path: None)
-    from .storage import _write_csv, _write_npz
+    from .storage import write_result_csv, write_result_npz
 
     written = []
-    for name, writer in (("result.npz", _write_npz), ("result.csv", _write_csv)):
+    for name, writer in (("result.npz", write_result_npz), ("result.csv", write_result_csv)):
         written.append(folder.write(name, lambda temporary, w=writer: w(result, temporary)))
         done(written[-1])
     written.append(folder.write_text("config.toml", result.config.to_toml(resolved=True)))
@@ -87,7 +88,7 @@ def write_report(
             try:
                 drawn = result.plot([name])
             except Exception as error:  # noqa: BLE001 - reported in the summary
-                failed.append(_failure(f"the figure {name}", error))
+                failed.append(post_run_failure(f"the figure {name}", error))
                 continue
             paths = folder.write_figures(drawn, formats)
             written += paths
@@ -95,13 +96,13 @@ def write_report(
                 done(path)
     if failed:
         summary["post_run_errors"] = [*summary.get("post_run_errors", []), *failed]
-    for path in _write_summary(folder, summary):
+    for path in write_summary(folder, summary):
         written.append(path)
         done(path)
     return written
 
 
-def _write_summary(folder: OutputFolder, summary: dict[str, Any]) -> list[Path]:
+def write_summary(folder: OutputFolder, summary: dict[str, Any]) -> list[Path]:
     """Write summary.json and summary.md of ``summary`` into ``folder``; returns the paths."""
     return [
         folder.write_text("summary.json", json.dumps(summary, indent=2) + "\n"),

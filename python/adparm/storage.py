@@ -12,14 +12,14 @@ import tempfile
 import zipfile
 import zlib
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ._files import atomic_write
 from .config import Config
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .simulation import SimulationResult
+from .result import ARRAYS_2, ARRAYS_N, SimulationResult, register
+from .simulation import available_memory
 
 __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
 
@@ -145,8 +145,6 @@ def _cached_urdf(path: Path, copy: Any) -> str:
             if target.is_file() and hashlib.sha256(target.read_bytes()).hexdigest() == digest:
                 return str(target)
             target.parent.mkdir(parents=True, exist_ok=True)
-            from ._files import atomic_write
-
             atomic_write(target, lambda temporary: Path(temporary).write_bytes(data))
             return str(target)
         except OSError:
@@ -200,7 +198,7 @@ def _metadata(result: SimulationResult) -> dict[str, Any]:
     }
 
 
-def _write_csv(result: SimulationResult, path: Path) -> None:
+def write_result_csv(result: SimulationResult, path: Path) -> None:
     with open(path, "w", encoding="utf-8", newline="\n") as stream:
         stream.write(CSV_PREFIX + json.dumps(_metadata(result)) + "\n")
         size, joints = result.critic_weights.shape[1], result.q.shape[1]
@@ -218,7 +216,7 @@ def _write_csv(result: SimulationResult, path: Path) -> None:
         stream.write(f"{CSV_END}{n} rows\n")
 
 
-def _write_npz(result: SimulationResult, path: Path) -> None:
+def write_result_npz(result: SimulationResult, path: Path) -> None:
     names = ("t", "hjb_error", "cost", *_RESULT_ARRAYS, "covariance_reset_times")
     config = result.config.to_dict()
     np.savez_compressed(
@@ -241,14 +239,12 @@ def save_result(result: SimulationResult, path: str | Path) -> Path:
     writes a first line ``# adparm result {json}`` (config, status, wall time, covariance
     resets), a header line and the time series (read it with :func:`load_result`, or with
     ``pandas.read_csv(path, comment="#")``)."""
-    from ._files import atomic_write
-
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".npz", ".csv"):
         raise ValueError(f"path: expected a .npz or .csv file name, got {str(path)!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
-    writer = _write_csv if suffix == ".csv" else _write_npz
+    writer = write_result_csv if suffix == ".csv" else write_result_npz
     return atomic_write(path, lambda temporary: writer(result, temporary))
 
 
@@ -329,15 +325,13 @@ def _check_npz_sizes(path: Path, archive: zipfile.ZipFile, config: Config) -> No
     """Refuse, before reading them, arrays whose declared shape or dtype is not the one a run of
     ``config`` records (float64; at most its rows, n joints, K weights), or that would not fit
     in memory: a small file cannot make load_result allocate gigabytes."""
-    from .simulation import _ARRAYS_2, _ARRAYS_N, available_memory
-
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
     n, k = config.dof, config.basis_size
     expected: dict[str, tuple[int, ...]] = {"covariance_reset_times": (steps + 1,)}
     expected.update({name: (rows,) for name in ("t", "hjb_error", "cost")})
-    expected.update({name: (rows, n) for name in _ARRAYS_2})
-    expected.update({name: (rows, k) for name in _ARRAYS_N})
+    expected.update({name: (rows, n) for name in ARRAYS_2})
+    expected.update({name: (rows, k) for name in ARRAYS_N})
     unknown = [
         member
         for member in archive.namelist()
@@ -438,8 +432,6 @@ def load_result(path: str | Path) -> SimulationResult:
     allocated: JSON nested deeper than MAX_JSON_DEPTH, a CSV first line longer than
     MAX_HEADER_BYTES, and .npz arrays larger than the run of the recorded config records (or
     than the memory available) are refused with a ValueError."""
-    from .simulation import SimulationResult
-
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".npz", ".csv"):
@@ -454,3 +446,19 @@ def load_result(path: str | Path) -> SimulationResult:
         )
     except (TypeError, ValueError) as error:
         raise _corrupt(path, str(error)) from None
+
+
+def result_dataframe(result: SimulationResult) -> Any:
+    """The time series of ``result`` as a pandas DataFrame (columns of :func:`columns`); needs
+    pandas (``pip install pandas``). SimulationResult.to_dataframe calls it."""
+    try:
+        import pandas
+    except ImportError as error:  # pragma: no cover - pandas is in the test extra
+        raise ImportError("to_dataframe() needs pandas: pip install pandas") from error
+    return pandas.DataFrame(
+        table(result), columns=columns(result.critic_weights.shape[1], result.q.shape[1])
+    )
+
+
+register("save", lambda result, path: save_result(result, path))
+register("to_dataframe", lambda result: result_dataframe(result))

@@ -7,16 +7,15 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ._sections import SECTIONS
+from .config import Config, paper_config
 from .optimal import basis_names, optimal_weights
+from .result import SimulationResult, post_run_failure, register, stop_time
 from .truth import diagnose
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .config import Config
-    from .simulation import SimulationResult
 
 __all__ = [
     "PAPER_CLAIM_TIME",
@@ -108,11 +107,9 @@ def _flatten(config: Config, left_out: dict[str, tuple[Any, str]]) -> dict[str, 
     plant)."""
     import dataclasses
 
-    from .config import _SECTIONS
-
     given = config.to_dict()
     flat = {}
-    for section, cls in _SECTIONS.items():  # in the order of the sections and their fields
+    for section, cls in SECTIONS.items():  # in the order of the sections and their fields
         for field in dataclasses.fields(cls):
             name = f"{section}.{field.name}"
             if field.name in given[section]:
@@ -140,8 +137,6 @@ def _same(printed: Any, value: Any) -> bool:
 def deviations(config: Config) -> list[dict[str, Any]]:
     """Every setting that differs from the paper's printed value, and every setting the paper
     leaves open, as rows {parameter, paper, used, reason}."""
-    from .config import paper_config
-
     left_out = config.left_out_values()
     used = _flatten(config, left_out)
     paper = paper_config()
@@ -184,19 +179,6 @@ def deviations(config: Config) -> list[dict[str, Any]]:
 def relative_weight_error(weights: np.ndarray, target: np.ndarray) -> np.ndarray:
     """||W(t) - W*|| / ||W*|| for each row of ``weights``."""
     return np.linalg.norm(np.asarray(weights) - target, axis=-1) / np.linalg.norm(target)
-
-
-def stop_time(result: SimulationResult) -> float | None:
-    """When a run that did not finish stopped: a diverged run at the end of the step after its
-    last finite row (0 if it recorded none; the time SimulationDiverged reports when the state
-    left the bound within a step), an interrupted or running one at its last row. None for a
-    finished run."""
-    if result.status == "finished":
-        return None
-    t = result.t
-    if result.status == "diverged":
-        return min(float(t[-1]) + result.config.sim.dt, result.config.sim.T) if t.size else 0.0
-    return float(t[-1]) if t.size else 0.0
 
 
 def _time_to_stay_within(
@@ -263,13 +245,13 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
     except ValueError as error:
         target, no_target = None, str(error)
     except Exception as error:  # noqa: BLE001 - any failure after the run is reported
-        target, no_target = None, _failure("W* (adparm.optimal_weights)", error)
+        target, no_target = None, post_run_failure("W* (adparm.optimal_weights)", error)
         post_run_errors.append(no_target)
     try:
         deviation_rows = deviations(result.config)
     except Exception as error:  # noqa: BLE001
         deviation_rows = []
-        post_run_errors.append(_failure("the deviations from the paper", error))
+        post_run_errors.append(post_run_failure("the deviations from the paper", error))
     out: dict[str, Any] = {
         "status": result.status,
         "t_end": _number(t[-1]) if t.size else None,
@@ -297,7 +279,7 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
             else diagnose(result, tolerance=tolerance)
         )
     except Exception as error:  # noqa: BLE001
-        message = _failure("the diagnosis (adparm.truth.diagnose)", error)
+        message = post_run_failure("the diagnosis (adparm.truth.diagnose)", error)
         post_run_errors.append(message)
         diagnostics = {"verdict": f"unknown: {message}", "problems": [], "advice": []}
     out["verdict"] = diagnostics["verdict"]
@@ -318,15 +300,6 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
             t, error, tolerance, finished=result.status == "finished"
         )
     return out
-
-
-def _failure(step: str, error: BaseException) -> str:
-    """One line for a post-run step that failed: the step, the error's type and its message
-    (its first line, at most 300 characters)."""
-    text = (str(error).strip().splitlines() or [""])[0]
-    if len(text) > 300:
-        text = text[:297] + "..."
-    return f"{step} failed after the run: {type(error).__name__}" + (f": {text}" if text else "")
 
 
 def _fmt(value: Any) -> str:
@@ -513,3 +486,6 @@ def summary_markdown(summary: dict[str, Any]) -> str:
             f"| {row['parameter']} | {_fmt(row['paper'])} | {_fmt(row['used'])} | {row['reason']} |"
         )
     return "\n".join(lines) + "\n"
+
+
+register("summary", lambda result, tolerance=None: summarize(result, tolerance=tolerance))

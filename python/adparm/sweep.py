@@ -23,12 +23,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from tqdm.auto import tqdm
 
+import adparm._core as _core
+
+from ._fields import did_you_mean
 from ._files import write_text
-from .config import _SECTIONS, Config, _hint
+from ._sections import SECTIONS
+from .config import Config
 from .simulation import (
     SimulationInterrupted,
     SimulationResult,
-    _check_threads,
+    check_threads,
     simulate_batch,
 )
 from .table import rows_dataframe, rows_json, rows_markdown, write_csv
@@ -69,15 +73,15 @@ def _check_name(name: Any, where: str) -> None:
             f"{where}: key {name!r} must be 'section.key', e.g. 'critic.eta_c' or 'task.q0'"
         )
     section, key = name.split(".")
-    if section not in _SECTIONS:
+    if section not in SECTIONS:
         raise ValueError(
             f"{where}[{name!r}]: unknown config section {section!r}"
-            f"{_hint(section, list(_SECTIONS))}; known sections: {', '.join(_SECTIONS)}"
+            f"{did_you_mean(section, list(SECTIONS))}; known sections: {', '.join(SECTIONS)}"
         )
-    keys = [f.name for f in dataclasses.fields(_SECTIONS[section])]
+    keys = [f.name for f in dataclasses.fields(SECTIONS[section])]
     if key not in keys:
         raise ValueError(
-            f"{where}[{name!r}]: unknown key {key!r} in [{section}]{_hint(key, keys)}; "
+            f"{where}[{name!r}]: unknown key {key!r} in [{section}]{did_you_mean(key, keys)}; "
             f"known keys: {', '.join(keys)}"
         )
 
@@ -201,7 +205,7 @@ class SweepResult:
     def __getitem__(self, column: str) -> np.ndarray:
         if column not in self.columns:
             raise KeyError(
-                f"{column!r}: not a column{_hint(column, self.columns)}; columns: "
+                f"{column!r}: not a column{did_you_mean(column, self.columns)}; columns: "
                 + ", ".join(self.columns)
             )
         values = [row[column] for row in self.rows]
@@ -288,7 +292,7 @@ def sweep(
         raise TypeError(f"base_config: expected adparm.Config, got {type(base_config).__name__}")
     if tolerance is not None and not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
-    workers = _check_threads(threads)
+    workers = check_threads(threads)
     points = grid_points(grid)
     configs = [_point_config(base_config, point) for point in points]
     parameters = tuple(points[0])
@@ -328,13 +332,12 @@ def _run_in_process(
     """(point index, metrics) of every run, as the runs end: one stream through the core's worker
     threads (no barrier between runs), each run summarised and freed as soon as it ends, so at
     most _RUNS_PER_THREAD runs per thread are held in memory, however many points."""
-    from . import _core
-    from .simulation import _check_memory, _check_steps, _result, _run_batch, core_settings
+    from .simulation import check_memory, check_steps, core_settings, make_result, run_batch
 
     workers = min(threads, max(1, len(configs)))
     window = workers * _RUNS_PER_THREAD
-    _check_steps(configs)
-    _check_memory(configs, at_once=window + workers)
+    check_steps(configs)
+    check_memory(configs, at_once=window + workers)
     batch = _core.Batch([core_settings(config) for config in configs])
     ended: dict[int, Any] = {}  # runs handed over by the core, not yet summarised
     rows: list[tuple[int, dict[str, Any]]] = []
@@ -342,7 +345,7 @@ def _run_in_process(
     def summarise() -> None:
         while ended:
             i, run = ended.popitem()
-            rows.append((i, _metrics(_result(run, configs[i], batch.seconds(i)), tolerance)))
+            rows.append((i, _metrics(make_result(run, configs[i], batch.seconds(i)), tolerance)))
 
     def on_end(i: int, run: Any) -> None:  # summarised at once: the run is freed on return
         ended[i] = run
@@ -350,7 +353,7 @@ def _run_in_process(
 
     with tqdm(total=len(configs), disable=not progress, desc="sweep", unit="run") as bar:
         try:
-            _run_batch(batch, workers, on_end, lambda: bar.update(len(rows) - bar.n), window=window)
+            run_batch(batch, workers, on_end, lambda: bar.update(len(rows) - bar.n), window=window)
             summarise()
         except KeyboardInterrupt:  # keep the rows of the runs that ended
             for i in batch.wait(0.0):  # after the stop: runs that ended before it

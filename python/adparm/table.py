@@ -12,7 +12,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .config import _plain as config_plain
+from ._arm_sections import plain_value as config_plain
+from ._files import atomic_write
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
@@ -48,7 +49,6 @@ def _cell(value: Any) -> str:
 
 def write_csv(path: Path, columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> Path:
     """One header line and one line per row (written atomically)."""
-    from ._files import atomic_write
 
     def write(temporary: Path) -> None:
         with temporary.open("w", newline="", encoding="utf-8") as stream:

@@ -18,20 +18,36 @@ import dataclasses
 import math
 import signal
 import threading
-import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .optimal import basis, hjb_residual, initial_error_state, optimal_weights
-from .rates import RK4_STABILITY_LIMIT, nice_ceil
-from .simulation import desired_state
+import adparm._core as _core
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .config import Config
-    from .simulation import SimulationResult
+from ._arm_sections import ModelConfig
+from .config import Config
+from .desired import desired_state
+from .divergence import (
+    divergence_causes,
+    e2_block_min_eigenvalues,
+    extrapolation_shortfall,
+    initial_actor_e2_block,
+    structured_e2_block_min_eigenvalue,
+)
+from .optimal import (
+    basis,
+    initial_error_state,
+    linearisation,
+    lqr_value,
+    optimal_weights,
+    policy,
+)
+from .rates import nice_ceil
+from .residual import hjb_residual, residual_settings
+from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
+from .simulation import SimulationDiverged, simulate
 
 __all__ = [
     "RESIDUAL_TOLERANCE",
@@ -48,6 +64,16 @@ __all__ = [
     "warn_if_approximate",
 ]
 
+#: Re-exported: the causes of a divergence (adparm.divergence) and the approximation warning
+#: (adparm.result) are part of the truth about a run.
+REEXPORTED = (
+    ApproximationWarning,
+    divergence_causes,
+    initial_actor_e2_block,
+    structured_e2_block_min_eigenvalue,
+    warn_if_approximate,
+)
+
 #: The relative HJB residual rms(eps) / rms(x^T Q x) above which a run is flagged (a critic 2 %
 #: off W* leaves a few per cent).
 RESIDUAL_TOLERANCE = 0.05
@@ -60,58 +86,10 @@ _SAMPLES = 200
 _SEED = 20240
 
 
-class ApproximationWarning(UserWarning):
-    """A learning run whose critic is not a good approximation of V*: the basis cannot represent
-    V* (the HJB residual of the final weights is large off the trajectory while small along it),
-    or learning has not converged. The message says which and what to try."""
-
-
 def _check_config(config: Any) -> Config:
-    from .config import Config
-
     if not isinstance(config, Config):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     return config
-
-
-def _mass(config: Config, q2: float) -> np.ndarray:
-    p = config.model.resolve(config.plant)
-    c = math.cos(q2)
-    m12 = p["p2"] + p["p3"] * c
-    return np.array([[p["p1"] + 2.0 * p["p3"] * c, m12], [m12, p["p2"]]])
-
-
-def _linearisation(config: Config) -> tuple[np.ndarray, np.ndarray]:
-    """A, B of dx = A x + B u at x = 0 for the set-point qd(0): de1 = -alpha1 e1 + e2,
-    M(qd) de2 = u (C e2 is quadratic in x and the feedforward cancels G and F)."""
-    alpha1 = np.array(config.control.alpha1)
-    qd = desired_state(config, 0.0)[0]
-    n = config.dof
-    if config.plant.urdf is None:
-        M = _mass(config, qd[1])
-    else:
-        from .optimal import arm_terms
-
-        M = arm_terms(config, qd, np.zeros(n), model=True)["M"]
-    A = np.block([[-alpha1, np.eye(n)], [np.zeros((n, n)), np.zeros((n, n))]])
-    B = np.vstack([np.zeros((n, n)), np.linalg.inv(M)])
-    return A, B
-
-
-def lqr_value(config: Config) -> np.ndarray:
-    """P (4 x 4) of the algebraic Riccati equation A^T P + P A - P B R^-1 B^T P + Q = 0 of the
-    error system linearised at the set-point qd(0) (believed model, A = [[-alpha1, I], [0, 0]],
-    B = [0; M(qd)^-1]), solved by python-control (control.care). x^T P x is V* exactly for a
-    linear arm (p3 = 0) and the local V* near the set-point otherwise; on the exact instances
-    P = blockdiag(K, s M(qd))."""
-    import control
-
-    config = _check_config(config)
-    A, B = _linearisation(config)
-    Q, R = np.array(config.cost.Q), np.array(config.cost.R)
-    P, _, _ = control.care(A, B, Q, R)
-    P = np.asarray(P)
-    return 0.5 * (P + P.T)
 
 
 def learned_matrix(config: Config, weights: Any) -> np.ndarray:
@@ -227,16 +205,14 @@ def default_horizon(config: Config) -> float:
     """The horizon of :func:`optimal_cost`: 12 time constants of the slowest closed-loop mode of
     the LQR policy on the linearisation (its state has decayed by e^-12 there)."""
     config = _check_config(config)
-    A, B = _linearisation(config)
+    A, B = linearisation(config)
     P = lqr_value(config)
     closed = A - B @ np.linalg.solve(np.array(config.cost.R), B.T @ P)
     return 12.0 / float(np.min(-np.linalg.eigvals(closed).real))
 
 
-def _plant_config(config: Config) -> Config:
+def plant_config(config: Config) -> Config:
     """``config`` with the model the plant itself (an exact model)."""
-    from .config import ModelConfig
-
     return dataclasses.replace(config, model=ModelConfig())
 
 
@@ -325,7 +301,7 @@ def optimal_cost(
     if not 0.0 < rtol < 1.0:
         raise ValueError(f"rtol: expected a number in (0, 1), got {rtol!r}")
     if not model:
-        config = _plant_config(config)
+        config = plant_config(config)
     x0 = initial_error_state(config) if x0 is None else np.asarray(x0, dtype=float)
     if x0.shape != (4,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"x0: expected 4 finite numbers, got {x0!r}")
@@ -493,9 +469,6 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
     from ``start``): how well the basis can represent V* there."""
     from scipy.optimize import least_squares
 
-    from . import _core
-    from .optimal import residual_settings
-
     Q = np.array(config.cost.Q)
     scale = max(np.sqrt(np.mean(np.einsum("ni,ij,nj->n", X, Q, X) ** 2)), 1e-300)
     settings = residual_settings(config)  # converted once
@@ -516,8 +489,6 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
 def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
     """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200 of
     them): u_hat of the recorded actor weights, u* of W*, at the recorded states."""
-    from .optimal import policy
-
     config = result.config
     tail = np.nonzero(result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0]))[0]
     tail = tail[np.linspace(0, tail.size - 1, min(tail.size, 200)).round().astype(int)]
@@ -632,7 +603,7 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
         e1 = _explored_states(result, np.random.default_rng(_SEED))[:, : config.dof]
         e1 = np.vstack([np.zeros(config.dof), e1])
         out["e2_block_min_eigenvalue"], out["actor_e2_block_min_eigenvalue"] = (
-            _e2_block_min_eigenvalues(config, [Wc, Wa], e1)
+            e2_block_min_eigenvalues(config, [Wc, Wa], e1)
         )
     if result.status == "diverged" or not finite:
         out["problems"].append("diverged")
@@ -826,8 +797,6 @@ def check_step_size(config: Config, *, transient: float = 1.0) -> dict[str, Any]
     - e1_max_difference: max_t |e1_dt - e1_dt/2| / max_t |e1_dt/2|;
     - verdict: "ok" when all are below STEP_TOLERANCE (1 %), else what was seen and what to try.
     RK4 is fourth order, so the difference is about 15/16 of the error of the dt run."""
-    from .simulation import SimulationDiverged, simulate
-
     config = _check_config(config)
     if not (isinstance(transient, (int, float)) and math.isfinite(transient) and transient > 0):
         raise ValueError(f"transient: expected a finite number > 0, got {transient!r}")
@@ -872,172 +841,4 @@ def check_step_size(config: Config, *, transient: float = 1.0) -> dict[str, Any]
     return out
 
 
-def extrapolation_shortfall(config: Config) -> str | None:
-    """What is wrong when Bellman-error extrapolation has fewer points than the basis has
-    functions (``extrapolation.points`` < K): the points' regressors span at most N of the K
-    directions, so they cannot determine the weights alone (the issue's prototype stalled 2-6 %
-    off W* or drifted into divergence). None when N = 0 or N >= K."""
-    points, size = config.extrapolation.points, config.basis_size
-    if 0 < points < size:
-        return (
-            f"extrapolation.points = {points} is below the {size} basis functions: the points "
-            "alone cannot determine the weights"
-        )
-    return None
-
-
-def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
-    """The e2 block M_w = sum_b Wa_b M_b(qd(0)) of the initial actor weights of the structured
-    basis of a URDF arm, seen through its policy u_hat = -R^-1 M^-1 M_w e2, which makes e2 decay
-    as de2 = -A e2 with A = M^-1 R^-1 M^-1 M_w (believed model's M at qd(0)):
-    {"min_eigenvalue": lambda_min(M_w), "rate": max |eig(A)| (1/s)}; None for other bases.
-    lambda_min <= 0 pushes e2 away; rate * sim.dt above RK4_STABILITY_LIMIT makes the first steps
-    of RK4 unstable (the weights all ones on the planar 3-link arm: 4600/s)."""
-    if config.plant.urdf is None or config.controller.basis != "structured":
-        return None
-    n = config.dof
-    qd = desired_state(config, 0.0)[0]
-    arm, blocks = _structured_e2_blocks(config, [config.initial_weights("actor_weights")], [qd])
-    M_w = blocks[0, 0]
-    M_inverse = np.linalg.inv(arm.terms(qd, np.zeros(n))["M"])
-    A = M_inverse @ np.linalg.inv(np.array(config.cost.R)) @ M_inverse @ M_w
-    return {
-        "min_eigenvalue": float(np.linalg.eigvalsh(0.5 * (M_w + M_w.T)).min()),
-        "rate": float(np.abs(np.linalg.eigvals(A)).max()),
-    }
-
-
-def _structured_e2_blocks(config: Config, weight_sets: Any, positions: Any) -> tuple[Any, Any]:
-    """The believed model's arm and the e2 blocks M_w(q) = sum_b W_b M_b(q) of each set of
-    weights of the structured basis of a URDF arm (rows of weight_sets) at each joint position
-    (rows of positions): an array (sets, positions, n, n). M_b are the arm's base-parameter
-    directions (UrdfArm.base_parameters), computed once per position."""
-    from .urdf import config_arm
-
-    arm = config_arm(config, model=True)
-    n = config.dof
-    _, columns, _ = arm.base_parameters()
-    W = np.atleast_2d(np.asarray(weight_sets, dtype=float))[:, n * (n + 1) // 2 :]
-    M_b = np.array([arm.mass_regressor(q)[columns] for q in np.atleast_2d(positions)])
-    return arm, np.einsum("wb,mbij->wmij", W, M_b)
-
-
-def _e2_block_min_eigenvalues(config: Config, weight_sets: Any, e1: Any) -> list[float]:
-    """For each set of weights, min over the rows of e1 of lambda_min of its e2 block at
-    q = qd(0) - e1 (structured_e2_block_min_eigenvalue)."""
-    positions = desired_state(config, 0.0)[0] - np.atleast_2d(e1)
-    _, blocks = _structured_e2_blocks(config, weight_sets, positions)
-    symmetric = 0.5 * (blocks + np.swapaxes(blocks, -1, -2))
-    return [float(value) for value in np.linalg.eigvalsh(symmetric).min(axis=(1, 2))]
-
-
-def structured_e2_block_min_eigenvalue(config: Config, weights: Any, e1: Any) -> float:
-    """min over the rows of e1 (m, n) of lambda_min of the e2 block sum_b W_b M_b(q),
-    q = qd(0) - e1, of weights W of the structured basis of a URDF arm (the believed model's
-    base-parameter directions M_b). At or below 0 the learned V is not positive definite in e2
-    there: not a stabilising solution."""
-    return _e2_block_min_eigenvalues(config, [weights], e1)[0]
-
-
-def _basis_problem_at_points(config: Config) -> str | None:
-    """The first term of an expression basis that is not finite (or whose d phi / dx is not) at
-    a fixed or grid extrapolation point, named with the point; None otherwise (the initial
-    state is checked by Config)."""
-    from .simulation import extrapolation_points
-
-    extrapolation = config.extrapolation
-    if not config.controller.is_expression or not extrapolation.points:
-        return None
-    if extrapolation.mode == "local":  # drawn anew at each step
-        return None
-    qd = desired_state(config, 0.0)[0]
-    problem = config.controller.expression_basis(config.dof).nonfinite(
-        extrapolation_points(config), qd
-    )
-    return None if problem is None else f"at an extrapolation point, {problem}"
-
-
-def _basis_problem_near_end(result: SimulationResult) -> str | None:
-    """The first term of an expression basis that is not finite (or whose d phi / dx is not)
-    just after the last recorded row of a diverged run: x extrapolated along its last recorded
-    velocity over two recording intervals."""
-    config = result.config
-    if not config.controller.is_expression or result.t.size < 2:
-        return None
-    t = result.t
-    x = np.hstack([result.e1[-2:], result.e2[-2:]])
-    step = t[-1] - t[-2]
-    if not step > 0.0:
-        return None
-    states = x[-1] + np.linspace(0.0, 2.0, 41)[:, None] * (x[-1] - x[-2])
-    problem = config.controller.expression_basis(config.dof).nonfinite(states, result.qd[-1])
-    return None if problem is None else f"just after t = {t[-1]:.6g} s, {problem}"
-
-
-def divergence_causes(config: Config, result: SimulationResult | None = None) -> list[str]:
-    """Likely causes of a divergence that the config shows before any run, each with a change
-    that is not already in effect: the measured fast rates of the closed loop against RK4's limit
-    at sim.dt (rates.closed_loop_rates; a smaller sim.dt that keeps them inside it), initial
-    actor weights of the structured basis of a URDF arm whose e2 block is not positive definite
-    (only when init.actor_weights is set), fewer extrapolation points than basis functions, and
-    first an expression basis term that is not finite at a fixed extrapolation point or (given
-    the diverged run's partial ``result``) just after its last recorded row."""
-    from .rates import AUTO_MARGIN, auto_step, closed_loop_rates, rates_text
-
-    causes = []
-    for problem in (
-        _basis_problem_at_points(config),
-        None if result is None else _basis_problem_near_end(result),
-    ):
-        if problem is not None:  # the first thing to fix: no step size helps
-            causes.append(problem)
-    rates = closed_loop_rates(config)
-    dt = config.sim.dt
-    fast = [entry for entry in rates if entry["rate"] * dt > AUTO_MARGIN * RK4_STABILITY_LIMIT]
-    if fast:
-        worst = max(fast, key=lambda entry: entry["rate"])
-        causes.append(
-            f"{worst['term']} acts at {worst['rate']:.4g}/s, near or beyond RK4's stability "
-            f"limit {RK4_STABILITY_LIMIT}/sim.dt = {RK4_STABILITY_LIMIT / dt:.4g}/s (use "
-            f'sim.dt = {auto_step(rates, config.sim.T):g}, which sim.dt = "auto" picks)'
-        )
-    block = initial_actor_e2_block(config)
-    if block is not None and block["min_eigenvalue"] <= 0.0:
-        causes.append(
-            "the initial actor weights' e2 block M_w = sum_b Wa_b M_b(qd) is not positive "
-            f"definite (lambda_min = {block['min_eigenvalue']:.3g}), so u_hat = -R^-1 M^-1 M_w e2 "
-            "pushes e2 away"
-            + (
-                " (leave init.actor_weights out: the believed model's inertia)"
-                if config.init.actor_weights is not None
-                else ""
-            )
-        )
-    for key in ("critic_weights", "actor_weights"):
-        given = getattr(config.init, key)
-        if given is not None and not np.any(np.asarray(given)):
-            causes.append(
-                f"init.{key} are all zero: at rest omega = 0 while the HJB error is x^T Q x > 0, "
-                f"so the weights cannot settle (leave init.{key} out: the basis' default)"
-            )
-    shortfall = extrapolation_shortfall(config)
-    if shortfall is not None:
-        causes.append(shortfall + f" (use extrapolation.points >= {config.basis_size})")
-    causes.append(
-        f"the closed loop's rates at the start (RK4's limit 2.785/sim.dt = "
-        f"{RK4_STABILITY_LIMIT / dt:.4g}/s): " + rates_text(rates)
-    )
-    return causes
-
-
-def warn_if_approximate(result: SimulationResult, stacklevel: int = 3) -> None:
-    """Emits ApproximationWarning when :func:`diagnose` finds that the basis cannot represent V*
-    or that learning has not converged (only for finished runs)."""
-    if result.status != "finished":
-        return
-    diagnostics = result.diagnostics
-    kind = diagnostics.get("approximation")
-    if kind is None and not diagnostics.get("problems"):
-        return
-    message = f"adparm: {diagnostics['verdict']}. Try: {'; '.join(diagnostics['advice']) or '-'}"
-    warnings.warn(message, ApproximationWarning, stacklevel=stacklevel)
+register("diagnose", lambda result: diagnose(result))

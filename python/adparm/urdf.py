@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _core
+import adparm._core as _core
 
 __all__ = ["UrdfArm", "example_robot_urdf", "EXAMPLE_LOCKED_JOINTS", "EXAMPLE_ROBOTS"]
 

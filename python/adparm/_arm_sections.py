@@ -1,0 +1,488 @@
+"""The sections of the configuration that describe the arm and the task: [plant], [model] and
+[task] (with its trajectories), the URDF probing they need (through the core, adparm.urdf) and
+plain_value, the plain (TOML/JSON-ready) form of a field's value."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ._fields import (
+    ARM_KEYS,
+    DEFAULT_GRAVITY,
+    MAX_SAMPLES,
+    MAX_SAMPLES_FILE_BYTES,
+    TWO_LINK_DEFAULTS,
+    TWO_LINK_KEYS,
+    Matrix,
+    Vector,
+    check_arm,
+    check_keys,
+    choice_value,
+    friction_value,
+    key_text,
+    matrix_value,
+    read_text_file,
+    rows_value,
+    scalar_value,
+    value_text,
+    vector_value,
+)
+
+#: A URDF named "example-robot-data:ur5" is that robot of the example-robot-data package
+#: (adparm.example_robot_urdf).
+EXAMPLE_ROBOT_PREFIX = "example-robot-data:"
+
+
+def urdf_path(value: Any, name: str) -> str:
+    """An absolute path of an existing URDF file (a relative one is taken from the current
+    directory; load_config makes it relative to the TOML file first), or
+    "example-robot-data:NAME" for a robot of example-robot-data."""
+    import os
+
+    if not isinstance(value, (str, Path)) or not str(value):
+        raise TypeError(f"{name}: expected the path of a URDF file, got {value_text(value)}")
+    if isinstance(value, str) and value.startswith(EXAMPLE_ROBOT_PREFIX):
+        from .urdf import example_robot_urdf
+
+        robot = value[len(EXAMPLE_ROBOT_PREFIX) :]
+        try:
+            return str(example_robot_urdf(robot))
+        except ModuleNotFoundError:
+            raise ValueError(
+                f"{name}: {value!r} needs the example-robot-data package "
+                "(pip install example-robot-data)"
+            ) from None
+        except (ValueError, FileNotFoundError) as error:
+            raise ValueError(f"{name}: {value!r}: {error}") from None
+    path = os.path.abspath(Path(value).expanduser())
+    if not Path(path).is_file():
+        raise ValueError(f"{name}: no URDF file {str(path)!r}")
+    return path
+
+
+#: Joints held at a position, as the core takes them: ((name, position), ...).
+LockedPairs = tuple[tuple[str, float], ...]
+
+
+def locked_pairs(locked: Mapping[str, float] | None) -> LockedPairs:
+    return tuple((name, float(value)) for name, value in (locked or {}).items())
+
+
+@functools.lru_cache(maxsize=32)
+def _urdf_info(
+    path: str, mtime_ns: int, size: int, locked: LockedPairs = ()
+) -> tuple[int, tuple[str, ...]]:
+    """(n, joint names) of a URDF read by the core (once per file version and locked joints),
+    after the checks of the text of its <inertial> elements (urdf.check_inertial_text)."""
+    import adparm._core as _core
+
+    from .urdf import check_inertial_text
+
+    check_inertial_text(path)
+    arm = _core.UrdfArm(path, locked_joints=list(locked))
+    return arm.dof, tuple(arm.joint_names)
+
+
+def urdf_error(error: Exception, name: str) -> ValueError:
+    """A ValueError naming ``name`` (plant.urdf or model.urdf), or its section's locked_joints
+    field for a problem with the locked joints."""
+    from .urdf import locked_joints_message
+
+    section = name.split(".")[0]
+    text = locked_joints_message(str(error), section)
+    return ValueError(text if text != str(error) else f"{name}: {error}")
+
+
+def urdf_info(
+    path: str, name: str = "plant.urdf", locked: Mapping[str, float] | None = None
+) -> tuple[int, tuple[str, ...]]:
+    """The free joint count and joint names of the URDF at ``path`` with the joints ``locked``
+    held; a file that does not parse, has no free actuated joint, has a floating base or fails a
+    physical check is refused with a ValueError naming ``name``, a problem with the locked joints
+    naming its section's locked_joints (plant.locked_joints)."""
+    import os
+
+    try:
+        stat = os.stat(path)
+        return _urdf_info(path, stat.st_mtime_ns, stat.st_size, locked_pairs(locked))
+    except (OSError, ValueError) as error:
+        raise urdf_error(error, name) from None
+
+
+@functools.lru_cache(maxsize=64)
+def _urdf_structured_size(path: str, mtime_ns: int, size: int, locked: LockedPairs = ()) -> int:
+    import adparm._core as _core
+
+    arm = _core.UrdfArm(path, locked_joints=list(locked))
+    return int(_core.UrdfStructuredBasis(arm).size)
+
+
+def urdf_structured_size(
+    path: str, name: str = "plant.urdf", locked: Mapping[str, float] | None = None
+) -> int:
+    """The number of functions of the structured basis of the URDF arm at ``path`` with the
+    joints ``locked`` held (it depends on the kinematics only: n (n + 1) / 2 + the number of
+    base inertial parameters)."""
+    import os
+
+    try:
+        stat = os.stat(path)
+        return _urdf_structured_size(path, stat.st_mtime_ns, stat.st_size, locked_pairs(locked))
+    except (OSError, ValueError) as error:
+        raise urdf_error(error, name) from None
+
+
+def locked_joints_value(value: Any, name: str) -> dict[str, float] | None:
+    """A table {joint name: position (rad or m)}; an empty one is None (nothing locked). The
+    names and limits are checked against the URDF by the core (urdf_info)."""
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise TypeError(
+            f"{name}: expected a table of joint names and positions such as "
+            f"{{panda_finger_joint1 = 0.0}}, got {type(value).__name__} {value_text(value)}"
+        )
+    locked = {}
+    for joint, position in value.items():
+        if not isinstance(joint, str) or not joint:
+            raise TypeError(
+                f"{name}: joint names must be non-empty strings, got {value_text(joint)}"
+            )
+        locked[joint] = scalar_value(position, f"{name}.{key_text(joint)}")
+    return locked or None
+
+
+def check_urdf_arm(arm: Any, section: str) -> None:
+    """With a URDF: the two-link keys stay unset, gravity has 3 entries; without: gravity and
+    per-joint friction are refused (the two-link arm has g1, g2 and one coefficient)."""
+    if arm.urdf is not None:
+        for key in TWO_LINK_KEYS:
+            value = getattr(arm, key)
+            if (
+                value is not None
+                and value != TWO_LINK_DEFAULTS[key]
+                or (section == "model" and value is not None)
+            ):
+                raise ValueError(
+                    f"{section}.{key}: a parameter of the built-in two-link arm; the arm of "
+                    f"{section}.urdf takes its inertia and geometry from the URDF (leave "
+                    f"{section}.{key} out)"
+                )
+        return
+    if arm.gravity is not None:
+        raise ValueError(
+            f"{section}.gravity: only with {section}.urdf (the two-link arm's gravity terms are "
+            f"{section}.g1 and {section}.g2)"
+        )
+    if arm.locked_joints is not None:
+        raise ValueError(
+            f"{section}.locked_joints: only with a URDF arm ({section}.urdf); the two-link arm "
+            "has no joint to lock"
+        )
+    for key in ("coulomb", "viscous"):
+        if isinstance(getattr(arm, key), tuple):
+            raise ValueError(
+                f"{section}.{key}: one number for the built-in two-link arm (one per joint needs "
+                f"{section}.urdf)"
+            )
+
+
+# --- sections ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PlantConfig:
+    """The arm of eq. (1): M, C, G as in Section 4, F = coulomb sgn(dq) + viscous dq,
+    tau_d = [disturbance[0] sin t, disturbance[1] cos t].
+
+    ``urdf`` names a URDF file instead (any fixed-base serial arm, through Pinocchio; relative to
+    the TOML file, or to the current directory for a config built from a dict; stored absolute),
+    with ``gravity`` (default DEFAULT_GRAVITY) and coulomb, viscous as one number or one per
+    joint; p1 ... g2 are then not used and may not be set. ``locked_joints`` ({name: position})
+    holds joints of the URDF at a position (Pinocchio's reduced model): the arm's joints are
+    the free ones."""
+
+    p1: float = 5.0
+    p2: float = 1.0
+    p3: float = 1.0
+    g1: float = 9.8 * 1.2
+    g2: float = 9.8
+    coulomb: float | Vector = -0.1  # as printed: F = -0.1 sgn(dq)
+    viscous: float | Vector = 0.0  # not in the paper; 0 keeps its plant
+    disturbance: Vector = (0.1, 0.1)
+    urdf: str | None = None
+    gravity: Vector | None = None
+    locked_joints: dict[str, float] | None = None
+
+    def __post_init__(self) -> None:
+        for key in TWO_LINK_KEYS:
+            object.__setattr__(self, key, scalar_value(getattr(self, key), f"plant.{key}"))
+        locked = locked_joints_value(self.locked_joints, "plant.locked_joints")
+        object.__setattr__(self, "locked_joints", locked)
+        for key in ("coulomb", "viscous"):
+            object.__setattr__(self, key, friction_value(getattr(self, key), f"plant.{key}"))
+        disturbance = vector_value(self.disturbance, "plant.disturbance", None)
+        object.__setattr__(self, "disturbance", disturbance)
+        if self.urdf is not None:
+            object.__setattr__(self, "urdf", urdf_path(self.urdf, "plant.urdf"))
+            urdf_info(self.urdf, "plant.urdf", self.locked_joints)
+        if self.gravity is not None:
+            object.__setattr__(self, "gravity", vector_value(self.gravity, "plant.gravity", 3))
+        check_urdf_arm(self, "plant")
+        check_arm(self.p1, self.p2, self.p3, "plant")
+
+    @property
+    def resolved_gravity(self) -> Vector:
+        """plant.gravity, or DEFAULT_GRAVITY when left out."""
+        return DEFAULT_GRAVITY if self.gravity is None else self.gravity
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """The arm the controller believes (feedforward h of eq. 5 and f, g of eq. 9). A key left
+    out (None) takes the plant's value, so the default is an exact model. With a URDF plant,
+    ``urdf`` may name another URDF of the same joint count (a model error), with its own
+    ``gravity``, coulomb, viscous and ``locked_joints`` (each left out: the plant's)."""
+
+    p1: float | None = None
+    p2: float | None = None
+    p3: float | None = None
+    g1: float | None = None
+    g2: float | None = None
+    coulomb: float | Vector | None = None
+    viscous: float | Vector | None = None
+    urdf: str | None = None
+    gravity: Vector | None = None
+    locked_joints: dict[str, float] | None = None
+
+    def __post_init__(self) -> None:
+        for key in TWO_LINK_KEYS:
+            value = getattr(self, key)
+            if value is not None:
+                object.__setattr__(self, key, scalar_value(value, f"model.{key}"))
+        locked = locked_joints_value(self.locked_joints, "model.locked_joints")
+        object.__setattr__(self, "locked_joints", locked)
+        for key in ("coulomb", "viscous"):
+            value = getattr(self, key)
+            if value is not None:
+                object.__setattr__(self, key, friction_value(value, f"model.{key}"))
+        if self.urdf is not None:
+            # read with the locked joints in Config (they may be the plant's)
+            object.__setattr__(self, "urdf", urdf_path(self.urdf, "model.urdf"))
+        if self.gravity is not None:
+            object.__setattr__(self, "gravity", vector_value(self.gravity, "model.gravity", 3))
+
+    def resolve(self, plant: PlantConfig) -> dict[str, Any]:
+        """The model's parameters with the plant's values filled in."""
+        return {
+            key: getattr(plant, key) if getattr(self, key) is None else getattr(self, key)
+            for key in ARM_KEYS
+        }
+
+    def resolve_urdf(self, plant: PlantConfig) -> dict[str, Any]:
+        """The believed URDF arm: urdf, gravity, coulomb, viscous, locked_joints, each the
+        plant's when left out (a URDF plant only)."""
+        return {
+            "urdf": plant.urdf if self.urdf is None else self.urdf,
+            "gravity": plant.resolved_gravity if self.gravity is None else self.gravity,
+            "coulomb": plant.coulomb if self.coulomb is None else self.coulomb,
+            "viscous": plant.viscous if self.viscous is None else self.viscous,
+            "locked_joints": (
+                plant.locked_joints if self.locked_joints is None else self.locked_joints
+            ),
+        }
+
+
+@dataclass(frozen=True)
+class SinusoidTrajectory:
+    """qd_j(t) = offset_j + sum_k amplitude_jk sin(frequency_jk t + phase_jk) (rad, rad/s).
+
+    amplitude, frequency and phase are each a vector (one sinusoid per joint) or a joints x k matrix
+    (k sinusoids per joint); phase None is all zeros. In TOML: ``[task.qd]`` with
+    ``kind = "sinusoid"``."""
+
+    kind: ClassVar[str] = "sinusoid"
+    amplitude: Vector | Matrix = (0.5, 0.3)
+    frequency: Vector | Matrix = (1.0, 1.0)
+    phase: Vector | Matrix | None = None
+    offset: Vector = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        amplitude = rows_value(self.amplitude, "task.qd.amplitude", None)
+        n = len(amplitude[0])
+        object.__setattr__(self, "amplitude", amplitude)
+        object.__setattr__(self, "frequency", rows_value(self.frequency, "task.qd.frequency", n))
+        phase = ((0.0,) * n,) * len(amplitude) if self.phase is None else self.phase
+        object.__setattr__(self, "phase", rows_value(phase, "task.qd.phase", n))
+        object.__setattr__(self, "offset", vector_value(self.offset, "task.qd.offset", None))
+        for key in ("frequency", "phase"):
+            if len(getattr(self, key)[0]) != n:
+                raise ValueError(
+                    f"task.qd.{key}: expected {n} column(s) like task.qd.amplitude, "
+                    f"got {len(getattr(self, key)[0])}"
+                )
+
+
+@dataclass(frozen=True)
+class SampledTrajectory:
+    """qd(t) through samples (t_i, qd_i), interpolated by a cubic spline
+    (scipy.interpolate.CubicSpline with bc_type = boundary), which gives dqd and ddqd too.
+
+    Either ``file``, a CSV file with columns t, qd1, qd2 (a header line and # comments are
+    skipped; a relative path in a TOML file is relative to that file), or ``t`` (n,) and ``q``
+    (n, 2) inline. The first sample must be at t <= 0 and the last at t >= sim.T. In TOML:
+    ``[task.qd]`` with ``kind = "samples"``."""
+
+    kind: ClassVar[str] = "samples"
+    t: Vector = ()
+    q: Matrix = ()
+    file: str | None = None
+    boundary: str = "not-a-knot"
+
+    def __post_init__(self) -> None:
+        if self.file is not None:
+            if not isinstance(self.file, (str, Path)):
+                raise TypeError(f"task.qd.file: expected a path, got {value_text(self.file)}")
+            if not (is_empty(self.t) and is_empty(self.q)):
+                raise ValueError("task.qd: give either file or t and q, not both")
+            t, q = read_samples(Path(self.file))
+            object.__setattr__(self, "file", str(self.file))
+            object.__setattr__(self, "t", t)
+            object.__setattr__(self, "q", q)
+        object.__setattr__(self, "t", vector_value(self.t, "task.qd.t", None))
+        if len(self.t) > MAX_SAMPLES:
+            raise ValueError(f"task.qd.t: at most {MAX_SAMPLES} samples, got {len(self.t)}")
+        q = matrix_value(self.q, "task.qd.q", None, None)
+        if len(q) != len(self.t):
+            width = len(q[0]) if q else 2
+            raise ValueError(
+                f"task.qd.q: expected shape ({len(self.t)}, {width}), one row per time in "
+                f"task.qd.t, got ({len(q)}, {width})"
+            )
+        object.__setattr__(self, "q", q)
+        if len(self.t) < 2:
+            raise ValueError(f"task.qd.t: expected at least 2 samples, got {len(self.t)}")
+        if not all(b > a for a, b in zip(self.t, self.t[1:], strict=False)):
+            raise ValueError("task.qd.t: sample times must be strictly increasing")
+        if self.t[0] > 0.0:
+            raise ValueError(f"task.qd.t: the first sample must be at t <= 0, got {self.t[0]:g}")
+        if not math.isfinite(self.t[-1] - self.t[0]):
+            raise ValueError(
+                f"task.qd.t: the samples must span a finite time, got {self.t[0]:g} to "
+                f"{self.t[-1]:g}"
+            )
+        choice_value(self.boundary, "task.qd.boundary", ("not-a-knot", "clamped", "natural"))
+        try:
+            with np.errstate(all="ignore"):
+                finite = bool(np.all(np.isfinite(self.spline().c)))
+        except ValueError:  # scipy: "`dydx` must contain only finite values"
+            finite = False
+        if not finite:
+            raise ValueError(
+                "task.qd.q: the cubic spline through the samples overflows (values too large, or "
+                "samples too close in time for their values)"
+            )
+
+    def spline(self) -> Any:
+        """The scipy CubicSpline through the samples (axis 0 is time)."""
+        from scipy.interpolate import CubicSpline
+
+        return CubicSpline(np.array(self.t), np.array(self.q), axis=0, bc_type=self.boundary)
+
+
+def is_empty(value: Any) -> bool:
+    return isinstance(value, (tuple, list)) and len(value) == 0
+
+
+def read_samples(path: Path) -> tuple[Vector, Matrix]:
+    lines = read_text_file(path, "task.qd.file", MAX_SAMPLES_FILE_BYTES).splitlines()
+    rows = []
+    for number, line in enumerate(lines, start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        try:
+            rows.append([float(v) for v in text.split(",")])
+        except ValueError as error:
+            if rows:  # only a first line may be a header
+                raise ValueError(f"task.qd.file: {path}:{number}: not numbers: {line!r}") from error
+            continue
+        columns = len(rows[0])  # t, qd1, ..., qdn (n checked by Config)
+        if len(rows[-1]) != columns or columns < 2:
+            expected = "t, qd1, qd2" if columns == 3 else "t, qd1, ..., qdn"
+            raise ValueError(
+                f"task.qd.file: {path}:{number}: expected {max(columns, 2)} columns {expected}, "
+                f"got {line!r}"
+            )
+    if not rows:
+        raise ValueError(f"task.qd.file: {path} holds no samples")
+    array = np.array(rows)
+    return tuple(array[:, 0]), tuple(map(tuple, array[:, 1:]))
+
+
+TRAJECTORIES: dict[str, type] = {"sinusoid": SinusoidTrajectory, "samples": SampledTrajectory}
+Trajectory = Vector | SinusoidTrajectory | SampledTrajectory
+
+
+def trajectory_value(value: Any) -> Trajectory:
+    if isinstance(value, (SinusoidTrajectory, SampledTrajectory)):
+        return value
+    if not isinstance(value, Mapping):
+        return vector_value(value, "task.qd", None)
+    values = dict(value)
+    kinds = tuple(TRAJECTORIES)
+    if "kind" not in values:
+        raise ValueError(f"task.qd.kind: expected one of {', '.join(kinds)}, got nothing")
+    kind = choice_value(values.pop("kind"), "task.qd.kind", kinds)
+    cls = TRAJECTORIES[kind]
+    check_keys(values, [f.name for f in dataclasses.fields(cls)], "task.qd")
+    return cls(**values)
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """Initial joint state and desired trajectory qd (rad, rad/s).
+
+    qd is a set-point (a pair, the paper's qd = 0), a SinusoidTrajectory or a SampledTrajectory
+    (in TOML a ``[task.qd]`` table with ``kind = "sinusoid"`` or ``"samples"``). The feedforward
+    uses qd, dqd and ddqd (eq. 5 in full). dq0 = 0 is our choice (the paper is silent)."""
+
+    q0: Vector = (0.1598, 0.2257)
+    dq0: Vector = (0.0, 0.0)
+    qd: Trajectory = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        for key in ("q0", "dq0"):
+            object.__setattr__(self, key, vector_value(getattr(self, key), f"task.{key}", None))
+        object.__setattr__(self, "qd", trajectory_value(self.qd))
+
+    @property
+    def is_set_point(self) -> bool:
+        """Whether qd is constant."""
+        return not isinstance(self.qd, (SinusoidTrajectory, SampledTrajectory))
+
+
+def plain_value(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return [plain_value(v) for v in value]
+    if isinstance(value, dict):  # plant.locked_joints, model.locked_joints
+        return dict(value)
+    if isinstance(value, SampledTrajectory):  # the samples inline, not the file
+        return {
+            "kind": value.kind,
+            "t": plain_value(value.t),
+            "q": plain_value(value.q),
+            "boundary": value.boundary,
+        }
+    if isinstance(value, SinusoidTrajectory):
+        fields = {f.name: plain_value(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        return {"kind": value.kind, **fields}
+    return value

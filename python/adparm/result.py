@@ -1,0 +1,332 @@
+"""The result of a run: SimulationResult (its arrays, status and config), the exceptions that
+carry a partial one (SimulationDiverged, SimulationInterrupted), ApproximationWarning, and the
+one-line text of a step that failed after a run.
+
+The result type imports none of the modules that present it. Its methods that belong to the
+layers above (``diagnostics``: adparm.truth; ``plot``: adparm.plotting; ``save``,
+``to_dataframe``: adparm.storage; ``summary``: adparm.summary) call the function that module
+registers here with :func:`register` when it is imported (``import adparm`` imports them all);
+each registered function looks its implementation up when called (docs/design.md, "Layers")."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import warnings
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+import adparm._core as _core
+
+from .config import Config
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas
+    from matplotlib.figure import Figure
+
+__all__ = [
+    "ApproximationWarning",
+    "SimulationDiverged",
+    "SimulationInterrupted",
+    "SimulationResult",
+    "register",
+]
+
+#: The functions a result's methods call in the layers above, by method ("diagnose", "plot",
+#: "save", "to_dataframe", "summary"), each registered by its module (register).
+PRESENTERS: dict[str, Callable[..., Any]] = {}
+
+
+def register(method: str, function: Callable[..., Any]) -> None:
+    """Let SimulationResult's ``method`` call ``function(result, ...)`` (a module of the analysis
+    or output layer registers its function when it is imported)."""
+    PRESENTERS[method] = function
+
+
+def presenter(method: str) -> Callable[..., Any]:
+    try:
+        return PRESENTERS[method]
+    except KeyError:  # pragma: no cover - import adparm registers every one
+        raise RuntimeError(f"SimulationResult.{method}: import adparm first") from None
+
+
+#: A result's status: the run reached sim.T, diverged (SimulationDiverged), was stopped by Ctrl-C
+#: (SimulationInterrupted) or is still running (a result read from a run in progress).
+STATUSES = ("finished", "diverged", "interrupted", "running")
+
+ARRAYS_2 = ("q", "dq", "qd", "e1", "e2", "tau", "u", "u_hat", "mu", "probe")
+ARRAYS_N = ("critic_weights", "actor_weights")
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """One closed-loop run, one row per recorded step (all arrays read-only).
+
+    Returned by :func:`adparm.simulate`; ``.plot()``, ``.save()``, ``.summary()`` and
+    ``.to_dataframe()`` present it.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Time (s).
+    q, dq : ndarray, shape (n, 2)
+        Joint angles (rad) and velocities (rad/s).
+    qd : ndarray, shape (n, 2)
+        Desired joint angles (rad).
+    e1, e2 : ndarray, shape (n, 2)
+        Tracking error e1 = qd - q (rad) and filtered error e2 = de1 + alpha1 e1 (rad/s).
+    tau : ndarray, shape (n, 2)
+        Applied torque tau = h_hat + mu - u (N m).
+    u : ndarray, shape (n, 2)
+        The controller's input (adp: u_hat + probe).
+    u_hat : ndarray, shape (n, 2)
+        The actor's input (eq. 20).
+    mu : ndarray, shape (n, 2)
+        The RISE term (eq. 27).
+    probe : ndarray, shape (n, 2)
+        The probing signal.
+    critic_weights, actor_weights : ndarray, shape (n, K)
+        Wc and Wa, in the order of ``adparm.basis_names(config)`` (K = 8, or 6 for the
+        structured basis).
+    hjb_error : ndarray, shape (n,)
+        The HJB error of eq. (21).
+    cost : ndarray, shape (n,)
+        Accumulated cost of eq. (10), the integral of x^T Q x + u^T R u, integrated by RK4 with
+        the state.
+    covariance_reset_times : ndarray, shape (k,)
+        Times (s) at which Gamma was reset.
+    config : Config
+        The configuration of the run.
+    status : str
+        ``"finished"``, ``"diverged"``, ``"interrupted"`` or ``"running"``.
+    wall_time : float
+        Seconds spent in the core.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    qd: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    tau: np.ndarray
+    u: np.ndarray
+    u_hat: np.ndarray
+    mu: np.ndarray
+    probe: np.ndarray
+    critic_weights: np.ndarray
+    actor_weights: np.ndarray
+    hjb_error: np.ndarray
+    cost: np.ndarray
+    covariance_reset_times: np.ndarray
+    config: Config
+    status: str = "finished"
+    wall_time: float = field(default=float("nan"))
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
+        if n < 0:
+            raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
+        shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
+        joints = self.config.dof if isinstance(self.config, Config) else 2
+        shapes.update({name: (n, joints) for name in ARRAYS_2})
+        size = self.config.basis_size if isinstance(self.config, Config) else 8
+        shapes.update({name: (n, size) for name in ARRAYS_N})
+        for name, shape in shapes.items():
+            array = read_only_float(getattr(self, name))
+            if array.shape != shape:
+                raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
+            array.flags.writeable = False
+            object.__setattr__(self, name, array)
+        resets = np.array(self.covariance_reset_times, dtype=float).reshape(-1)
+        resets.flags.writeable = False
+        object.__setattr__(self, "covariance_reset_times", resets)
+        if self.status not in STATUSES:
+            raise ValueError(f"status: expected one of {', '.join(STATUSES)}, got {self.status!r}")
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        # pickle and copy.deepcopy rebuild through __init__, so the arrays are checked and
+        # read-only again (the default would restore them writable)
+        return (
+            SimulationResult,
+            tuple(getattr(self, f.name) for f in dataclasses.fields(self)),
+        )
+
+    @property
+    def covariance_resets(self) -> int:
+        """Number of resets of Gamma (eq. 24's reset rule)."""
+        return int(self.covariance_reset_times.size)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The arrays by name (copies), with status and wall_time."""
+        names = ("t", "hjb_error", "cost", *ARRAYS_2, *ARRAYS_N, "covariance_reset_times")
+        out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
+        out["status"] = self.status
+        out["wall_time"] = self.wall_time
+        return out
+
+    def plot(
+        self,
+        which: str | Iterable[str] | None = None,
+        *,
+        ax: Any = None,
+        fig: Figure | None = None,
+    ) -> dict[str, Figure] | Figure:
+        """Figures 2-4 of the paper and the torques (:func:`adparm.plotting.plot_result`).
+
+        Parameters
+        ----------
+        which : str or iterable of str, optional
+            Names from ``adparm.plotting.FIGURES`` (``fig2_critic_weights``,
+            ``fig3_actor_weights``, ``fig4_errors``, ``torques``). None (default) gives all of
+            them as a dict name -> Figure; a single name gives that Figure.
+        ax : Axes or sequence of Axes, optional
+            With a single name: draw into these axes (see :mod:`adparm.plotting`).
+        fig : Figure, optional
+            With a single name: add the panels to this figure.
+
+        Returns
+        -------
+        dict of str to Figure, or Figure
+        """
+        return presenter("plot")(self, which, ax=ax, fig=fig)
+
+    def save(self, path: str | Path) -> Path:
+        """Write to ``path``: ``.npz`` (everything, for adparm.load_result) or ``.csv``."""
+        return presenter("save")(self, path)
+
+    def to_dataframe(self) -> pandas.DataFrame:
+        """The time series as a pandas DataFrame (columns of adparm.storage.columns()).
+        Needs pandas (``pip install pandas``)."""
+        return presenter("to_dataframe")(self)
+
+    @functools.cached_property
+    def diagnostics(self) -> dict[str, Any]:
+        """The truth about this run (adparm.truth.diagnose): the verdict ("ok" or the problems
+        found: a non-positive-definite e2 block, away from a known W*, a basis that cannot
+        represent V*, learning not converged), the HJB residual of the final weights over the
+        explored region relative to x^T Q x, and the learned V against the best yardstick."""
+        return presenter("diagnose")(self)
+
+    def summary(self, tolerance: float | None = None) -> dict[str, Any]:
+        """The metrics of summary.json (adparm.summary.summarize)."""
+        return presenter("summary")(self, tolerance=tolerance)
+
+    def __repr__(self) -> str:
+        return (
+            f"SimulationResult(status={self.status!r}, rows={self.t.size}, "
+            f"t_end={self.t[-1] if self.t.size else float('nan'):g}, "
+            f"covariance_resets={self.covariance_resets}, wall_time={self.wall_time:.3g})"
+        )
+
+
+class SimulationDiverged(RuntimeError):
+    """A run whose state became non-finite or left sim.divergence_bound.
+
+    ``result`` holds what was recorded up to the last finite step; ``time`` is when it diverged.
+    From simulate_batch: ``index`` is the run's position in the batch and ``results`` holds every
+    run's result (None from simulate)."""
+
+    def __init__(
+        self,
+        message: str,
+        result: SimulationResult,
+        time: float,
+        *,
+        index: int | None = None,
+        results: list[SimulationResult] | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.result = result
+        self.time = time
+        self.index = index
+        self.results = results
+
+
+class SimulationInterrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT, or anything raising KeyboardInterrupt) stopped a call between two chunks.
+
+    It is a KeyboardInterrupt, so a script that does not catch it stops as usual. ``result``
+    holds what the call would have returned, up to where it stopped: from simulate, the
+    SimulationResult of the rows recorded so far (status "interrupted"); from simulate_batch, the
+    list of results (runs not done have status "interrupted"); from sweep, the SweepResult of the
+    points done; from compare, the Comparison of the controllers run so far. ``time`` is the
+    simulated time reached (simulate; None otherwise)."""
+
+    def __init__(self, message: str, result: Any, time: float | None = None) -> None:
+        super().__init__(message)
+        self.result = result
+        self.time = time
+
+
+def read_only_float(value: Any) -> np.ndarray:
+    """``value`` as a float array that nobody else can write: a read-only float64 array that is
+    not a view of another NumPy array is kept as it is (no copy: the core's recordings), anything
+    else is copied."""
+    if (
+        isinstance(value, np.ndarray)
+        and value.dtype == np.float64
+        and not value.flags.writeable
+        and not isinstance(value.base, np.ndarray)
+        and type(value) is np.ndarray
+    ):
+        return value
+    return np.array(value, dtype=float)
+
+
+def make_result(run: _core.Simulation, config: Config, wall_time: float) -> SimulationResult:
+    recording = run.recording()
+    for array in recording.values():
+        array.flags.writeable = False  # handed over: SimulationResult keeps them without a copy
+    return SimulationResult(
+        **recording,
+        covariance_reset_times=np.array(run.reset_times),
+        config=config,
+        status="interrupted" if run.status == "running" else run.status,
+        wall_time=wall_time,
+    )
+
+
+class ApproximationWarning(UserWarning):
+    """A learning run whose critic is not a good approximation of V*: the basis cannot represent
+    V* (the HJB residual of the final weights is large off the trajectory while small along it),
+    or learning has not converged. The message says which and what to try."""
+
+
+def warn_if_approximate(result: SimulationResult, stacklevel: int = 3) -> None:
+    """Emits ApproximationWarning when :func:`diagnose` finds that the basis cannot represent V*
+    or that learning has not converged (only for finished runs)."""
+    if result.status != "finished":
+        return
+    diagnostics = result.diagnostics
+    kind = diagnostics.get("approximation")
+    if kind is None and not diagnostics.get("problems"):
+        return
+    message = f"adparm: {diagnostics['verdict']}. Try: {'; '.join(diagnostics['advice']) or '-'}"
+    warnings.warn(message, ApproximationWarning, stacklevel=stacklevel)
+
+
+def post_run_failure(step: str, error: BaseException) -> str:
+    """One line for a post-run step that failed: the step, the error's type and its message
+    (its first line, at most 300 characters)."""
+    text = (str(error).strip().splitlines() or [""])[0]
+    if len(text) > 300:
+        text = text[:297] + "..."
+    return f"{step} failed after the run: {type(error).__name__}" + (f": {text}" if text else "")
+
+
+def stop_time(result: SimulationResult) -> float | None:
+    """When a run that did not finish stopped: a diverged run at the end of the step after its
+    last finite row (0 if it recorded none; the time SimulationDiverged reports when the state
+    left the bound within a step), an interrupted or running one at its last row. None for a
+    finished run."""
+    if result.status == "finished":
+        return None
+    t = result.t
+    if result.status == "diverged":
+        return min(float(t[-1]) + result.config.sim.dt, result.config.sim.T) if t.size else 0.0
+    return float(t[-1]) if t.size else 0.0
