@@ -21,6 +21,7 @@ LAYERS = {
     "_examples": 0,
     "physical": 0,
     "urdf": 0,
+    "term_checks": 0,
     "bases": 0,
     "_files": 0,
     # 1 schema: the configuration's sections, value checks and TOML text
@@ -30,6 +31,8 @@ LAYERS = {
     "_schema": 1,
     # 2 model: the arm, the basis, the exact optimum and the defaults derived from them
     "desired": 2,
+    "dynamics": 2,
+    "basis_family": 2,
     "optimal": 2,
     "rates": 2,
     "config": 2,
@@ -42,14 +45,18 @@ LAYERS = {
     "sweep": 3,
     # 4 analysis: what a run means
     "residual": 4,
+    "yardstick": 4,
     "truth": 4,
     "comparison": 4,
     # 5 output: files, figures, summaries
     "summary": 5,
+    "_figure_style": 5,
+    "weight_figures": 5,
     "plotting": 5,
     "storage": 5,
     "report": 5,
     # 6 interface
+    "cli_parser": 6,
     "cli": 6,
     "__init__": 6,
     "__main__": 6,

@@ -486,7 +486,7 @@ def test_cli_dt_auto_is_passed_on_as_the_string(monkeypatch, tmp_path) -> None:
         return original(self, changes)
 
     monkeypatch.setattr(adparm.Config, "updated", updated)
-    args = cli._parser().parse_args(["run", "x.toml", "--dt", "auto", "--T", "3"])
+    args = cli.build_parser().parse_args(["run", "x.toml", "--dt", "auto", "--T", "3"])
     monkeypatch.setattr(cli, "load_config", lambda path: paper)
     try:
         config = cli._config(args)

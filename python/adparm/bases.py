@@ -15,13 +15,8 @@ forward-mode differentiation, with no Python call and no heap allocation per eva
 
 from __future__ import annotations
 
-import ast
-import difflib
 import itertools
 import math
-import operator
-import re
-import reprlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -32,6 +27,22 @@ import adparm._core as _core
 
 if TYPE_CHECKING:
     import sympy
+from .term_checks import (
+    FUNCTIONS,
+    MAX_DEGREE,
+    MAX_EXPANSION,
+    MAX_FUNCTIONS,
+    MAX_TERMS,
+    MAX_TOTAL_EXPANSION,
+    check_joints,
+    check_text,
+    did_you_mean,
+    expression_text,
+    int_text,
+    range_text,
+    term_repr,
+    term_short,
+)
 
 __all__ = [
     "AUGMENTED_TERMS",
@@ -62,34 +73,11 @@ PAPER_TERMS = (
 AUGMENTED_TERMS = tuple(term.replace("cos(x2)", "cos(q2)") for term in PAPER_TERMS)
 #: Names that expand to lists of terms.
 FAMILIES = ("paper", "augmented", "quadratic", "polynomial")
-#: The functions a term may call.
-FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "tanh")
-
-#: The most functions a basis may have: the C++ core's kMaxBasisSize.
-MAX_FUNCTIONS = 128
-#: The most terms :func:`basis_terms` and :func:`polynomial_terms` list (a basis for a run has at
-#: most MAX_FUNCTIONS).
-MAX_TERMS = 1024
-#: The largest degree of the ``"polynomial"`` family (one joint reaches 128 functions at 22).
-MAX_DEGREE = 20
-#: Bounds on a term, checked on its text before sympy does any work: its length, the nesting of
-#: functions, powers, signs and brackets, the size of an exponent and of an integer, and the
-#: number of terms its expansion (with q = qd - e1 substituted) may have.
-MAX_TERM_LENGTH = 1000
-MAX_NESTING = 32
-MAX_EXPONENT = 64
-MAX_INTEGER_DIGITS = 30
-MAX_EXPANSION = 1000
-#: The most terms the expansions of all of a basis' terms may have together.
-MAX_TOTAL_EXPANSION = 10_000
-
-_ALLOWED = re.compile(r"^[A-Za-z0-9_\s.+\-*/^()]*$")
-_ATTRIBUTE = re.compile(r"\.\s*[A-Za-z_]")
 
 
 def variable_names(joints: int) -> list[str]:
     """The variable names of a term for n joints: x1 to x2n, q1 to qn, qd1 to qdn."""
-    _check_joints(joints)
+    check_joints(joints)
     return (
         [f"x{i}" for i in range(1, 2 * joints + 1)]
         + [f"q{i}" for i in range(1, joints + 1)]
@@ -107,7 +95,7 @@ def quadratic_terms(joints: int) -> list[str]:
 
 def polynomial_terms(joints: int, degree: int) -> list[str]:
     """Every monomial of the error state x (2n) of even degree 2, 4, ..., ``degree``."""
-    _check_joints(joints)
+    check_joints(joints)
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)):
         raise ValueError(f"degree: must be an even integer >= 2, got {degree!r}")
     if degree < 2 or degree % 2:
@@ -115,7 +103,7 @@ def polynomial_terms(joints: int, degree: int) -> list[str]:
             f"degree: must be an even integer >= 2 (a value function has even degree), got {degree}"
         )
     if degree > MAX_DEGREE:
-        raise ValueError(f"degree: must be <= {MAX_DEGREE}, got {_int_text(int(degree))}")
+        raise ValueError(f"degree: must be <= {MAX_DEGREE}, got {int_text(int(degree))}")
     count = polynomial_size(joints, int(degree))
     if count > MAX_TERMS:
         raise ValueError(
@@ -152,20 +140,20 @@ def _unique_terms(
 ) -> list[tuple[str, sympy.Expr]]:
     """basis_terms, with each term's parsed expression; at most ``limit`` terms, counted (the
     families by their size) before any is listed or parsed."""
-    _check_joints(joints)
+    check_joints(joints)
     items = [basis] if isinstance(basis, str) else list(basis)
     if not items:
         raise ValueError("basis: needs at least one term or family")
     for item in items:
         if not isinstance(item, str):
-            raise ValueError(f"basis: each entry must be a string, got {_repr(item)}")
+            raise ValueError(f"basis: each entry must be a string, got {term_repr(item)}")
     names = {item.strip() for item in items}
     count = sum(item.strip() not in FAMILIES for item in items)
     count += sum(len(PAPER_TERMS) for name in ("paper", "augmented") if name in names)
     if "polynomial" in names and degree is not None:
         if isinstance(degree, (int, np.integer)) and not isinstance(degree, bool):
             if degree > MAX_DEGREE:
-                raise ValueError(f"degree: must be <= {MAX_DEGREE}, got {_int_text(int(degree))}")
+                raise ValueError(f"degree: must be <= {MAX_DEGREE}, got {int_text(int(degree))}")
             if degree >= 2:
                 count += polynomial_size(joints, int(degree))
     elif "quadratic" in names:  # the polynomial family includes it
@@ -195,7 +183,7 @@ def _unique_terms(
             terms.append(item)
     work = 0
     for term in terms:  # every term bounded, and their expansion in all, before sympy parses one
-        work += _check_text(term, joints)
+        work += check_text(term, joints)
         if work > MAX_TOTAL_EXPANSION:
             raise ValueError(
                 f"basis: its terms expand to more than {MAX_TOTAL_EXPANSION:_} terms in all "
@@ -228,7 +216,7 @@ def parse_term(term: str, joints: int = 2) -> sympy.Expr:
     )
 
     names = variable_names(joints)
-    _check_text(term, joints)
+    check_text(term, joints)
     local: dict[str, Any] = {name: sympy.Symbol(name) for name in names}
     local.update({name: getattr(sympy, name) for name in FUNCTIONS})
     local["pi"] = sympy.pi
@@ -244,7 +232,9 @@ def parse_term(term: str, joints: int = 2) -> sympy.Expr:
             transformations=standard_transformations + (convert_xor,),
         )
     except (SyntaxError, TypeError, ValueError, TokenError) as error:
-        raise ValueError(f"basis term {term!r}: cannot parse it ({_short(str(error))})") from None
+        raise ValueError(
+            f"basis term {term!r}: cannot parse it ({term_short(str(error))})"
+        ) from None
     except (RecursionError, MemoryError, OverflowError) as error:  # bounded above: a safety net
         raise ValueError(
             f"basis term {term!r}: too large to parse ({type(error).__name__})"
@@ -255,17 +245,17 @@ def parse_term(term: str, joints: int = 2) -> sympy.Expr:
         name = type(function).__name__
         raise ValueError(
             f"basis term {term!r}: unknown function {name!r} (known: {', '.join(FUNCTIONS)})"
-            + _did_you_mean(name, FUNCTIONS)
+            + did_you_mean(name, FUNCTIONS)
         )
     for symbol in sorted(expression.free_symbols, key=str):
         if symbol.name not in names:
             raise ValueError(
                 f"basis term {term!r}: unknown variable {symbol.name!r} "
-                f"({joints} joints: {_range_text(joints)})" + _did_you_mean(symbol.name, names)
+                f"({joints} joints: {range_text(joints)})" + did_you_mean(symbol.name, names)
             )
     if not expression.free_symbols:
         raise ValueError(
-            f"basis term {term!r}: is the constant {_expression_text(expression)}; a basis "
+            f"basis term {term!r}: is the constant {expression_text(expression)}; a basis "
             "function must depend on "
             f"the state (only its gradient enters the HJB error)"
         )
@@ -305,7 +295,7 @@ def compile_terms(
         if labels is not None:
             label = labels[i]
         else:
-            label = term if isinstance(term, str) else _expression_text(term)
+            label = term if isinstance(term, str) else expression_text(term)
         _emit(expression.xreplace(substitution), index, program, label)
         program.append((_core.ExpressionOp.store, 0.0))
     opcodes = np.array([int(op) for op, _ in program], dtype=np.int32)
@@ -442,7 +432,7 @@ class ExpressionBasis:
             x.shape[:-1] + (self.joints,),
         )
         return (
-            f"basis term {_short(repr(self.terms[column]))}: {what} at x = "
+            f"basis term {term_short(repr(self.terms[column]))}: {what} at x = "
             f"{np.round(x[row], 3).tolist()}, qd = {np.round(desired[row], 3).tolist()} (sqrt "
             "and log need positive arguments, 1/f and tan finite values)"
         )
@@ -473,300 +463,6 @@ def check_real(array: np.ndarray, name: str) -> None:
             f"{name}: expected real numbers, got complex values (the imaginary part would be "
             "dropped)"
         )
-
-
-def _repr(value: Any) -> str:
-    """repr(value) for a message: a string cut to 80 characters, anything else with bounded
-    nesting (never a RecursionError)."""
-    if isinstance(value, str):
-        return _short(repr(value))
-    short = reprlib.Repr()
-    short.maxlevel, short.maxlist, short.maxstring, short.maxother = 3, 6, 60, 60
-    try:
-        return _short(short.repr(value))
-    except Exception:  # noqa: BLE001 - a repr that fails
-        return f"<{type(value).__name__}>"
-
-
-def _expression_text(expression: Any) -> str:
-    """A sympy expression as text for a message, cut to 60 characters (never raises: sympy
-    cannot print some numbers beyond a double's range)."""
-    try:
-        return _short(str(expression), 60)
-    except Exception:  # noqa: BLE001
-        return "a number beyond the range of a double"
-
-
-def _short(text: str, size: int = 80) -> str:
-    """``text`` cut to ``size`` characters (a hostile term is never printed whole)."""
-    return text if len(text) <= size else text[: size - 20] + f"... ({len(text):_} characters)"
-
-
-def _int_text(value: int) -> str:
-    digits = (
-        len(str(abs(value))) if value.bit_length() < 4000 else int(value.bit_length() * 0.30103)
-    )
-    return str(value) if digits <= 20 else f"a {digits:_}-digit number"
-
-
-_BINARY = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
-_OPERATIONS = {
-    ast.Add: operator.add,
-    ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
-    ast.Div: operator.truediv,
-    ast.Pow: operator.pow,
-}
-_SUMS = (ast.Add, ast.Sub)
-_PRODUCTS = (ast.Mult, ast.Div)
-
-
-def _check_text(term: str, joints: int) -> int:
-    """The checks of a term's text (type, length, characters, then :func:`_check_bounds`);
-    returns the work of expanding it."""
-    if not isinstance(term, str):
-        raise ValueError(f"basis term {_repr(term)}: must be a string")
-    if not term.strip():
-        raise ValueError("basis term '': empty")
-    if len(term) > MAX_TERM_LENGTH:
-        raise ValueError(
-            f"basis term {_repr(term)}: {len(term):_} characters; at most {MAX_TERM_LENGTH}"
-        )
-    if not _ALLOWED.match(term) or _ATTRIBUTE.search(term) or "__" in term:
-        raise ValueError(
-            f"basis term {_repr(term)}: may contain only variables "
-            f"({_range_text(joints)}), numbers, + - * / ^ ** ( ) and the functions "
-            f"{', '.join(FUNCTIONS)}"
-        )
-    return _check_bounds(term, joints)
-
-
-def _check_bounds(term: str, joints: int) -> int:
-    """Refuses, from the text alone and before sympy sees it, a term that is not an arithmetic
-    expression of names, numbers and calls (``and``, ``if``, comparisons, ``//``, complex
-    numbers), that nests deeper than MAX_NESTING, whose exponents are not numbers of at most
-    MAX_EXPONENT, whose integers have more than MAX_INTEGER_DIGITS digits or whose floats
-    overflow, or whose expansion (q = qd - e1 substituted) has more than MAX_EXPANSION terms.
-    Iterative: no recursion, whatever the text. Returns the work of expanding it (in terms)."""
-    where = f"basis term {_repr(term)}"
-    try:
-        tree = ast.parse(term.replace("^", "**").strip(), mode="eval")
-    except SyntaxError as error:
-        raise ValueError(f"{where}: cannot parse it ({_short(error.msg)})") from None
-    except (RecursionError, MemoryError, ValueError, OverflowError) as error:
-        raise ValueError(f"{where}: too deeply nested ({type(error).__name__})") from None
-    q_names = {f"q{i}" for i in range(1, joints + 1)}
-    # first pass, top-down: node kinds and nesting depth (a chain of + - or of * / is one level)
-    stack: list[tuple[ast.AST, int, type | None]] = [(tree.body, 0, None)]
-    order: list[ast.AST] = []
-    while stack:
-        node, depth, parent = stack.pop()
-        if depth > MAX_NESTING:
-            raise ValueError(f"{where}: nested more than {MAX_NESTING} deep")
-        order.append(node)
-        if isinstance(node, ast.BinOp):
-            kind = type(node.op)
-            if kind not in _BINARY:
-                raise ValueError(f"{where}: operator {_op_text(node.op)} is not allowed")
-            group = _SUMS if kind in _SUMS else _PRODUCTS if kind in _PRODUCTS else None
-            deeper = (
-                depth if group is not None and parent is not None and parent in group else depth + 1
-            )
-            stack.append((node.left, deeper, kind))
-            stack.append((node.right, deeper, kind))
-        elif isinstance(node, ast.UnaryOp):
-            if not isinstance(node.op, (ast.USub, ast.UAdd)):
-                raise ValueError(f"{where}: operator {_op_text(node.op)} is not allowed")
-            stack.append((node.operand, depth + 1, None))
-        elif isinstance(node, ast.Call):
-            if (
-                not isinstance(node.func, ast.Name)
-                or node.keywords
-                or len(node.args) != 1
-                or isinstance(node.args[0], ast.Starred)
-            ):
-                raise ValueError(f"{where}: a function takes one argument, as in sin(x1)")
-            stack.append((node.args[0], depth + 1, None))
-        elif isinstance(node, ast.Constant):
-            value = node.value
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ValueError(f"{where}: {_short(repr(value), 30)} is not a real number")
-            if isinstance(value, int) and value.bit_length() > MAX_INTEGER_DIGITS * 3.33:
-                raise ValueError(
-                    f"{where}: an integer of {len(str(value)):_} digits; at most "
-                    f"{MAX_INTEGER_DIGITS}"
-                )
-            if isinstance(value, float) and not math.isfinite(value):
-                text = ast.get_source_segment(term.replace("^", "**").strip(), node) or "?"
-                raise ValueError(
-                    f"{where}: the number {_short(text, 30)} is beyond the range of a double "
-                    "(about 1.8e308)"
-                )
-        elif not isinstance(node, ast.Name):
-            raise ValueError(
-                f"{where}: {type(node).__name__.lower()} ({_node_text(node)}) is not allowed; a "
-                f"term is arithmetic (+ - * / ^) of variables, numbers and "
-                f"{', '.join(FUNCTIONS)}"
-            )
-    # second pass, bottom-up: the number of terms of each node's expansion (an upper bound), and
-    # the work of expanding: the terms of the whole term, of each function's argument, of each
-    # denominator and of each base of a negative or fractional power (each is expanded)
-    size: dict[int, int] = {}
-    values: dict[int, float] = {}  # the constant parts, as doubles: each must be finite and real
-    work = 0
-    cap = MAX_EXPANSION + 1
-    source = term.replace("^", "**").strip()
-    for node in reversed(order):
-        expanded = 0
-        value = _fold(node, values, where, source)
-        if value is not None:
-            values[id(node)] = value
-        if isinstance(node, ast.Name):
-            terms = 2 if node.id in q_names else 1
-        elif isinstance(node, ast.Constant):
-            terms = 1
-        elif isinstance(node, ast.UnaryOp):
-            terms = size[id(node.operand)]
-        elif isinstance(node, ast.Call):
-            terms, expanded = 1, size[id(node.args[0])]
-        else:  # BinOp
-            left, right = size[id(node.left)], size[id(node.right)]
-            if isinstance(node.op, _SUMS):
-                terms = left + right
-            elif isinstance(node.op, ast.Mult):
-                terms = left * right
-            elif isinstance(node.op, ast.Div):
-                terms, expanded = left, right
-            else:
-                if id(node.right) not in values:
-                    raise ValueError(
-                        f"{where}: an exponent must be a number (write exp(b*log(a)) for a "
-                        "variable power)"
-                    )
-                exponent = values[id(node.right)]
-                if abs(exponent) > MAX_EXPONENT:
-                    raise ValueError(
-                        f"{where}: the exponent {_number_text(exponent)} is larger than "
-                        f"{MAX_EXPONENT} in size"
-                    )
-                k = int(abs(exponent))
-                # the distinct monomials of degree k in `left` summands (the multinomial)
-                power = math.comb(left + k - 1, k) if exponent == k else left
-                if exponent == k and exponent >= 0:
-                    terms = power
-                else:  # 1 / (...)^k or (...)^(1/2): one factor, expanded inside
-                    terms, expanded = 1, power
-        terms = min(terms, cap)
-        work += min(expanded, cap)
-        if terms >= cap or expanded >= cap or work >= 4 * cap:
-            raise ValueError(
-                f"{where}: its expansion has more than {MAX_EXPANSION} terms; write it "
-                "as several terms"
-            )
-        size[id(node)] = terms
-    work += size[id(tree.body)]
-    if work >= 4 * cap:
-        raise ValueError(
-            f"{where}: its expansion has more than {MAX_EXPANSION} terms; write it as several terms"
-        )
-    return work
-
-
-def _op_text(op: ast.AST) -> str:
-    return {
-        ast.FloorDiv: "//",
-        ast.Mod: "%",
-        ast.Not: "not",
-        ast.Invert: "~",
-        ast.BitXor: "^",
-        ast.MatMult: "@",
-    }.get(type(op), type(op).__name__)
-
-
-def _node_text(node: ast.AST) -> str:
-    names = {
-        ast.BoolOp: "and/or",
-        ast.IfExp: "if ... else",
-        ast.Compare: "a comparison",
-        ast.Lambda: "lambda",
-        ast.NamedExpr: ":=",
-    }
-    return names.get(type(node), type(node).__name__)
-
-
-def _number_text(value: float) -> str:
-    return f"{value:.6g}"
-
-
-def _fold(node: ast.AST, values: dict[int, float], where: str, source: str) -> float | None:
-    """The value of ``node`` as a double if it is constant (numbers, pi, + - * / ** and the
-    functions of constants; its children already folded into ``values``), else None. A constant
-    that overflows a double, divides by zero or is not real is a ValueError: sympy would carry
-    it exactly and may take forever on it (exp(1e300^27))."""
-    functions = {name: getattr(math, name) for name in FUNCTIONS}
-    try:
-        if isinstance(node, ast.Constant):
-            result = float(node.value)
-        elif isinstance(node, ast.Name):
-            if node.id != "pi":
-                return None
-            result = math.pi
-        elif isinstance(node, ast.UnaryOp):
-            if id(node.operand) not in values:
-                return None
-            operand = values[id(node.operand)]
-            result = -operand if isinstance(node.op, ast.USub) else operand
-        elif isinstance(node, ast.Call):
-            name = node.func.id  # type: ignore[attr-defined]
-            if id(node.args[0]) not in values or name not in functions:
-                return None
-            result = functions[name](values[id(node.args[0])])
-        elif isinstance(node, ast.BinOp):
-            if id(node.left) not in values or id(node.right) not in values:
-                return None
-            a, b = values[id(node.left)], values[id(node.right)]
-            if isinstance(node.op, ast.Pow) and abs(b) > MAX_EXPONENT:
-                raise ValueError(
-                    f"{where}: the exponent {_number_text(b)} is larger than {MAX_EXPONENT} in size"
-                )
-            result = _OPERATIONS[type(node.op)](a, b)
-        else:
-            return None
-    except ZeroDivisionError:
-        raise ValueError(f"{where}: {_segment(source, node)} divides by zero") from None
-    except OverflowError:
-        raise ValueError(
-            f"{where}: the constant {_segment(source, node)} is beyond the range of a double"
-        ) from None
-    except (ValueError, TypeError) as error:
-        if str(error).startswith("basis term"):
-            raise
-        raise ValueError(f"{where}: the constant {_segment(source, node)} is not real") from None
-    if isinstance(result, complex):
-        raise ValueError(f"{where}: the constant {_segment(source, node)} is not real")
-    if not math.isfinite(result):
-        raise ValueError(
-            f"{where}: the constant {_segment(source, node)} is beyond the range of a double"
-        )
-    return float(result)
-
-
-def _segment(source: str, node: ast.AST) -> str:
-    return _short(ast.get_source_segment(source, node) or "?", 40)
-
-
-def _check_joints(joints: int) -> None:
-    if isinstance(joints, bool) or not isinstance(joints, (int, np.integer)) or joints < 1:
-        raise ValueError(f"joints: must be an integer >= 1, got {joints!r}")
-
-
-def _range_text(joints: int) -> str:
-    return f"x1..x{2 * joints}, q1..q{joints}, qd1..qd{joints}"
-
-
-def _did_you_mean(name: str, choices: Sequence[str]) -> str:
-    close = difflib.get_close_matches(name, list(choices), n=1, cutoff=0.5)
-    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def _symbol(name: str) -> Any:
@@ -805,7 +501,7 @@ def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: st
         value = complex(expression)
         if value.imag != 0 or not np.isfinite(value.real):
             raise ValueError(
-                f"basis term {_repr(term)}: the constant {_expression_text(expression)} is not "
+                f"basis term {term_repr(term)}: the constant {expression_text(expression)} is not "
                 "finite and real"
             )
         program.append((op.constant, value.real))
@@ -837,7 +533,7 @@ def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: st
     elif expression.is_Pow:
         if not expression.exp.is_number:
             raise ValueError(
-                f"basis term {_repr(term)}: the exponent of {_expression_text(expression)} must "
+                f"basis term {term_repr(term)}: the exponent of {expression_text(expression)} must "
                 "be a number "
                 f"(write exp(b*log(a)) for a variable power)"
             )
@@ -849,6 +545,6 @@ def _emit(expression: sympy.Expr, index: dict[str, int], program: list, term: st
         program.append((getattr(op, type(expression).__name__), 0.0))
     else:
         raise ValueError(
-            f"basis term {_repr(term)}: cannot compile {_expression_text(expression)} "
+            f"basis term {term_repr(term)}: cannot compile {expression_text(expression)} "
             f"({type(expression).__name__})"
         )

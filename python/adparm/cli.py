@@ -22,15 +22,15 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ._files import OutputError, OutputFolder
+from .cli_parser import build_parser
 from .comparison import (
-    DEFAULT_KINDS,
     J_STAR_INTERRUPTED,
     Comparison,
     compare,
     controller_configs,
 )
-from .config import Config, load_config, paper_config, tomllib
-from .report import FIGURE_FORMATS, check_formats, report_files, write_report, write_summary
+from .config import Config, load_config, paper_config
+from .report import report_files, write_report, write_summary
 from .result import post_run_failure
 from .simulation import (
     SimulationDiverged,
@@ -104,219 +104,6 @@ class _Signals:
 
     def status(self) -> int:
         return 128 + (self.received or signal.SIGINT)
-
-
-def _formats(text: str) -> tuple[str, ...]:
-    try:
-        formats = check_formats(f.strip() for f in text.split(",") if f.strip())
-    except ValueError:
-        formats = ()
-    if not formats:
-        raise argparse.ArgumentTypeError(
-            f"expected a comma-separated list of {', '.join(FIGURE_FORMATS)}, got {text!r}"
-        )
-    return formats
-
-
-EXIT_STATUS_TEXT = (
-    "exit status: 0 done; 1 a run diverged (its rows are written); 2 bad input or output path "
-    "(nothing was run); 3 a file could not be written; 130 Ctrl-C, 143 SIGTERM (what was done is "
-    "written)"
-)
-
-
-class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
-    """Each option's default after its help, except flags and defaults the help already says."""
-
-    def _get_help_string(self, action: argparse.Action) -> str:
-        if action.default in (None, False) or "default" in (action.help or ""):
-            return action.help or ""
-        return super()._get_help_string(action)
-
-
-def _parser() -> argparse.ArgumentParser:
-    from . import __version__
-
-    parser = argparse.ArgumentParser(
-        prog="adparm",
-        description="Exact linearization, RISE and online actor-critic ADP for robot arms: run "
-        "the paper's instance or your own configuration and write figures, summaries and data.",
-        epilog=EXIT_STATUS_TEXT,
-        formatter_class=_HelpFormatter,
-    )
-    parser.add_argument("--version", action="version", version=f"adparm {__version__}")
-    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
-    def add(name: str, help: str, description: str) -> argparse.ArgumentParser:
-        return commands.add_parser(
-            name,
-            help=help,
-            description=description,
-            epilog=EXIT_STATUS_TEXT,
-            formatter_class=_HelpFormatter,
-        )
-
-    def common(sub: argparse.ArgumentParser, default_out: str, *, dt: bool = True) -> None:
-        sub.add_argument(
-            "--out",
-            type=Path,
-            default=Path(default_out),
-            help="output folder (created if needed; adparm overwrites only files it wrote)",
-        )
-        sub.add_argument(
-            "--formats",
-            type=_formats,
-            default="png,svg",
-            help="figure formats, comma-separated (png, svg, pdf)",
-        )
-        sub.add_argument("--no-figures", action="store_true", help="write no figures")
-        sub.add_argument("--no-progress", action="store_true", help="show no progress bar")
-        _horizon_options(sub, dt=dt)
-
-    reproduce = add(
-        "reproduce",
-        "run the paper's instance and write Figures 2-4, summary and data",
-        "Run the paper's two-link instance (Section 4, with the corrections of the errata) and "
-        "write to --out: result.npz and result.csv (every recorded step), config.toml, "
-        "summary.json and summary.md (metrics and deviations from the paper) and the figures "
-        "fig2_critic_weights, fig3_actor_weights, fig4_errors and torques.",
-    )
-    common(reproduce, "results", dt=False)  # the paper's step; --T shortens the run
-    run = add(
-        "run",
-        "run a TOML configuration and write the same files",
-        "Run the configuration in CONFIG (keys left out take the paper's values) and write the "
-        "same files as reproduce to --out.",
-    )
-    run.add_argument("config", type=Path, help="TOML file ([plant] [task] [cost] ... [sim])")
-    common(run, "results")
-    for sub in (reproduce, run):
-        sub.add_argument(
-            "--check-dt",
-            action="store_true",
-            help="also run the first second with sim.dt and sim.dt/2 and report the integration "
-            "error of the learning transient (summary field step_size_check)",
-        )
-    comparison = add(
-        "compare",
-        "run the same arm, task and initial state under several controllers and tabulate "
-        "cost, errors and torques",
-        "Run adp (the learning run and a second run from its learned weights without "
-        "probing), rise, pd and optimal on the same arm, task and initial state; write "
-        "compare.md/csv/json, the figure compare.<format> and config.toml to --out.",
-    )
-    comparison.add_argument(
-        "config",
-        type=Path,
-        nargs="?",
-        default=None,
-        help="TOML file (default: the paper's instance); controller.kind is replaced per run",
-    )
-    common(comparison, "compare")
-    comparison.add_argument(
-        "--kinds",
-        default=",".join(DEFAULT_KINDS),
-        help="controllers, comma-separated",
-    )
-    sweeping = add(
-        "sweep",
-        "run a grid of settings and tabulate the summary metrics of each point",
-        "Run every combination of the --grid values from the configuration (the "
-        "paper's instance without a file) in parallel threads and write one row of summary "
-        "metrics per point to --out (a diverged run keeps its row, status diverged).",
-    )
-    sweeping.add_argument("config", type=Path, nargs="?", default=None, help="base TOML file")
-    sweeping.add_argument(
-        "--grid",
-        action="append",
-        type=_grid_entry,
-        required=True,
-        metavar="SECTION.KEY=V1,V2,...",
-        help="values to try, as TOML values separated by commas, e.g. critic.eta_c=100,800, "
-        'task.q0=[0.1,0.2],[0.5,-0.3] or (strings in quotes) \'controller.kind="adp","pd"\'; '
-        "one --grid per key",
-    )
-    sweeping.add_argument(
-        "--out", type=Path, default=Path("sweep.csv"), help="table file: .csv, .json or .md"
-    )
-    sweeping.add_argument(
-        "--threads",
-        type=int,
-        default=None,
-        help="threads (default: every CPU this process can use)",
-    )
-    sweeping.add_argument("--no-progress", action="store_true", help="show no progress bar")
-    _horizon_options(sweeping)
-    return parser
-
-
-def _horizon_options(sub: argparse.ArgumentParser, *, dt: bool = True) -> None:
-    """--T (sim.T) and, unless dt is False, --dt (sim.dt): checked by Config.updated."""
-    sub.add_argument(
-        "--T",
-        type=_number_or_text,
-        default=None,
-        metavar="SECONDS",
-        help="horizon sim.T in s (default: the config's)",
-    )
-    if dt:
-        sub.add_argument(
-            "--dt",
-            type=_number_or_text,
-            default=None,
-            metavar="SECONDS",
-            help='RK4 step sim.dt in s, or "auto" (default: the config\'s)',
-        )
-
-
-def _number_or_text(text: str) -> float | str:
-    """A float if ``text`` reads as one, else ``text`` itself (e.g. "auto"), so that the
-    configuration's own check names the setting and what it accepts."""
-    try:
-        return float(text)
-    except ValueError:
-        return text.strip()
-
-
-#: The deepest nesting of brackets and braces in a --grid value (TOML's reader recurses).
-MAX_GRID_NESTING = 32
-
-
-def _nesting(text: str) -> int:
-    """The deepest nesting of [ ] and { } in ``text`` outside quoted strings (an upper bound)."""
-    depth = deepest = 0
-    quote = ""
-    for char in text:
-        if quote:
-            quote = "" if char == quote else quote
-        elif char in "\"'":
-            quote = char
-        elif char in "[{":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif char in "]}":
-            depth -= 1
-    return deepest
-
-
-def _grid_entry(text: str) -> tuple[str, list]:
-    name, separator, values = text.partition("=")
-    if not separator or not name.strip() or not values.strip():
-        raise argparse.ArgumentTypeError(f"expected SECTION.KEY=V1,V2,..., got {text!r}")
-    depth = _nesting(values)
-    if depth > MAX_GRID_NESTING:
-        raise argparse.ArgumentTypeError(
-            f"{name.strip()}: values nested {depth} deep; at most {MAX_GRID_NESTING}"
-        )
-    try:
-        parsed = tomllib.loads(f"values = [{values}]")["values"]
-    except (RecursionError, MemoryError):  # a safety net below the bound above
-        raise argparse.ArgumentTypeError(f"{name.strip()}: values nested too deeply") from None
-    except tomllib.TOMLDecodeError as error:
-        raise argparse.ArgumentTypeError(
-            f"{name.strip()}: expected TOML values separated by commas, got {values!r} ({error})"
-        ) from error
-    return name.strip(), parsed
 
 
 def _say(command: str, text: str) -> None:
@@ -780,7 +567,7 @@ def _save_one(comparison: Comparison, name: str, temporary: Path) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``adparm`` command; returns the exit status (see the module's doc)."""
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     if args.command == "compare":
         return _compare(args)
     if args.command == "sweep":

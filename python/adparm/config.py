@@ -33,7 +33,6 @@ from ._arm_sections import (
     SinusoidTrajectory,
     TaskConfig,
     plain_value,
-    urdf_structured_size,
 )
 from ._fields import (
     ARM_KEYS,
@@ -50,7 +49,6 @@ from ._fields import (
 from ._schema import ConfigSchema
 from ._sections import (
     BASIS_KINDS,
-    BASIS_SIZES,
     CONTROLLER_KINDS,
     EPSILON_T_EXTRAPOLATION,
     EPSILON_T_PROBING,
@@ -72,10 +70,10 @@ from ._sections import (
     ProbeConfig,
     SimConfig,
 )
+from .basis_family import basis_for
 from .desired import desired_state
-from .optimal import arm_terms, initial_error_state
+from .optimal import initial_error_state
 from .rates import auto_step, closed_loop_rates, urdf_defaults
-from .urdf import config_arm
 
 __all__ = [
     "ActorConfig",
@@ -207,45 +205,14 @@ class Config(ConfigSchema):
 
     def _default_initial_weights(self, key: str) -> np.ndarray:
         """The basis' default initial weights (InitConfig), whether or not init gives some."""
-        if self.controller.is_expression:
-            return self._expression_initial_weights(key)
-        if self.controller.basis == "structured":
-            if self.plant.urdf is not None:
-                # K = I and the believed model's base parameters: u_hat = -R^-1 e2 at first
-                return config_arm(self, model=True).structured_weights(np.eye(self.dof))
-            p = self.model.resolve(self.plant)
-            return np.array([1.0, 0.0, 1.0, p["p1"], p["p2"], p["p3"]])
-        return np.ones(BASIS_SIZES[self.controller.basis])
+        return basis_for(self).initial_weights(self, key)
 
     @property
     def basis_size(self) -> int:
         """The number of functions of controller.basis on this arm (the length of the weights):
         the structured basis of a URDF arm has n (n + 1) / 2 + one per base inertial parameter
         of the believed model's URDF."""
-        if self.plant.urdf is not None and self.controller.basis == "structured":
-            believed = self.model.resolve_urdf(self.plant)
-            return urdf_structured_size(
-                believed["urdf"],
-                "model.urdf" if self.model.urdf else "plant.urdf",
-                believed["locked_joints"],
-            )
-        return self.controller.basis_size(self.dof)
-
-    def _expression_initial_weights(self, key: str) -> np.ndarray:
-        """The weights of x^T blockdiag(I, M(qd(0))) x (the believed model's inertia at the
-        desired position): the actor then starts at u_hat = -R^-1 e2, which stabilises."""
-        n = self.dof
-        qd = desired_state(self, 0.0)[0]
-        M = arm_terms(self, qd, np.zeros(n), model=True)["M"]
-        P = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), M]])
-        try:
-            return self.controller.expression_basis(n).quadratic_form_weights(P)
-        except ValueError as error:
-            raise ValueError(
-                f"init.{key}: controller.basis = {plain_value(self.controller.basis)!r} cannot "
-                "represent the default initial value x^T blockdiag(I, M(qd)) x "
-                f"({error}); set init.critic_weights and init.actor_weights"
-            ) from None
+        return basis_for(self).size(self)
 
     def left_out_values(self) -> dict[str, tuple[Any, str]]:
         """The value each setting that adparm resolves when it is left out takes for this

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from .basis_family import UrdfStructuredBasis, basis_for
 from .config import Config
 from .desired import desired_state
 from .rates import AUTO_MARGIN, RK4_STABILITY_LIMIT, auto_step, closed_loop_rates, rates_text
@@ -39,7 +40,7 @@ def initial_actor_e2_block(config: Config) -> dict[str, float] | None:
     {"min_eigenvalue": lambda_min(M_w), "rate": max |eig(A)| (1/s)}; None for other bases.
     lambda_min <= 0 pushes e2 away; rate * sim.dt above RK4_STABILITY_LIMIT makes the first steps
     of RK4 unstable (the weights all ones on the planar 3-link arm: 4600/s)."""
-    if config.plant.urdf is None or config.controller.basis != "structured":
+    if not isinstance(basis_for(config), UrdfStructuredBasis):
         return None
     n = config.dof
     qd = desired_state(config, 0.0)[0]

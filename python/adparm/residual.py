@@ -10,7 +10,8 @@ import numpy as np
 import adparm._core as _core
 
 from .config import Config
-from .optimal import basis_names, check_config, error_states, weight_vector
+from .dynamics import check_config, error_states, weight_vector
+from .optimal import basis_names
 from .translate import core_settings
 
 __all__ = ["hjb_residual", "residual_settings"]

@@ -10,6 +10,7 @@ import numpy as np
 import adparm._core as _core
 
 from ._fields import ARM_KEYS
+from .basis_family import UrdfStructuredBasis, basis_for
 from .config import Config
 from .desired import trajectory_settings
 from .rates import check_positions
@@ -72,8 +73,7 @@ def core_settings(config: Config) -> _core.Settings:
         setattr(actor, key, getattr(config.actor, key))
     if (
         config.actor.positive_e2
-        and config.plant.urdf is not None
-        and config.controller.basis == "structured"
+        and isinstance(basis_for(config), UrdfStructuredBasis)
         and config.controller.kind == "adp"
     ):  # where the structured basis keeps its e2 block positive (not in the paper)
         actor.e2_check_positions = np.asfortranarray(check_positions(config).T)
@@ -85,15 +85,13 @@ def core_settings(config: Config) -> _core.Settings:
     controller.kp = config.controller.gain_matrix("kp", config.dof)
     controller.kd = config.controller.gain_matrix("kd", config.dof)
     settings.controller = controller
+    settings.basis = getattr(_core.BasisKind, basis_for(config).core_kind)
     if config.controller.is_expression:  # the compiled terms, run on the dynamic-size loop
-        settings.basis = _core.BasisKind.expression
         expression = config.controller.expression_basis(config.dof)
         program = _core.ExpressionProgram()
         program.opcodes = expression.opcodes.tolist()
         program.arguments = expression.arguments.tolist()
         settings.basis_program = program
-    else:
-        settings.basis = getattr(_core.BasisKind, config.controller.basis)
     extrapolation = _core.ExtrapolationSettings()
     extrapolation.points = config.extrapolation.points
     extrapolation.box = config.extrapolation.box_vector(config.dof)
