@@ -404,3 +404,30 @@ def test_guide_example_runs(index: int, tmp_path, monkeypatch, capsys) -> None:
     monkeypatch.chdir(tmp_path)
     exec(compile(python_blocks(GUIDE)[index], f"{GUIDE.name}[{index}]", "exec"), {})
     assert capsys.readouterr().out  # every example prints what it shows
+
+
+def test_a_config_reads_its_urdf_once_per_set_of_arguments(monkeypatch, tmp_path) -> None:
+    """Building a URDF config and simulating it read the file in Python once for its kinematics
+    (joints, structured basis size, rates) and once for the arm with the config's gravity and
+    friction (issue 23: it was read 19 times); a changed file is read again."""
+    import shutil
+
+    import adparm._core
+
+    urdf = tmp_path / "arm.urdf"
+    shutil.copy(ARMS / "planar_3link.urdf", urdf)
+    reads = []
+    real = adparm._core.UrdfArm
+
+    def counting(*args, **kwargs):
+        reads.append(args[0])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(adparm._core, "UrdfArm", counting)
+    plant = {"urdf": str(urdf), "coulomb": 0.05}
+    config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.01}})
+    adparm.simulate(config, diagnose=False)
+    assert len(reads) == 2
+    urdf.write_text(urdf.read_text() + "\n<!-- changed -->\n")
+    adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.01}})
+    assert len(reads) == 4

@@ -35,6 +35,7 @@ from ._fields import (
     value_text,
     vector_value,
 )
+from .urdf import example_robot_urdf, locked_joints_message, shared_arm
 
 #: A URDF named "example-robot-data:ur5" is that robot of the example-robot-data package
 #: (adparm.example_robot_urdf).
@@ -50,8 +51,6 @@ def urdf_path(value: Any, name: str) -> str:
     if not isinstance(value, (str, Path)) or not str(value):
         raise TypeError(f"{name}: expected the path of a URDF file, got {value_text(value)}")
     if isinstance(value, str) and value.startswith(EXAMPLE_ROBOT_PREFIX):
-        from .urdf import example_robot_urdf
-
         robot = value[len(EXAMPLE_ROBOT_PREFIX) :]
         try:
             return str(example_robot_urdf(robot))
@@ -82,20 +81,13 @@ def _urdf_info(
 ) -> tuple[int, tuple[str, ...]]:
     """(n, joint names) of a URDF read by the core (once per file version and locked joints),
     after the checks of the text of its <inertial> elements (urdf.check_inertial_text)."""
-    import adparm._core as _core
-
-    from .urdf import check_inertial_text
-
-    check_inertial_text(path)
-    arm = _core.UrdfArm(path, locked_joints=list(locked))
+    arm = shared_arm(path, locked_joints=dict(locked))
     return arm.dof, tuple(arm.joint_names)
 
 
 def urdf_error(error: Exception, name: str) -> ValueError:
     """A ValueError naming ``name`` (plant.urdf or model.urdf), or its section's locked_joints
     field for a problem with the locked joints."""
-    from .urdf import locked_joints_message
-
     section = name.split(".")[0]
     text = locked_joints_message(str(error), section)
     return ValueError(text if text != str(error) else f"{name}: {error}")
@@ -119,10 +111,7 @@ def urdf_info(
 
 @functools.lru_cache(maxsize=64)
 def _urdf_structured_size(path: str, mtime_ns: int, size: int, locked: LockedPairs = ()) -> int:
-    import adparm._core as _core
-
-    arm = _core.UrdfArm(path, locked_joints=list(locked))
-    return int(_core.UrdfStructuredBasis(arm).size)
+    return len(shared_arm(path, locked_joints=dict(locked)).structured_names())
 
 
 def urdf_structured_size(

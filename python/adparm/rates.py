@@ -65,9 +65,9 @@ _SEED = 20241202
 def _inertia_range(
     urdf: str, mtime_ns: int, size: int, locked: tuple[tuple[str, float], ...]
 ) -> tuple[float, float]:
-    from .urdf import UrdfArm
+    from .urdf import shared_arm
 
-    arm = UrdfArm(urdf, locked_joints=dict(locked) or None)
+    arm = shared_arm(urdf, locked_joints=dict(locked) or None)
     n = arm.dof
     low, high = _limits_box(arm)
     rng = np.random.default_rng(_SEED)

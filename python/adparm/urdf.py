@@ -8,10 +8,12 @@ M(q)^-1 in adparm's C++ core, with the same conventions as the built-in two-link
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import sys
 import sysconfig
+import threading
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Mapping
 from pathlib import Path
@@ -22,7 +24,13 @@ from numpy.typing import ArrayLike, NDArray
 
 import adparm._core as _core
 
-__all__ = ["UrdfArm", "example_robot_urdf", "EXAMPLE_LOCKED_JOINTS", "EXAMPLE_ROBOTS"]
+__all__ = [
+    "EXAMPLE_LOCKED_JOINTS",
+    "EXAMPLE_ROBOTS",
+    "UrdfArm",
+    "example_robot_urdf",
+    "shared_arm",
+]
 
 #: Names accepted by example_robot_urdf, and their files under example-robot-data's robots/:
 #: every fixed-base arm of the package (4.x). The Panda needs its fingers locked (they mimic
@@ -392,9 +400,53 @@ def config_arm(config: Any, *, model: bool = False) -> UrdfArm:
             "locked_joints": plant.locked_joints,
         }
     )
-    return UrdfArm(
+    return shared_arm(
         arm["urdf"], arm["gravity"], arm["coulomb"], arm["viscous"], arm["locked_joints"]
     )
+
+
+def _hashable(value: Any) -> Any:
+    """A number, or a tuple of numbers for a vector (a cache key)."""
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        return float(value)
+    return tuple(float(v) for v in np.asarray(value, dtype=float).reshape(-1))
+
+
+@functools.lru_cache(maxsize=32)
+def _shared_arm(
+    path: str,
+    mtime_ns: int,
+    size: int,
+    gravity: tuple[float, ...],
+    coulomb: float | tuple[float, ...],
+    viscous: float | tuple[float, ...],
+    locked: tuple[tuple[str, float], ...],
+    thread: int,
+) -> UrdfArm:
+    return UrdfArm(path, gravity, coulomb, viscous, dict(locked) or None)
+
+
+def shared_arm(
+    urdf: str | os.PathLike[str],
+    gravity: ArrayLike = (0.0, 0.0, -9.81),
+    coulomb: float | ArrayLike = 0.0,
+    viscous: float | ArrayLike = 0.0,
+    locked_joints: Mapping[str, float] | None = None,
+) -> UrdfArm:
+    """``UrdfArm(urdf, gravity, coulomb, viscous, locked_joints)``, read once per version of the
+    file (its modification time and size), set of arguments and thread, and shared: a config's
+    checks, defaults, basis and optimum all use the one parse. Read it, do not change it."""
+    try:
+        stat = os.stat(urdf)
+        key = (
+            _hashable(gravity),
+            _hashable(coulomb),
+            _hashable(viscous),
+            tuple((str(k), float(v)) for k, v in (locked_joints or {}).items()),
+        )
+    except (OSError, TypeError, ValueError):  # UrdfArm names the problem
+        return UrdfArm(urdf, gravity, coulomb, viscous, locked_joints)
+    return _shared_arm(str(urdf), stat.st_mtime_ns, stat.st_size, *key, threading.get_ident())
 
 
 def _example_robot_data_root() -> Path | None:
