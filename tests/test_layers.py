@@ -145,3 +145,12 @@ def test_no_private_name_crosses_a_module():
         if name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
     ]
     assert not private, "\n".join(private)
+
+
+def test_no_module_is_over_600_lines():
+    long = [
+        f"{path.name}: {n} lines"
+        for path in sorted(PACKAGE.glob("*.py"))
+        if (n := len(path.read_text(encoding="utf-8").splitlines())) > 600
+    ]
+    assert not long, "split along its jobs: " + ", ".join(long)

@@ -10,19 +10,11 @@ import difflib
 import math
 import numbers
 import re
-import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
-__all__ = ["AUTO", "tomllib"]
 
 Vector = tuple[float, ...]
 Matrix = tuple[tuple[float, ...], ...]

@@ -9,7 +9,7 @@ one entry of :data:`BASIS_FAMILIES` (and, for the core, its C++ basis: docs/desi
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -63,6 +63,9 @@ class BasisFamily(Protocol):
 
     #: The name of the core's adparm._core.BasisKind that runs it.
     core_kind: str
+    #: Whether every function and its d phi / dx are finite at every state (a built-in basis);
+    #: else :meth:`nonfinite` finds the first that is not.
+    finite_everywhere: bool
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         """The functions' names, in the order of the weights."""
@@ -90,7 +93,11 @@ class _CoreBasis:
     """A basis of the two-link arm built into the core, evaluated row by row."""
 
     core_kind = "augmented"
+    finite_everywhere = True
     function_names: tuple[str, ...] = BASIS_NAMES
+
+    def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
+        return None
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         return self.function_names
@@ -179,9 +186,13 @@ class UrdfStructuredBasis:
     e2^T M_b(q) e2 per base inertial parameter (UrdfArm.structured_basis)."""
 
     core_kind = "structured"
+    finite_everywhere = True
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         return tuple(config_arm(config, model=True).structured_names())
+
+    def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
+        return None
 
     def size(self, config: ConfigSchema) -> int:
         believed = config.model.resolve_urdf(config.plant)
@@ -218,6 +229,10 @@ class ExpressionFamily:
     and run by the core's dynamic-size loop."""
 
     core_kind = "expression"
+    finite_everywhere = False  # sqrt or log of a negative value, 1/0, ...
+
+    def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
+        return config.controller.expression_basis(config.dof).nonfinite(states, qd)
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         # the terms' text, after expansion of the families

@@ -18,12 +18,18 @@ refused with a "did you mean" hint.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 from ._arm_sections import (
     EXAMPLE_ROBOT_PREFIX,
@@ -44,7 +50,6 @@ from ._fields import (
     deep_toml,
     read_text_file,
     toml_text,
-    tomllib,
 )
 from ._schema import ConfigSchema
 from ._sections import (
@@ -70,7 +75,7 @@ from ._sections import (
     ProbeConfig,
     SimConfig,
 )
-from .basis_family import basis_for
+from .basis_family import BasisFamily, basis_for
 from .desired import desired_state
 from .optimal import initial_error_state
 from .rates import auto_step, closed_loop_rates, urdf_defaults
@@ -165,18 +170,17 @@ class Config(ConfigSchema):
                     f"controller.basis = {plain_value(self.controller.basis)!r}, "
                     f"got ({len(value)},)"
                 )
-        if self.controller.is_expression:
-            self._check_basis_at_start()
+        family = basis_for(self)
+        if not family.finite_everywhere:
+            self._check_basis_at_start(family)
 
     def _arm_defaults(self) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
         return urdf_defaults(self)
 
-    def _check_basis_at_start(self) -> None:
+    def _check_basis_at_start(self, family: BasisFamily) -> None:
         """An expression basis and its d phi / dx must be finite at the initial state: sqrt or
         log of a negative value there ends the run at t = 0 (or leaves V(x(0)) undefined)."""
-        problem = self.controller.expression_basis(self.dof).nonfinite(
-            initial_error_state(self), desired_state(self, 0.0)[0]
-        )
+        problem = family.nonfinite(self, initial_error_state(self), desired_state(self, 0.0)[0])
         if problem is not None:
             raise ValueError(
                 f"controller.basis: at the initial state (task.q0, task.qd), {problem}"

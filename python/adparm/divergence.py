@@ -89,14 +89,13 @@ def basis_problem_at_points(config: Config) -> str | None:
     a fixed or grid extrapolation point, named with the point; None otherwise (the initial
     state is checked by Config)."""
     extrapolation = config.extrapolation
-    if not config.controller.is_expression or not extrapolation.points:
+    family = basis_for(config)
+    if family.finite_everywhere or not extrapolation.points:
         return None
     if extrapolation.mode == "local":  # drawn anew at each step
         return None
     qd = desired_state(config, 0.0)[0]
-    problem = config.controller.expression_basis(config.dof).nonfinite(
-        extrapolation_points(config), qd
-    )
+    problem = family.nonfinite(config, extrapolation_points(config), qd)
     return None if problem is None else f"at an extrapolation point, {problem}"
 
 
@@ -105,7 +104,8 @@ def basis_problem_near_end(result: SimulationResult) -> str | None:
     just after the last recorded row of a diverged run: x extrapolated along its last recorded
     velocity over two recording intervals."""
     config = result.config
-    if not config.controller.is_expression or result.t.size < 2:
+    family = basis_for(config)
+    if family.finite_everywhere or result.t.size < 2:
         return None
     t = result.t
     x = np.hstack([result.e1[-2:], result.e2[-2:]])
@@ -113,7 +113,7 @@ def basis_problem_near_end(result: SimulationResult) -> str | None:
     if not step > 0.0:
         return None
     states = x[-1] + np.linspace(0.0, 2.0, 41)[:, None] * (x[-1] - x[-2])
-    problem = config.controller.expression_basis(config.dof).nonfinite(states, result.qd[-1])
+    problem = family.nonfinite(config, states, result.qd[-1])
     return None if problem is None else f"just after t = {t[-1]:.6g} s, {problem}"
 
 

@@ -5,8 +5,10 @@ one-line text of a step that failed after a run.
 The result type imports none of the modules that present it. Its methods that belong to the
 layers above (``diagnostics``: adparm.truth; ``plot``: adparm.plotting; ``save``,
 ``to_dataframe``: adparm.storage; ``summary``: adparm.summary) call the function that module
-registers here with :func:`register` when it is imported (``import adparm`` imports them all);
-each registered function looks its implementation up when called (docs/design.md, "Layers")."""
+registers here with :func:`register` when it is imported (``import adparm`` imports them all),
+as does adparm.plotting for ``Comparison.plot`` ("plot_comparison"); each registered function
+looks its implementation up when called, so replacing that module's function replaces the
+method's (docs/design.md, "The Python package's layers")."""
 
 from __future__ import annotations
 
