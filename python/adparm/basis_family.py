@@ -88,6 +88,14 @@ class BasisFamily(Protocol):
     def value_features(self, config: ConfigSchema, state: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The functions whose product with W* is V*(x) at one state (optimal_value)."""
 
+    def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
+        """The first function (or its d phi / dx) not finite at one of ``states`` (m, 2n) with
+        desired position ``qd``, named with the state; None if all are."""
+
+    def core_program(self, config: ConfigSchema) -> _core.ExpressionProgram | None:
+        """What the core needs besides core_kind to run the basis (an expression basis' compiled
+        terms), or None."""
+
 
 class _CoreBasis:
     """A basis of the two-link arm built into the core, evaluated row by row."""
@@ -97,6 +105,9 @@ class _CoreBasis:
     function_names: tuple[str, ...] = BASIS_NAMES
 
     def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
+        return None
+
+    def core_program(self, config: ConfigSchema) -> _core.ExpressionProgram | None:
         return None
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
@@ -194,6 +205,9 @@ class UrdfStructuredBasis:
     def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
         return None
 
+    def core_program(self, config: ConfigSchema) -> _core.ExpressionProgram | None:
+        return None
+
     def size(self, config: ConfigSchema) -> int:
         believed = config.model.resolve_urdf(config.plant)
         return urdf_structured_size(
@@ -233,6 +247,14 @@ class ExpressionFamily:
 
     def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
         return config.controller.expression_basis(config.dof).nonfinite(states, qd)
+
+    def core_program(self, config: ConfigSchema) -> _core.ExpressionProgram:
+        # the compiled terms, run on the dynamic-size loop
+        expression = config.controller.expression_basis(config.dof)
+        program = _core.ExpressionProgram()
+        program.opcodes = expression.opcodes.tolist()
+        program.arguments = expression.arguments.tolist()
+        return program
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         # the terms' text, after expansion of the families

@@ -85,12 +85,10 @@ def core_settings(config: Config) -> _core.Settings:
     controller.kp = config.controller.gain_matrix("kp", config.dof)
     controller.kd = config.controller.gain_matrix("kd", config.dof)
     settings.controller = controller
-    settings.basis = getattr(_core.BasisKind, basis_for(config).core_kind)
-    if config.controller.is_expression:  # the compiled terms, run on the dynamic-size loop
-        expression = config.controller.expression_basis(config.dof)
-        program = _core.ExpressionProgram()
-        program.opcodes = expression.opcodes.tolist()
-        program.arguments = expression.arguments.tolist()
+    family = basis_for(config)
+    settings.basis = getattr(_core.BasisKind, family.core_kind)
+    program = family.core_program(config)
+    if program is not None:
         settings.basis_program = program
     extrapolation = _core.ExtrapolationSettings()
     extrapolation.points = config.extrapolation.points
