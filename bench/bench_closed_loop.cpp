@@ -61,6 +61,7 @@
 #include <string>
 #include <vector>
 
+#include "adparm/any_simulation.hpp"
 #include "adparm/batch.hpp"
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"

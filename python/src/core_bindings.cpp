@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "adparm/any_simulation.hpp"
 #include "adparm/basis.hpp"
 #include "adparm/batch.hpp"
 #include "adparm/expression_basis.hpp"
@@ -16,7 +17,6 @@
 #include "adparm/open_loop.hpp"
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
-#include "adparm/simulation.hpp"
 
 namespace py = pybind11;
 using namespace adparm;
@@ -24,28 +24,6 @@ using namespace adparm;
 namespace {
 
 using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-using ExpressionLoop = ClosedLoop<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>;
-using UrdfLoop = ClosedLoop<UrdfLoopArm, ExpressionLoopBasis>;
-using UrdfStructuredLoop = ClosedLoop<UrdfLoopArm, PinocchioStructuredBasis>;
-
-// Calls f(Loop*) (a null pointer of the loop type) for the loop of the settings: a URDF arm's
-// (expression basis), or the two-link loop of settings.basis: the fixed-size loop of a built-in
-// basis, the dynamic-size loop of the expression basis.
-template <class F>
-decltype(auto) with_loop(const Settings& settings, F&& f) {
-  if (!settings.plant_urdf.urdf.empty()) {
-    if (settings.basis == BasisKind::structured)
-      return f(static_cast<UrdfStructuredLoop*>(nullptr));
-    if (settings.basis != BasisKind::expression)
-      throw std::invalid_argument(
-          "controller.basis: a URDF arm takes the structured basis or an expression basis");
-    return f(static_cast<UrdfLoop*>(nullptr));
-  }
-  if (settings.basis == BasisKind::expression) return f(static_cast<ExpressionLoop*>(nullptr));
-  return with_basis(settings.basis, [&](auto basis) {
-    return f(static_cast<ClosedLoop<TwoLinkArm, decltype(basis)>*>(nullptr));
-  });
-}
 
 void bind_settings(py::module_& m) {
   py::class_<TwoLinkArmParameters>(m, "ArmParameters",
@@ -515,9 +493,9 @@ void bind_hjb(py::module_& m) {
         check_finite(actor_weights, "actor_weights");
         check_finite(states, "x");
         check_finite(t, "t");
-        return with_loop(settings, [&](auto* tag) {
-          using Loop = std::remove_pointer_t<decltype(tag)>;
-          const Loop loop(settings);
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          const Loop loop = make_loop<Loop>(settings);
           check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
           check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
           check_size(states, states.rows(), 2 * loop.dof(), "x");
@@ -546,9 +524,9 @@ void bind_closed_loop(py::module_& m) {
       [](const Settings& settings, double t, const Eigen::VectorXd& state) {
         check_finite(state, "state");
         check_finite(t, "t");
-        return with_loop(settings, [&](auto* tag) {
-          using Loop = std::remove_pointer_t<decltype(tag)>;
-          Loop loop(settings);
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          Loop loop = make_loop<Loop>(settings);
           check_size(state, loop.state_size(), 1, "state");
           typename Loop::TimeSignals signals;
           typename Loop::State x = state, rate = Loop::State::Zero(loop.state_size());
@@ -578,17 +556,18 @@ void bind_closed_loop(py::module_& m) {
   m.def(
       "initial_state",
       [](const Settings& settings) {
-        return with_loop(settings, [&](auto* tag) {
-          using Loop = std::remove_pointer_t<decltype(tag)>;
-          return Eigen::VectorXd(Loop(settings).initial_state());
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          return Eigen::VectorXd(make_loop<Loop>(settings).initial_state());
         });
       },
       py::arg("settings"), "The closed loop's initial state (S,).");
   m.def(
       "extrapolation_points",
       [](const Settings& settings) {
-        return with_loop(settings, [&](auto* tag) {
-          const std::remove_pointer_t<decltype(tag)> loop(settings);
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          const Loop loop = make_loop<Loop>(settings);
           const auto& points = loop.extrapolation().points();
           RowsXX out(static_cast<Eigen::Index>(points.size()), 2 * loop.dof());
           for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();

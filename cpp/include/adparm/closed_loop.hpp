@@ -52,35 +52,11 @@ inline void check_hurwitz(const Eigen::MatrixXd& alpha1) {
         "control.alpha1: every eigenvalue must have a positive real part (-alpha1 Hurwitz)");
 }
 
-// The basis a loop builds from its settings: a fixed basis has nothing to build; the expression
-// basis compiles settings.basis_program for the arm's n joints.
-template <class Basis>
-Basis settings_basis(const Settings&, Eigen::Index) {
-  return Basis();
-}
-template <>
-inline ExpressionLoopBasis settings_basis<ExpressionLoopBasis>(const Settings& settings,
-                                                               Eigen::Index joints) {
-  return ExpressionLoopBasis(static_cast<int>(joints), settings.basis_program);
-}
-
-// The plant and model a loop builds from its settings (`model` false: the plant): a two-link arm
-// from settings.plant and settings.model. Another arm type overloads both for ArmTag<ItsType>
-// (found at instantiation by argument-dependent lookup; urdf_loop_arm.hpp).
-template <class Arm>
-struct ArmTag {};
-template <class Arm>
-Arm settings_arm(ArmTag<Arm>, const Settings& settings, bool model) {
-  return model ? Arm(settings.model, "model") : Arm(settings.plant, "plant");
-}
-template <class Arm>
-bool settings_model_is_plant(ArmTag<Arm>, const Settings& settings) {
-  return settings.plant == settings.model;
-}
-
 template <class Arm, class Basis>
 class ClosedLoop {
  public:
+  using ArmType = Arm;
+  using BasisType = Basis;
   static constexpr int kDof = Arm::kDof;
   static constexpr int kBasisSize = Basis::kSize;
   static constexpr bool kFixed = kDof != Dynamic && kBasisSize != Dynamic;
@@ -125,22 +101,9 @@ class ClosedLoop {
     double hjb_error = 0.0;  // eq. (21)
   };
 
-  // The two-link arm (or an arm built from TwoLinkArmParameters) of settings.plant and
-  // settings.model, with the basis of the settings (settings_basis below).
-  explicit ClosedLoop(const Settings& settings)
-      : ClosedLoop(settings, settings_arm(ArmTag<Arm>(), settings, false)) {}
-  ClosedLoop(const Settings& settings, const Basis& basis)
-      : ClosedLoop(settings, settings_arm(ArmTag<Arm>(), settings, false),
-                   settings_arm(ArmTag<Arm>(), settings, true),
-                   settings_model_is_plant(ArmTag<Arm>(), settings), basis) {}
-  // The arm of the settings' plant, given already built (its joint count sizes the basis).
-  ClosedLoop(const Settings& settings, const Arm& plant)
-      : ClosedLoop(settings, plant, settings_arm(ArmTag<Arm>(), settings, true),
-                   settings_model_is_plant(ArmTag<Arm>(), settings),
-                   settings_basis<Basis>(settings, plant.dof())) {}
-
-  // Any arm: the plant, the model the controller believes (`model_is_plant`: the same arm, whose
-  // terms are then computed once per evaluation) and the basis.
+  // The plant, the model the controller believes (`model_is_plant`: the same arm, whose terms are
+  // then computed once per evaluation) and the basis, built already (from Settings:
+  // make_loop in any_simulation.hpp).
   ClosedLoop(const Settings& settings, const Arm& plant, const Arm& model, bool model_is_plant,
              const Basis& basis = Basis())
       : plant_(plant),

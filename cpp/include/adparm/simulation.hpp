@@ -8,13 +8,10 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <variant>
 #include <vector>
 
 #include "adparm/closed_loop.hpp"
-#include "adparm/dynamic_size.hpp"
 #include "adparm/rk4.hpp"
-#include "adparm/urdf_loop_arm.hpp"
 
 namespace adparm {
 
@@ -77,9 +74,7 @@ class Simulation {
   using System = ClosedLoop<Arm, Basis>;
   using State = typename System::State;
 
-  // The two-link arm of settings.plant and settings.model.
-  explicit Simulation(const Settings& settings) : Simulation(System(settings), settings.sim) {}
-  // Any arm (closed_loop.hpp).
+  // A loop built already (from Settings: AnySimulation and make_loop in any_simulation.hpp).
   Simulation(const Settings& settings, const Arm& plant, const Arm& model, bool model_is_plant,
              const Basis& basis = Basis())
       : Simulation(System(settings, plant, model, model_is_plant, basis), settings.sim) {}
@@ -240,77 +235,5 @@ class Simulation {
 };
 
 using PaperSimulation = Simulation<TwoLinkArm, PaperBasis>;
-
-// The runs of a URDF arm (settings.plant_urdf.urdf not empty): the structured basis of the
-// believed model (pinocchio_structured_basis.hpp) or an expression basis, on the dynamic-size
-// loop. The two-link bases (paper, augmented) are refused, naming controller.basis.
-using UrdfSimulation = Simulation<UrdfLoopArm, ExpressionLoopBasis>;
-using UrdfStructuredSimulation = Simulation<UrdfLoopArm, PinocchioStructuredBasis>;
-
-// A simulation picked at run time: the two-link arm with the basis of settings.basis, or a URDF
-// arm (settings.plant_urdf) with an expression basis.
-class AnySimulation {
- public:
-  explicit AnySimulation(const Settings& settings) : impl_(make(settings)) {}
-
-  long advance(long max_steps, const RunControl& control = {}) {
-    return std::visit([&](auto& s) { return s.advance(max_steps, control); }, impl_);
-  }
-  RunStatus status() const {
-    return std::visit([](const auto& s) { return s.status(); }, impl_);
-  }
-  long steps() const {
-    return std::visit([](const auto& s) { return s.steps(); }, impl_);
-  }
-  long step() const {
-    return std::visit([](const auto& s) { return s.step(); }, impl_);
-  }
-  double divergence_time() const {
-    return std::visit([](const auto& s) { return s.divergence_time(); }, impl_);
-  }
-  const std::vector<double>& reset_times() const {
-    return std::visit([](const auto& s) -> const std::vector<double>& { return s.reset_times(); },
-                      impl_);
-  }
-  Eigen::VectorXd state() const {
-    return std::visit([](const auto& s) { return Eigen::VectorXd(s.state()); }, impl_);
-  }
-  Recording recording() const {
-    return std::visit([](const auto& s) { return s.recording(); }, impl_);
-  }
-
- private:
-  using Variant =
-      std::variant<Simulation<TwoLinkArm, PaperBasis>, Simulation<TwoLinkArm, AugmentedBasis>,
-                   Simulation<TwoLinkArm, StructuredBasis>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>, UrdfSimulation,
-                   UrdfStructuredSimulation>;
-  static Variant make(const Settings& settings) {
-    if (!settings.plant_urdf.urdf.empty()) {
-      if (settings.basis == BasisKind::structured)
-        return Variant(std::in_place_type<UrdfStructuredSimulation>, settings);
-      if (settings.basis != BasisKind::expression)
-        throw std::invalid_argument(
-            "controller.basis: the paper and augmented bases are the two-link arm's; a URDF arm "
-            "(plant.urdf) takes the structured basis or an expression basis (quadratic, "
-            "polynomial, terms)");
-      return Variant(std::in_place_type<UrdfSimulation>, settings);
-    }
-    if (settings.basis == BasisKind::expression)  // dynamic sizes only
-      return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>>,
-                     settings);
-    return with_basis(settings.basis, [&](auto basis) {
-      using Basis = decltype(basis);
-      if (settings.dynamic_sizes)
-        return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<Basis>>>,
-                       settings);
-      return Variant(std::in_place_type<Simulation<TwoLinkArm, Basis>>, settings);
-    });
-  }
-  Variant impl_;
-};
 
 }  // namespace adparm

@@ -3,8 +3,7 @@
 // runs the paper's laws (eqs. 1-28) on any fixed-base serial arm of up to kMaxDof joints.
 //   M, M^-1, C, G, F   PinocchioArm::compute, copied into the loop's bounded Terms
 //   ddq                eq. (1): M^-1 (tau - C dq - G - F - tau_d)
-// The loop builds its plant from Settings::plant_urdf and its model from Settings::model_urdf (an
-// empty model path: the plant, an exact model) through settings_arm below.
+// make_loop (any_simulation.hpp) builds the plant and the model of a run from its UrdfArmSettings.
 //
 // Not thread-safe, like PinocchioArm: compute() works in buffers the arm owns; every run has its
 // own arms.
@@ -14,9 +13,7 @@
 #include <string>
 #include <utility>
 
-#include "adparm/closed_loop.hpp"
 #include "adparm/pinocchio_arm.hpp"
-#include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/settings.hpp"
 #include "adparm/types.hpp"
 
@@ -80,35 +77,5 @@ class UrdfLoopArm {
   PinocchioArm arm_;
   mutable PinocchioArm::Terms buffer_;
 };
-
-// The plant of settings.plant_urdf; the model of settings.model_urdf, or the plant's when its
-// path is empty.
-inline UrdfLoopArm settings_arm(ArmTag<UrdfLoopArm>, const Settings& settings, bool model) {
-  if (model && !settings.model_urdf.urdf.empty()) {
-    UrdfLoopArm arm(settings.model_urdf, "model.urdf");
-    const int n = UrdfLoopArm(settings.plant_urdf, "plant.urdf").dof();
-    if (arm.dof() != n)
-      throw std::invalid_argument("model.urdf: the model has " + std::to_string(arm.dof()) +
-                                  " joints, the plant (plant.urdf) " + std::to_string(n));
-    return arm;
-  }
-  return UrdfLoopArm(settings.plant_urdf, "plant.urdf");
-}
-
-inline bool settings_model_is_plant(ArmTag<UrdfLoopArm>, const Settings& settings) {
-  return settings.model_urdf.urdf.empty() || settings.model_urdf == settings.plant_urdf;
-}
-
-// The structured basis of a URDF run is the believed model's (model.urdf, or the plant's): its
-// base parameters are those the controller can know.
-template <>
-inline PinocchioStructuredBasis settings_basis<PinocchioStructuredBasis>(const Settings& settings,
-                                                                         Eigen::Index) {
-  const UrdfLoopArm model = settings_arm(ArmTag<UrdfLoopArm>(), settings, true);
-  PinocchioStructuredBasis basis(model.arm());
-  if (settings.actor.positive_e2)  // not in the paper: pinocchio_structured_basis.hpp
-    basis.set_check_positions(model.arm(), settings.actor.e2_check_positions);
-  return basis;
-}
 
 }  // namespace adparm
