@@ -25,6 +25,58 @@ namespace {
 
 using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+// Settings::arm (a std::variant of the two-link arm's parameters and a URDF arm's settings) as
+// the four attributes plant, model (two-link) and plant_urdf, model_urdf (URDF). A getter of the
+// alternative held returns a reference into the settings (s.plant.p1 = ... changes them, as for
+// any member); of the other alternative, a default copy.
+template <class Member, class Alternative>
+py::object arm_member(py::handle self, Member Alternative::* member) {
+  Settings& settings = self.cast<Settings&>();
+  if (Alternative* arms = std::get_if<Alternative>(&settings.arm))
+    return py::cast(&(arms->*member), py::return_value_policy::reference_internal, self);
+  return py::cast(Member());
+}
+
+template <TwoLinkArmParameters TwoLinkArms::* member>
+py::object two_link_arm(py::handle self) {
+  return arm_member(self, member);
+}
+
+template <TwoLinkArmParameters TwoLinkArms::* member>
+void set_two_link_arm(Settings& settings, const TwoLinkArmParameters& parameters) {
+  TwoLinkArms* arms = std::get_if<TwoLinkArms>(&settings.arm);
+  if (arms == nullptr)
+    throw std::invalid_argument(
+        std::string(member == &TwoLinkArms::plant ? "plant" : "model") +
+        ": the settings' arm is a URDF arm (plant_urdf), which has no two-link parameters");
+  arms->*member = parameters;
+}
+
+template <UrdfArmSettings UrdfArms::* member>
+py::object urdf_arm(py::handle self) {
+  return arm_member(self, member);
+}
+
+// A path makes the arm a URDF arm (keeping a URDF model given before); an empty one, the two-link
+// arm (keeping its parameters, if it was one).
+void set_urdf_plant(Settings& settings, const UrdfArmSettings& plant) {
+  if (plant.urdf.empty()) {
+    if (!std::holds_alternative<TwoLinkArms>(settings.arm)) settings.arm = TwoLinkArms{};
+    return;
+  }
+  if (UrdfArms* arms = std::get_if<UrdfArms>(&settings.arm))
+    arms->plant = plant;
+  else
+    settings.arm = UrdfArms{plant, UrdfArmSettings()};
+}
+
+void set_urdf_model(Settings& settings, const UrdfArmSettings& model) {
+  if (UrdfArms* arms = std::get_if<UrdfArms>(&settings.arm))
+    arms->model = model;
+  else if (!model.urdf.empty())
+    throw std::invalid_argument("model.urdf: a URDF model needs a URDF plant (plant_urdf)");
+}
+
 void bind_settings(py::module_& m) {
   py::class_<TwoLinkArmParameters>(m, "ArmParameters",
                                    "Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.")
@@ -144,10 +196,23 @@ void bind_settings(py::module_& m) {
                        "dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) "
                        "loop.")
       .def(py::init<>())
-      .def_readwrite("plant", &Settings::plant)
-      .def_readwrite("model", &Settings::model)
-      .def_readwrite("plant_urdf", &Settings::plant_urdf)
-      .def_readwrite("model_urdf", &Settings::model_urdf)
+      .def_property("plant", &two_link_arm<&TwoLinkArms::plant>,
+                    &set_two_link_arm<&TwoLinkArms::plant>,
+                    "The two-link arm's parameters (the default arm; assigning plant_urdf makes "
+                    "the arm a URDF arm, whose plant and model are default ArmParameters here).")
+      .def_property("model", &two_link_arm<&TwoLinkArms::model>,
+                    &set_two_link_arm<&TwoLinkArms::model>,
+                    "The parameters of the two-link arm the controller believes.")
+      .def_property("plant_urdf", &urdf_arm<&UrdfArms::plant>, &set_urdf_plant,
+                    "A URDF plant: assigning one with a path makes the arm a URDF arm (one with "
+                    "an empty path, the two-link arm); urdf empty when the arm is the two-link "
+                    "arm.")
+      .def_property("model_urdf", &urdf_arm<&UrdfArms::model>, &set_urdf_model,
+                    "The URDF arm's believed model (urdf empty: the plant, an exact model); "
+                    "assign plant_urdf first.")
+      .def_property_readonly(
+          "is_urdf", [](const Settings& s) { return std::holds_alternative<UrdfArms>(s.arm); },
+          "Whether the arm is a URDF arm (plant_urdf) rather than the two-link arm.")
       .def_readwrite("disturbance", &Settings::disturbance)
       .def_readwrite("task", &Settings::task)
       .def_readwrite("Q", &Settings::Q)

@@ -4,10 +4,10 @@
 // Loops and one branch in visit_loop (and, if it is built from settings, in make_loop's helpers).
 //
 //   arm (settings)   basis (settings.basis)         loop: ClosedLoop<Arm, Basis> with Arm, Basis
-//   two-link         paper, augmented, structured   TwoLinkArm, the basis (fixed sizes)
+//   arm: TwoLinkArms paper, augmented, structured   TwoLinkArm, the basis (fixed sizes)
 //                    the same, dynamic_sizes        DynamicArm<TwoLinkArm>, DynamicBasis<the basis>
 //                    expression                     DynamicArm<TwoLinkArm>, ExpressionLoopBasis
-//   URDF             expression                     UrdfLoopArm, ExpressionLoopBasis
+//   arm: UrdfArms    expression                     UrdfLoopArm, ExpressionLoopBasis
 //                    structured                     UrdfLoopArm, PinocchioStructuredBasis
 //                    paper, augmented               refused (kUrdfBasisRefusal)
 #pragma once
@@ -68,7 +68,7 @@ decltype(auto) visit_loop(const Settings& settings, F&& f) {
     static_assert(Loops::contains<typename decltype(loop_type)::type>, "a loop not in Loops");
     return f(loop_type);
   };
-  if (!settings.plant_urdf.urdf.empty()) {
+  if (std::holds_alternative<UrdfArms>(settings.arm)) {
     if (settings.basis == BasisKind::structured)
       return call(LoopType<ClosedLoop<UrdfLoopArm, PinocchioStructuredBasis>>{});
     if (settings.basis != BasisKind::expression) throw std::invalid_argument(kUrdfBasisRefusal);
@@ -95,21 +95,30 @@ struct LoopArms {
   bool model_is_plant;
 };
 
-// A two-link arm (TwoLinkArm, or DynamicArm of it) from settings.plant and settings.model.
-template <class Arm>
-LoopArms<Arm> loop_arms(const Settings& settings) {
-  return {Arm(settings.plant, "plant"), Arm(settings.model, "model"),
-          settings.plant == settings.model};
+// The arms of the settings' alternative (visit_loop picks a loop of that arm).
+template <class Alternative>
+const Alternative& arm_settings(const Settings& settings) {
+  const Alternative* arms = std::get_if<Alternative>(&settings.arm);
+  if (arms == nullptr)
+    throw std::invalid_argument("plant: the loop's arm is not the arm of the settings");
+  return *arms;
 }
 
-// A URDF arm: the plant of settings.plant_urdf; the model of settings.model_urdf, or the plant
-// when its path is empty (or names the same arm).
+// A two-link arm (TwoLinkArm, or DynamicArm of it) from the two-link parameters.
+template <class Arm>
+LoopArms<Arm> loop_arms(const Settings& settings) {
+  const TwoLinkArms& arms = arm_settings<TwoLinkArms>(settings);
+  return {Arm(arms.plant, "plant"), Arm(arms.model, "model"), arms.plant == arms.model};
+}
+
+// A URDF arm: the plant of its plant settings; the model of its model settings, or the plant when
+// the model's path is empty (or the model is the plant).
 template <>
 inline LoopArms<UrdfLoopArm> loop_arms<UrdfLoopArm>(const Settings& settings) {
-  UrdfLoopArm plant(settings.plant_urdf, "plant.urdf");
-  if (settings.model_urdf.urdf.empty() || settings.model_urdf == settings.plant_urdf)
-    return {plant, plant, true};
-  UrdfLoopArm model(settings.model_urdf, "model.urdf");
+  const UrdfArms& arms = arm_settings<UrdfArms>(settings);
+  UrdfLoopArm plant(arms.plant, "plant.urdf");
+  if (arms.model.urdf.empty() || arms.model == arms.plant) return {plant, plant, true};
+  UrdfLoopArm model(arms.model, "model.urdf");
   if (model.dof() != plant.dof())
     throw std::invalid_argument("model.urdf: the model has " + std::to_string(model.dof()) +
                                 " joints, the plant (plant.urdf) " + std::to_string(plant.dof()));
