@@ -384,10 +384,10 @@ void fail(const std::string& what) {
 }
 
 bool same(const adparm::Recording& a, const adparm::Recording& b) {
-  return a.rows == b.rows && a.t == b.t && a.hjb_error == b.hjb_error && a.cost == b.cost &&
-         a.q == b.q && a.dq == b.dq && a.qd == b.qd && a.e1 == b.e1 && a.e2 == b.e2 &&
-         a.tau == b.tau && a.u == b.u && a.u_hat == b.u_hat && a.mu == b.mu && a.probe == b.probe &&
-         a.critic_weights == b.critic_weights && a.actor_weights == b.actor_weights;
+  bool equal = a.rows == b.rows;
+  for (const adparm::RecordedSeries& series : adparm::kRecordedSeries)
+    equal = equal && a.*series.member == b.*series.member;
+  return equal;
 }
 
 // Runs `settings` in chunks of 7 and 13 steps in turn (chunks end on recorded rows and between

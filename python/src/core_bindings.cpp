@@ -646,6 +646,9 @@ void bind_closed_loop(py::module_& m) {
 }
 
 void bind_simulation(py::module_& m) {
+  py::tuple names(kRecordedSeries.size());
+  for (std::size_t i = 0; i < kRecordedSeries.size(); ++i) names[i] = kRecordedSeries[i].name;
+  m.attr("RECORDED_SERIES") = names;
   py::class_<AnySimulation>(m, "Simulation",
                             "The closed-loop run (basis from settings.basis); advance(n) takes up "
                             "to n RK4 steps.")
@@ -676,25 +679,16 @@ void bind_simulation(py::module_& m) {
             // twice besides the run's own recording.
             Recording r = s.recording();
             py::dict out;
-            const auto give = [&out](const char* name, auto& series) {
-              out[name] = series;
-              series.resize(0, series.cols() == 1 ? 1 : 0);
-            };
-            give("t", r.t);
-            give("q", r.q);
-            give("dq", r.dq);
-            give("qd", r.qd);
-            give("e1", r.e1);
-            give("e2", r.e2);
-            give("tau", r.tau);
-            give("u", r.u);
-            give("u_hat", r.u_hat);
-            give("mu", r.mu);
-            give("probe", r.probe);
-            give("critic_weights", r.critic_weights);
-            give("actor_weights", r.actor_weights);
-            give("hjb_error", r.hjb_error);
-            give("cost", r.cost);
+            for (const RecordedSeries& series : kRecordedSeries) {
+              Recording::Rows& rows = r.*series.member;
+              if (series.width == SeriesWidth::one)  // a 1-D array
+                out[series.name] =
+                    py::cast(Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.rows()),
+                             py::return_value_policy::copy);
+              else
+                out[series.name] = rows;
+              rows.resize(0, 0);
+            }
             return out;
           },
           "Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2), "

@@ -25,48 +25,68 @@ struct RunControl {
   std::atomic<long>* step = nullptr;
 };
 
-// One row per recorded step; matrices are (rows x columns), row-major.
+// One row per recorded step; every series is (rows x columns), row-major: one column (t,
+// hjb_error, cost), one per joint or one per basis function (kRecordedSeries below).
 struct Recording {
   using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  Eigen::VectorXd t, hjb_error, cost;  // cost: accumulated cost of eq. (10) from t = 0
+  Rows t;                                            // s
   Rows q, dq, qd, e1, e2, tau, u, u_hat, mu, probe;  // one column per joint
   Rows critic_weights, actor_weights;                // one column per basis function
+  Rows hjb_error;                                    // eq. (21)
+  Rows cost;                                         // accumulated cost of eq. (10) from t = 0
   Eigen::Index rows = 0;
 
-  void allocate(Eigen::Index capacity, int dof, int basis_size) {
-    for (Eigen::VectorXd* v : series()) v->resize(capacity);
-    for (Rows* m : joint_series()) m->resize(capacity, dof);
-    for (Rows* m : weight_series()) m->resize(capacity, basis_size);
-  }
-
+  inline void allocate(Eigen::Index capacity, int dof, int basis_size);
   // A copy of the rows written (not of the whole capacity, which a long run interrupted early
   // leaves mostly unwritten).
-  Recording written() const {
-    Recording out;
-    out.rows = rows;
-    copy_rows(series(), out.series());
-    copy_rows(joint_series(), out.joint_series());
-    copy_rows(weight_series(), out.weight_series());
-    return out;
-  }
+  inline Recording written() const;
+};
 
- private:
-  std::array<Eigen::VectorXd*, 3> series() { return {&t, &hjb_error, &cost}; }
-  std::array<Rows*, 10> joint_series() {
-    return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
-  }
-  std::array<Rows*, 2> weight_series() { return {&critic_weights, &actor_weights}; }
-  std::array<const Eigen::VectorXd*, 3> series() const { return {&t, &hjb_error, &cost}; }
-  std::array<const Rows*, 10> joint_series() const {
-    return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
-  }
-  std::array<const Rows*, 2> weight_series() const { return {&critic_weights, &actor_weights}; }
+// The columns of a recorded series.
+enum class SeriesWidth { one, joints, basis };
 
-  template <class From, class To>
-  void copy_rows(const From& from, const To& to) const {
-    for (std::size_t i = 0; i < from.size(); ++i) *to[i] = from[i]->topRows(rows);
+struct RecordedSeries {
+  const char* name;
+  SeriesWidth width;
+  Recording::Rows Recording::* member;
+
+  Eigen::Index columns(Eigen::Index dof, Eigen::Index basis_size) const {
+    return width == SeriesWidth::one ? 1 : width == SeriesWidth::joints ? dof : basis_size;
   }
 };
+
+// The one table of the recorded series, in the order Python shows them (adparm._core's
+// RECORDED_SERIES and Simulation.recording() iterate it).
+inline constexpr std::array<RecordedSeries, 15> kRecordedSeries = {{
+    {"t", SeriesWidth::one, &Recording::t},
+    {"q", SeriesWidth::joints, &Recording::q},
+    {"dq", SeriesWidth::joints, &Recording::dq},
+    {"qd", SeriesWidth::joints, &Recording::qd},
+    {"e1", SeriesWidth::joints, &Recording::e1},
+    {"e2", SeriesWidth::joints, &Recording::e2},
+    {"tau", SeriesWidth::joints, &Recording::tau},
+    {"u", SeriesWidth::joints, &Recording::u},
+    {"u_hat", SeriesWidth::joints, &Recording::u_hat},
+    {"mu", SeriesWidth::joints, &Recording::mu},
+    {"probe", SeriesWidth::joints, &Recording::probe},
+    {"critic_weights", SeriesWidth::basis, &Recording::critic_weights},
+    {"actor_weights", SeriesWidth::basis, &Recording::actor_weights},
+    {"hjb_error", SeriesWidth::one, &Recording::hjb_error},
+    {"cost", SeriesWidth::one, &Recording::cost},
+}};
+
+void Recording::allocate(Eigen::Index capacity, int dof, int basis_size) {
+  for (const RecordedSeries& series : kRecordedSeries)
+    (this->*series.member).resize(capacity, series.columns(dof, basis_size));
+}
+
+Recording Recording::written() const {
+  Recording out;
+  out.rows = rows;
+  for (const RecordedSeries& series : kRecordedSeries)
+    out.*series.member = (this->*series.member).topRows(rows);
+  return out;
+}
 
 template <class Arm, class Basis>
 class Simulation {
@@ -196,7 +216,7 @@ class Simulation {
     if (!finite(outputs)) return false;
     Recording& r = recording_;
     const Eigen::Index i = r.rows++;
-    r.t[i] = t;
+    r.t(i, 0) = t;
     const Eigen::Index n = system_.dof(), k = system_.basis_size();
     r.q.row(i) = state.template segment<System::kDof>(0, n).transpose();
     r.dq.row(i) = state.template segment<System::kDof>(system_.dq_offset(), n).transpose();
@@ -212,8 +232,8 @@ class Simulation {
         state.template segment<System::kBasisSize>(system_.critic_offset(), k).transpose();
     r.actor_weights.row(i) =
         state.template segment<System::kBasisSize>(system_.actor_offset(), k).transpose();
-    r.hjb_error[i] = outputs.hjb_error;
-    r.cost[i] = state[system_.cost_offset()];
+    r.hjb_error(i, 0) = outputs.hjb_error;
+    r.cost(i, 0) = state[system_.cost_offset()];
     return true;
   }
 
