@@ -50,6 +50,7 @@ bool check(const std::string& name, const adparm::PinocchioArm& arm, const Basis
   adparm::PinocchioArm::Terms terms = arm.make_terms();
   adparm::HjbPoint<Basis, adparm::Dynamic> point;
   adparm::HjbEvaluation<Basis, adparm::Dynamic> evaluation;
+  adparm::BasisWorkspace<Basis> workspace = adparm::basis_workspace(basis);
   double worst = 0.0;
   for (std::size_t i = 0; i < 64; ++i) {
     const auto& x = xs[i];
@@ -59,7 +60,7 @@ bool check(const std::string& name, const adparm::PinocchioArm& arm, const Basis
     adparm::ErrorVector<adparm::Dynamic> drift(2 * n);
     drift << -alpha1 * e1 + e2, -terms.mass_inverse * (terms.coriolis * e2);
     adparm::prepare_hjb_point<Basis, adparm::Dynamic>(basis, x, desired[i], drift, terms, cost,
-                                                      point);
+                                                      point, workspace);
     adparm::evaluate_hjb(point, cost, W, W, evaluation);
     worst = std::max(worst, std::abs(evaluation.error) / cost.state_cost(x));
   }

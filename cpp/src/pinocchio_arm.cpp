@@ -401,9 +401,7 @@ std::string read_file(const std::string& path) {
 }  // namespace
 
 PinocchioArm::PinocchioArm(std::unique_ptr<Impl> impl)
-    : impl_(std::move(impl)),
-      dof_(impl_->model.nv),
-      residual_(Eigen::VectorXd::Zero(impl_->model.nv)) {}
+    : impl_(std::move(impl)), dof_(impl_->model.nv) {}
 
 PinocchioArm::PinocchioArm(const std::string& urdf_path, const Eigen::Vector3d& gravity,
                            const Eigen::VectorXd& coulomb, const Eigen::VectorXd& viscous,
@@ -429,13 +427,12 @@ std::string LockedJointsError::with_section(const std::string& section) const {
 }
 
 PinocchioArm::PinocchioArm(const PinocchioArm& other)
-    : impl_(std::make_unique<Impl>(*other.impl_)), dof_(other.dof_), residual_(other.residual_) {}
+    : impl_(std::make_unique<Impl>(*other.impl_)), dof_(other.dof_) {}
 
 PinocchioArm& PinocchioArm::operator=(const PinocchioArm& other) {
   if (this != &other) {
     impl_ = std::make_unique<Impl>(*other.impl_);
     dof_ = other.dof_;
-    residual_ = other.residual_;
   }
   return *this;
 }
@@ -460,6 +457,7 @@ PinocchioArm::Terms PinocchioArm::make_terms() const {
   terms.coriolis = Eigen::MatrixXd::Zero(dof_, dof_);
   terms.gravity = Eigen::VectorXd::Zero(dof_);
   terms.friction = Eigen::VectorXd::Zero(dof_);
+  terms.residual = Eigen::VectorXd::Zero(dof_);
   return terms;
 }
 

@@ -596,9 +596,10 @@ void bind_closed_loop(py::module_& m) {
           typename Loop::TimeSignals signals;
           typename Loop::State x = state, rate = Loop::State::Zero(loop.state_size());
           typename Loop::Outputs outputs;
-          loop.begin_step(t, x);
+          typename Loop::Data data = loop.make_data();
+          loop.begin_step(t, x, data);
           loop.time_signals(t, signals);
-          loop.derivative(signals, x, rate, &outputs);
+          loop.derivative(signals, x, rate, &outputs, data);
           py::dict out;
           out["qd"] = outputs.qd;
           out["e1"] = outputs.errors.e1;

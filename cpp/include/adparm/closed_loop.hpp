@@ -90,6 +90,16 @@ class ClosedLoop {
     Desired desired;    // qd(t), dqd(t), ddqd(t)
   };
 
+  // The loop's work buffers (Crocoddyl's Data beside its Model): sized once by make_data(), owned
+  // by the caller (Simulation) and passed to the calls that write them; the loop itself stays
+  // const during an evaluation.
+  struct Data {
+    Terms plant_terms, believed_terms;  // dynamic sizes (fixed sizes keep them on the stack)
+    Terms point_terms;                  // the model's terms at an extrapolation point
+    typename Critic<Basis>::Workspace critic;
+    BasisWorkspace<Basis> basis;  // the basis' work buffers (basis.hpp)
+  };
+
   struct Outputs {
     Errors errors;
     Joint qd;                // desired position
@@ -132,8 +142,6 @@ class ClosedLoop {
     check_size(settings.actor_weights, k, 1, "init.actor_weights");
     check_finite(settings.critic_weights, "init.critic_weights");
     check_finite(settings.actor_weights, "init.actor_weights");
-    plant_.init_terms(plant_terms_);
-    error_system_.model().init_terms(believed_terms_);
     const Joint q0 = settings.task.q0, dq0 = settings.task.dq0;
     const Errors initial = tracking_errors<kDof>(q0, dq0, trajectory_(0.0), error_system_.alpha1());
     rise_ = RiseT<kDof>(settings.control.rise, initial.e2);
@@ -156,6 +164,16 @@ class ClosedLoop {
   Eigen::Index state_size() const { return cost_offset() + 1; }
 
   const State& initial_state() const { return initial_state_; }
+
+  Data make_data() const {
+    Data data;
+    plant_.init_terms(data.plant_terms);
+    error_system_.model().init_terms(data.believed_terms);
+    error_system_.model().init_terms(data.point_terms);
+    data.critic = critic_.workspace();
+    data.basis = basis_workspace(basis_);
+    return data;
+  }
   const Arm& plant() const { return plant_; }
   const Basis& basis() const { return basis_; }
   const ErrorSystem<Arm>& error_system() const { return error_system_; }
@@ -179,18 +197,19 @@ class ClosedLoop {
 
   // Called at the start of each step (and before the first evaluation): draws local
   // extrapolation points around the current error state, or prepares fixed ones once.
-  void begin_step(double t, const State& state) {
+  void begin_step(double t, const State& state, Data& data) {
     if (!extrapolation_.needs_begin_step()) return;
     const Eigen::Index n = dof();
     const Desired desired = trajectory_(t);
     const Errors errors = tracking_errors<kDof>(state.template segment<kDof>(kQ, n),
                                                 state.template segment<kDof>(dq_offset(), n),
                                                 desired, error_system_.alpha1());
-    extrapolation_.begin_step(basis_, error_system_, cost_, errors.x(), desired);
+    extrapolation_.begin_step(basis_, error_system_, cost_, errors.x(), desired, data.point_terms,
+                              data.basis);
   }
 
-  void derivative(const TimeSignals& signals, const State& state, State& rate,
-                  Outputs* outputs) const {
+  void derivative(const TimeSignals& signals, const State& state, State& rate, Outputs* outputs,
+                  Data& data) const {
     const Eigen::Index n = dof(), k = basis_size();
     const Joint q = state.template segment<kDof>(kQ, n);
     const Joint dq = state.template segment<kDof>(dq_offset(), n);
@@ -204,15 +223,15 @@ class ClosedLoop {
 
     // fixed sizes: the terms on the stack; dynamic: in the buffers sized once
     Terms local_plant_terms, local_believed_terms;
-    Terms& plant_terms = kFixed ? local_plant_terms : plant_terms_;
-    Terms& believed_terms = kFixed ? local_believed_terms : believed_terms_;
+    Terms& plant_terms = kFixed ? local_plant_terms : data.plant_terms;
+    Terms& believed_terms = kFixed ? local_believed_terms : data.believed_terms;
     plant_.compute(q, dq, plant_terms);
     if (!model_is_plant_) error_system_.model().compute(q, dq, believed_terms);
     const Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
 
     Point point;
     prepare_hjb_point<Basis, kDof>(basis_, x, desired, error_system_.drift(x, model_terms),
-                                   model_terms, cost_, point);
+                                   model_terms, cost_, point, data.basis);
     Evaluation hjb;
     evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
 
@@ -226,7 +245,7 @@ class ClosedLoop {
       const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
         if constexpr (kBasisSize == Dynamic) {  // (23)-(24), gathered in blocks (critic.hpp)
           if (gathers_)
-            critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
+            critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, data.critic);
           else
             critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         } else {
@@ -237,8 +256,9 @@ class ClosedLoop {
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
-                              learn);
-      if constexpr (kBasisSize == Dynamic) critic_.flush(gamma, critic_rate, gamma_rate);
+                              data.point_terms, data.basis, learn);
+      if constexpr (kBasisSize == Dynamic)
+        critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
         critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
                                              actor_.settings().e2_margin, gamma);
@@ -277,8 +297,8 @@ class ClosedLoop {
   }
 
   // Resets Gamma to gamma0 I when lambda_min(Gamma) < epsilon_T; returns whether it did.
-  bool reset_covariance_if_needed(State& state) const {
-    if (!critic_.needs_reset(covariance(state))) return false;
+  bool reset_covariance_if_needed(State& state, Data& data) const {
+    if (!critic_.needs_reset(covariance(state), data.critic)) return false;
     critic_.reset(covariance(state));
     return true;
   }
@@ -320,7 +340,6 @@ class ClosedLoop {
   // whose coefficient-wise products beat a call of Eigen's matrix-vector kernel.
   bool gathers_;
   State initial_state_;
-  mutable Terms plant_terms_, believed_terms_;  // dynamic sizes: the terms' buffers
 };
 
 using PaperClosedLoop = ClosedLoop<TwoLinkArm, PaperBasis>;

@@ -61,6 +61,7 @@ class PinocchioArm {
     Eigen::MatrixXd coriolis;      // C(q, dq)
     Eigen::VectorXd gravity;       // G(q)
     Eigen::VectorXd friction;      // F(dq)
+    Eigen::VectorXd residual;      // acceleration()'s work space
   };
 
   // Joint position limits (+-inf for a continuous joint), velocity and effort limits, as the URDF
@@ -118,14 +119,14 @@ class PinocchioArm {
                const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms) const;
 
   // Joint acceleration of eq. (1) for a given torque and disturbance, written into ddq (size
-  // dof()); no heap allocation.
-  void acceleration(const Terms& terms, const Eigen::Ref<const Eigen::VectorXd>& dq,
+  // dof()); no heap allocation (terms.residual is its work space).
+  void acceleration(Terms& terms, const Eigen::Ref<const Eigen::VectorXd>& dq,
                     const Eigen::Ref<const Eigen::VectorXd>& tau,
                     const Eigen::Ref<const Eigen::VectorXd>& tau_d,
                     Eigen::Ref<Eigen::VectorXd> ddq) const {
-    residual_ = tau - terms.gravity - terms.friction - tau_d;
-    residual_.noalias() -= terms.coriolis * dq;
-    ddq.noalias() = terms.mass_inverse * residual_;
+    terms.residual = tau - terms.gravity - terms.friction - tau_d;
+    terms.residual.noalias() -= terms.coriolis * dq;
+    ddq.noalias() = terms.mass_inverse * terms.residual;
   }
 
   // The inertial parameters pi of the URDF (10 per joint, Pinocchio's order for the body that
@@ -149,7 +150,6 @@ class PinocchioArm {
 
   std::unique_ptr<Impl> impl_;
   int dof_ = 0;
-  mutable Eigen::VectorXd residual_;  // acceleration()'s work space
 };
 
 }  // namespace adparm

@@ -99,7 +99,8 @@ class Simulation {
              const Basis& basis = Basis())
       : Simulation(System(settings, plant, model, model_is_plant, basis), settings.sim) {}
 
-  Simulation(System&& system, const SimSettings& sim) : system_(std::move(system)), sim_(sim) {
+  Simulation(System&& system, const SimSettings& sim)
+      : system_(std::move(system)), data_(system_.make_data()), sim_(sim) {
     check_positive(sim_.T, "sim.T");
     check_positive(sim_.dt, "sim.dt");
     check_positive(sim_.divergence_bound, "sim.divergence_bound");
@@ -116,7 +117,7 @@ class Simulation {
     states_[1] = states_[0];  // sizes every state buffer once
     record_rate_ = states_[0];
     workspace_.resize(states_[0].size());
-    system_.begin_step(0.0, states_[0]);
+    system_.begin_step(0.0, states_[0], data_);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, static_cast<int>(system_.dof()),
                         static_cast<int>(system_.basis_size()));
@@ -139,7 +140,7 @@ class Simulation {
       State& state = states_[1 - current_];
       const bool row_due = row_due_;
       rk4_step(system_, t_begin, t_end, previous, state, workspace_,
-               row_due ? &row_outputs_ : nullptr);
+               row_due ? &row_outputs_ : nullptr, data_);
       row_due_ = false;
       if (row_due && !record(t_begin, previous, row_outputs_)) {
         stop_diverged(t_begin);  // the step is not taken: state() stays at t_begin
@@ -156,8 +157,8 @@ class Simulation {
       }
       current_ = 1 - current_;
       if (control.step != nullptr) control.step->store(step_, std::memory_order_relaxed);
-      if (system_.reset_covariance_if_needed(state)) reset_times_.push_back(t_end);
-      system_.begin_step(t_end, state);  // for the next step (and the row recorded at t_end)
+      if (system_.reset_covariance_if_needed(state, data_)) reset_times_.push_back(t_end);
+      system_.begin_step(t_end, state, data_);  // for the next step (and the row recorded at t_end)
       if (step_ == steps_) {
         if (record(t_end, state))
           status_ = RunStatus::finished;
@@ -206,7 +207,7 @@ class Simulation {
 
   bool record(double t, const State& state) {
     system_.time_signals(t, record_signals_);
-    system_.derivative(record_signals_, state, record_rate_, &row_outputs_);
+    system_.derivative(record_signals_, state, record_rate_, &row_outputs_, data_);
     return record(t, state, row_outputs_);
   }
 
@@ -238,6 +239,7 @@ class Simulation {
   }
 
   System system_;
+  typename System::Data data_;  // the loop's work buffers
   SimSettings sim_;
   long steps_ = 0;
   long step_ = 0;

@@ -24,18 +24,20 @@ class UrdfLoopArm {
   static constexpr int kDof = Dynamic;
   using Joint = JointVector<Dynamic>;
 
-  using Terms = DynamicTerms;
+  // The loop's bounded terms, and Pinocchio's (dynamic) terms that compute() copies into them.
+  struct Terms : DynamicTerms {
+    PinocchioArm::Terms pinocchio;
+  };
 
   // Reads the URDF of `arm`; errors name `field` (plant.urdf or model.urdf).
-  UrdfLoopArm(const UrdfArmSettings& arm, const std::string& field)
-      : arm_(read(arm, field)), buffer_(arm_.make_terms()) {
+  UrdfLoopArm(const UrdfArmSettings& arm, const std::string& field) : arm_(read(arm, field)) {
     if (arm_.dof() > kMaxDof)
       throw std::invalid_argument(field + ": the arm has " + std::to_string(arm_.dof()) +
                                   " joints; the core supports 1 to " + std::to_string(kMaxDof));
   }
 
   // An arm already read (the bench builds its arms so).
-  explicit UrdfLoopArm(const PinocchioArm& arm) : arm_(arm), buffer_(arm_.make_terms()) {
+  explicit UrdfLoopArm(const PinocchioArm& arm) : arm_(arm) {
     if (arm_.dof() > kMaxDof)
       throw std::invalid_argument("the arm has " + std::to_string(arm_.dof()) +
                                   " joints; the core supports 1 to " + std::to_string(kMaxDof));
@@ -44,16 +46,19 @@ class UrdfLoopArm {
   int dof() const { return arm_.dof(); }
   const PinocchioArm& arm() const { return arm_; }
 
-  void init_terms(Terms& terms) const { init_dynamic_terms(terms, dof()); }
+  void init_terms(Terms& terms) const {
+    init_dynamic_terms(terms, dof());
+    terms.pinocchio = arm_.make_terms();
+  }
 
-  // No heap allocation: Pinocchio fills the arm's buffers, copied into the bounded terms.
+  // No heap allocation: Pinocchio fills the terms' own buffers, copied into the bounded terms.
   void compute(const Joint& q, const Joint& dq, Terms& terms) const {
-    arm_.compute(q, dq, buffer_);
-    terms.mass = buffer_.mass;
-    terms.mass_inverse = buffer_.mass_inverse;
-    terms.coriolis = buffer_.coriolis;
-    terms.gravity = buffer_.gravity;
-    terms.friction = buffer_.friction;
+    arm_.compute(q, dq, terms.pinocchio);
+    terms.mass = terms.pinocchio.mass;
+    terms.mass_inverse = terms.pinocchio.mass_inverse;
+    terms.coriolis = terms.pinocchio.coriolis;
+    terms.gravity = terms.pinocchio.gravity;
+    terms.friction = terms.pinocchio.friction;
   }
 
   // eq. (1)
@@ -75,7 +80,6 @@ class UrdfLoopArm {
   }
 
   PinocchioArm arm_;
-  mutable PinocchioArm::Terms buffer_;
 };
 
 }  // namespace adparm
