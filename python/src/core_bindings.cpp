@@ -403,11 +403,12 @@ void bind_urdf_structured_basis(py::module_& m) {
               py::gil_scoped_release release;
               Eigen::VectorXd p(N), r(N), row_x(2 * n), row_qd(n), row_dqd(n);
               Eigen::MatrixXd j(N, 2 * n);
+              PinocchioStructuredBasis::Workspace workspace = basis.workspace();
               for (Eigen::Index i = 0; i < rows; ++i) {
                 row_x = x.row(i).transpose();
                 row_qd = qd.row(i).transpose();
                 row_dqd = dqd.row(i).transpose();
-                basis.evaluate_at(row_x, row_qd, row_dqd, p, j, r);
+                basis.evaluate_at(row_x, row_qd, row_dqd, p, j, r, workspace);
                 Eigen::Map<Eigen::VectorXd>(phi_out + i * N, N) = p;
                 Eigen::Map<Eigen::VectorXd>(rate_out + i * N, N) = r;
                 Eigen::Map<RowsX>(jacobian_out + i * N * 2 * n, N, 2 * n) = j;
