@@ -499,10 +499,16 @@ Eigen::VectorXd PinocchioArm::inertial_parameters() const {
 
 void PinocchioArm::mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
                                   Eigen::Ref<Eigen::MatrixXd> out) const {
+  Workspace workspace = this->workspace();
+  mass_regressor(q, out, workspace);
+}
+
+void PinocchioArm::mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                  Eigen::Ref<Eigen::MatrixXd> out, Workspace& workspace) const {
   check_size(q, dof_, 1, "q");
   check_size(out, dof_, static_cast<Eigen::Index>(dof_) * parameter_count(), "out");
   const Impl& s = *impl_;
-  WorkspaceData w(s.model);
+  WorkspaceData& w = *workspace;
   s.set_configuration(q, w.configuration);
   const Eigen::Index n = dof_;
   for (Eigen::Index j = 0; j < n; ++j) {

@@ -115,9 +115,10 @@ BaseParameters base_parameters(const PinocchioArm& arm, int samples, std::uint64
   Eigen::MatrixXd regressor(n, n * p);
   Eigen::VectorXd q(n);
   SplitMix64 random{seed};
+  PinocchioArm::Workspace workspace = arm.workspace();
   for (Eigen::Index s = 0; s < samples; ++s) {
     for (Eigen::Index j = 0; j < n; ++j) q[j] = lower[j] + (upper[j] - lower[j]) * random.uniform();
-    arm.mass_regressor(q, regressor);
+    arm.mass_regressor(q, regressor, workspace);
     Eigen::Index row = s * entries;
     for (Eigen::Index i = 0; i < n; ++i)
       for (Eigen::Index j = i; j < n; ++j, ++row)
@@ -260,8 +261,9 @@ void PinocchioStructuredBasis::set_check_positions(
   const Eigen::Index r = static_cast<Eigen::Index>(base.columns.size());
   Eigen::MatrixXd regressor(n, static_cast<Eigen::Index>(n) * arm.parameter_count());
   check_blocks_.assign(static_cast<std::size_t>(positions.cols()), Eigen::MatrixXd(n * n, r));
+  PinocchioArm::Workspace workspace = arm.workspace();
   for (Eigen::Index s = 0; s < positions.cols(); ++s) {
-    arm.mass_regressor(positions.col(s), regressor);
+    arm.mass_regressor(positions.col(s), regressor, workspace);
     for (Eigen::Index b = 0; b < r; ++b) {
       const auto M_b = regressor.middleCols(static_cast<Eigen::Index>(base.columns[b]) * n, n);
       check_blocks_[static_cast<std::size_t>(s)].col(b) =

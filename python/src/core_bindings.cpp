@@ -28,7 +28,9 @@ using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowM
 // Settings::arm (a std::variant of the two-link arm's parameters and a URDF arm's settings) as
 // the four attributes plant, model (two-link) and plant_urdf, model_urdf (URDF). A getter of the
 // alternative held returns a reference into the settings (s.plant.p1 = ... changes them, as for
-// any member); of the other alternative, a default copy.
+// any member); of the other alternative, a default copy. Such a reference stands for the arm held
+// when it was taken: assigning plant_urdf (which changes the alternative) leaves it dangling, so
+// Python code assigns whole values (as core_settings does) rather than keeping one across that.
 template <class Member, class Alternative>
 py::object arm_member(py::handle self, Member Alternative::* member) {
   Settings& settings = self.cast<Settings&>();

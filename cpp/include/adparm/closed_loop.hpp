@@ -20,6 +20,7 @@
 #pragma once
 
 #include <Eigen/Eigenvalues>
+#include <type_traits>
 
 #include "adparm/basis.hpp"
 #include "adparm/controller.hpp"
@@ -222,9 +223,10 @@ class ClosedLoop {
     const Error x = errors.x();
 
     // fixed sizes: the terms on the stack; dynamic: in the buffers sized once
-    Terms local_plant_terms, local_believed_terms;
-    Terms& plant_terms = kFixed ? local_plant_terms : data.plant_terms;
-    Terms& believed_terms = kFixed ? local_believed_terms : data.believed_terms;
+    [[maybe_unused]] std::conditional_t<kFixed, Terms, NoTerms> local_plant_terms,
+        local_believed_terms;
+    Terms& plant_terms = pick_terms(local_plant_terms, data.plant_terms);
+    Terms& believed_terms = pick_terms(local_believed_terms, data.believed_terms);
     plant_.compute(q, dq, plant_terms);
     if (!model_is_plant_) error_system_.model().compute(q, dq, believed_terms);
     const Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
@@ -304,6 +306,15 @@ class ClosedLoop {
   }
 
  private:
+  struct NoTerms {};
+  template <class Local>
+  static Terms& pick_terms(Local& local, Terms& buffer) {
+    if constexpr (kFixed)
+      return local;
+    else
+      return buffer;
+  }
+
   static Eigen::Index checked_dof(const Arm& plant, const Arm& model, const Basis& basis) {
     const Eigen::Index n = plant.dof();
     if (model.dof() != n)

@@ -153,6 +153,9 @@ class PinocchioArm {
   // without gravity.
   void mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
                       Eigen::Ref<Eigen::MatrixXd> out) const;
+  // The same in a work space of this arm (no work space to allocate: for many positions).
+  void mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Ref<Eigen::MatrixXd> out,
+                      Workspace& workspace) const;
 
   struct Impl;  // opaque: Pinocchio's model (cpp/src/pinocchio_arm_impl.hpp)
   // For the other Pinocchio translation units of the core (pinocchio_structured_basis.cpp).
