@@ -61,6 +61,7 @@
 #include <string>
 #include <vector>
 
+#include "adparm/any_simulation.hpp"
 #include "adparm/batch.hpp"
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
@@ -383,10 +384,10 @@ void fail(const std::string& what) {
 }
 
 bool same(const adparm::Recording& a, const adparm::Recording& b) {
-  return a.rows == b.rows && a.t == b.t && a.hjb_error == b.hjb_error && a.cost == b.cost &&
-         a.q == b.q && a.dq == b.dq && a.qd == b.qd && a.e1 == b.e1 && a.e2 == b.e2 &&
-         a.tau == b.tau && a.u == b.u && a.u_hat == b.u_hat && a.mu == b.mu && a.probe == b.probe &&
-         a.critic_weights == b.critic_weights && a.actor_weights == b.actor_weights;
+  bool equal = a.rows == b.rows;
+  for (const adparm::RecordedSeries& series : adparm::kRecordedSeries)
+    equal = equal && a.*series.member == b.*series.member;
+  return equal;
 }
 
 // Runs `settings` in chunks of 7 and 13 steps in turn (chunks end on recorded rows and between
@@ -458,8 +459,8 @@ void check_runs(double horizon) {
             finished);
   check_run("paper_basis_model_error", variant([](Settings& s) {
               s.basis = adparm::BasisKind::paper;
-              s.model.p1 = 4.5;
-              s.model.viscous = 0.2;
+              std::get<adparm::TwoLinkArms>(s.arm).model.p1 = 4.5;
+              std::get<adparm::TwoLinkArms>(s.arm).model.viscous = 0.2;
               s.probe.ramp = 0.1;
               s.sim.record_every = 7;
             }),
@@ -515,7 +516,7 @@ void check_runs(double horizon) {
               s.basis = adparm::BasisKind::paper;
               s.task.qd = sinusoid();
               s.extrapolation.points = 4;
-              s.model.p1 = 4.5;
+              std::get<adparm::TwoLinkArms>(s.arm).model.p1 = 4.5;
             }),
             finished);
   check_run("expression_quadratic_points", variant([](Settings& s) {
@@ -626,9 +627,10 @@ void check_invalid_settings() {
       {"task.q0 nan", [&](Settings& s) { s.task.q0[1] = nan; }},
       {"task.dq0 inf", [&](Settings& s) { s.task.dq0[0] = -inf; }},
       {"plant.disturbance inf", [&](Settings& s) { s.disturbance[0] = inf; }},
-      {"plant.p2 zero", [](Settings& s) { s.plant.p2 = 0.0; }},
-      {"plant M not positive definite", [](Settings& s) { s.plant.p1 = 1.5; }},
-      {"model.p3 nan", [&](Settings& s) { s.model.p3 = nan; }},
+      {"plant.p2 zero", [](Settings& s) { std::get<adparm::TwoLinkArms>(s.arm).plant.p2 = 0.0; }},
+      {"plant M not positive definite",
+       [](Settings& s) { std::get<adparm::TwoLinkArms>(s.arm).plant.p1 = 1.5; }},
+      {"model.p3 nan", [&](Settings& s) { std::get<adparm::TwoLinkArms>(s.arm).model.p3 = nan; }},
       {"cost.Q asymmetric", [](Settings& s) { s.Q(0, 1) += 1.0; }},
       {"cost.R not positive definite", [](Settings& s) { s.R(1, 1) = -1.0; }},
       {"cost.R nan", [&](Settings& s) { s.R(0, 0) = nan; }},

@@ -50,6 +50,7 @@ bool check(const std::string& name, const adparm::PinocchioArm& arm, const Basis
   adparm::PinocchioArm::Terms terms = arm.make_terms();
   adparm::HjbPoint<Basis, adparm::Dynamic> point;
   adparm::HjbEvaluation<Basis, adparm::Dynamic> evaluation;
+  adparm::BasisWorkspace<Basis> workspace = adparm::basis_workspace(basis);
   double worst = 0.0;
   for (std::size_t i = 0; i < 64; ++i) {
     const auto& x = xs[i];
@@ -59,7 +60,7 @@ bool check(const std::string& name, const adparm::PinocchioArm& arm, const Basis
     adparm::ErrorVector<adparm::Dynamic> drift(2 * n);
     drift << -alpha1 * e1 + e2, -terms.mass_inverse * (terms.coriolis * e2);
     adparm::prepare_hjb_point<Basis, adparm::Dynamic>(basis, x, desired[i], drift, terms, cost,
-                                                      point);
+                                                      point, workspace);
     adparm::evaluate_hjb(point, cost, W, W, evaluation);
     worst = std::max(worst, std::abs(evaluation.error) / cost.state_cost(x));
   }
@@ -68,10 +69,11 @@ bool check(const std::string& name, const adparm::PinocchioArm& arm, const Basis
   bool agree = true;
   Basis::Vector phi[3], rate[3];
   Basis::Jacobian jacobian[3];
+  Basis::Workspace workspaces[3] = {basis.workspace(), copy.workspace(), assigned.workspace()};
   for (std::size_t i = 0; i < 64; ++i) {
-    basis.evaluate(xs[i], desired[i], phi[0], jacobian[0], rate[0]);
-    copy.evaluate(xs[i], desired[i], phi[1], jacobian[1], rate[1]);
-    assigned.evaluate(xs[i], desired[i], phi[2], jacobian[2], rate[2]);
+    basis.evaluate(xs[i], desired[i], phi[0], jacobian[0], rate[0], workspaces[0]);
+    copy.evaluate(xs[i], desired[i], phi[1], jacobian[1], rate[1], workspaces[1]);
+    assigned.evaluate(xs[i], desired[i], phi[2], jacobian[2], rate[2], workspaces[2]);
     for (int k = 1; k < 3; ++k)
       agree = agree && phi[k] == phi[0] && jacobian[k] == jacobian[0] && rate[k] == rate[0];
   }
@@ -102,6 +104,7 @@ int run(const std::string& name, const std::string& path, long evaluations) {
   adparm::PinocchioStructuredBasis::Vector phi, rate;
   adparm::PinocchioStructuredBasis::Jacobian jacobian;
   if (!check(name, arm, basis, xs, desired)) return 1;
+  adparm::PinocchioStructuredBasis::Workspace workspace = basis.workspace();
   double best = 1e300, checksum = 0.0;
   long seen = 0;
   for (int repeat = 0; repeat < 3; ++repeat) {
@@ -109,7 +112,7 @@ int run(const std::string& name, const std::string& path, long evaluations) {
     const auto start = Clock::now();
     for (long e = 0; e < evaluations; ++e) {
       const std::size_t i = static_cast<std::size_t>(e % kPoints);
-      basis.evaluate(xs[i], desired[i], phi, jacobian, rate);
+      basis.evaluate(xs[i], desired[i], phi, jacobian, rate, workspace);
       checksum += phi[basis.size() - 1] + jacobian(0, 0) + rate[basis.size() - 1];
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();

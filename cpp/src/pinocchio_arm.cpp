@@ -349,7 +349,6 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
   model.gravity.linear(gravity);
   impl->model_without_gravity = model;
   impl->model_without_gravity.gravity.setZero();
-  impl->data = std::make_unique<pinocchio::Data>(model);
   impl->gravity = gravity;
 
   impl->limits.lower.resize(dof);
@@ -380,10 +379,6 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
     impl->limits.velocity[i] = model.velocityLimit[iv];
     impl->limits.effort[i] = model.effortLimit[iv];
   }
-  impl->configuration = pinocchio::neutral(model);
-  impl->velocity = Eigen::VectorXd::Zero(dof);
-  impl->zero_velocity = Eigen::VectorXd::Zero(dof);
-  impl->unit_acceleration = Eigen::VectorXd::Zero(dof);
   impl->coulomb = per_joint(coulomb, dof, source, "coulomb");
   impl->viscous = per_joint(viscous, dof, source, "viscous");
   return impl;
@@ -401,9 +396,7 @@ std::string read_file(const std::string& path) {
 }  // namespace
 
 PinocchioArm::PinocchioArm(std::unique_ptr<Impl> impl)
-    : impl_(std::move(impl)),
-      dof_(impl_->model.nv),
-      residual_(Eigen::VectorXd::Zero(impl_->model.nv)) {}
+    : impl_(std::move(impl)), dof_(impl_->model.nv) {}
 
 PinocchioArm::PinocchioArm(const std::string& urdf_path, const Eigen::Vector3d& gravity,
                            const Eigen::VectorXd& coulomb, const Eigen::VectorXd& viscous,
@@ -429,13 +422,12 @@ std::string LockedJointsError::with_section(const std::string& section) const {
 }
 
 PinocchioArm::PinocchioArm(const PinocchioArm& other)
-    : impl_(std::make_unique<Impl>(*other.impl_)), dof_(other.dof_), residual_(other.residual_) {}
+    : impl_(std::make_unique<Impl>(*other.impl_)), dof_(other.dof_) {}
 
 PinocchioArm& PinocchioArm::operator=(const PinocchioArm& other) {
   if (this != &other) {
     impl_ = std::make_unique<Impl>(*other.impl_);
     dof_ = other.dof_;
-    residual_ = other.residual_;
   }
   return *this;
 }
@@ -453,13 +445,23 @@ const Eigen::VectorXd& PinocchioArm::coulomb() const { return impl_->coulomb; }
 const Eigen::VectorXd& PinocchioArm::viscous() const { return impl_->viscous; }
 const LockedJoints& PinocchioArm::locked_joints() const { return impl_->locked; }
 
+void PinocchioArm::WorkspaceDeleter::operator()(WorkspaceData* workspace) const {
+  delete workspace;
+}
+
+PinocchioArm::Workspace PinocchioArm::workspace() const {
+  return Workspace(new WorkspaceData(impl_->model));
+}
+
 PinocchioArm::Terms PinocchioArm::make_terms() const {
   Terms terms;
+  terms.workspace = workspace();
   terms.mass = Eigen::MatrixXd::Zero(dof_, dof_);
   terms.mass_inverse = Eigen::MatrixXd::Zero(dof_, dof_);
   terms.coriolis = Eigen::MatrixXd::Zero(dof_, dof_);
   terms.gravity = Eigen::VectorXd::Zero(dof_);
   terms.friction = Eigen::VectorXd::Zero(dof_);
+  terms.residual = Eigen::VectorXd::Zero(dof_);
   return terms;
 }
 
@@ -469,17 +471,18 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   check_size(dq, dof_, 1, "dq");
   const Impl& s = *impl_;
   const pinocchio::Model& model = s.model;
-  pinocchio::Data& data = *s.data;
-  s.set_configuration(q);
-  s.velocity = dq;
+  WorkspaceData& w = *terms.workspace;
+  pinocchio::Data& data = w.data;
+  s.set_configuration(q, w.configuration);
+  w.velocity = dq;
   // CRBA and the articulated-body M^-1 fill the upper triangles only: mirror them.
-  pinocchio::crba(model, data, s.configuration);
+  pinocchio::crba(model, data, w.configuration);
   terms.mass = data.M.selfadjointView<Eigen::Upper>();
-  pinocchio::computeCoriolisMatrix(model, data, s.configuration, s.velocity);
+  pinocchio::computeCoriolisMatrix(model, data, w.configuration, w.velocity);
   terms.coriolis = data.C;
-  pinocchio::computeGeneralizedGravity(model, data, s.configuration);
+  pinocchio::computeGeneralizedGravity(model, data, w.configuration);
   terms.gravity = data.g;
-  pinocchio::computeMinverse(model, data, s.configuration);
+  pinocchio::computeMinverse(model, data, w.configuration);
   terms.mass_inverse = data.Minv.selfadjointView<Eigen::Upper>();
   for (Eigen::Index i = 0; i < dof_; ++i)
     terms.friction[i] =
@@ -496,17 +499,24 @@ Eigen::VectorXd PinocchioArm::inertial_parameters() const {
 
 void PinocchioArm::mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
                                   Eigen::Ref<Eigen::MatrixXd> out) const {
+  Workspace workspace = this->workspace();
+  mass_regressor(q, out, workspace);
+}
+
+void PinocchioArm::mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                  Eigen::Ref<Eigen::MatrixXd> out, Workspace& workspace) const {
   check_size(q, dof_, 1, "q");
   check_size(out, dof_, static_cast<Eigen::Index>(dof_) * parameter_count(), "out");
   const Impl& s = *impl_;
-  s.set_configuration(q);
+  WorkspaceData& w = *workspace;
+  s.set_configuration(q, w.configuration);
   const Eigen::Index n = dof_;
   for (Eigen::Index j = 0; j < n; ++j) {
-    s.unit_acceleration.setZero();
-    s.unit_acceleration[j] = 1.0;
+    w.unit_acceleration.setZero();
+    w.unit_acceleration[j] = 1.0;
     // Y(q, 0, e_j) pi = M(q) e_j without gravity: its column k is column j of M_k.
     const auto& regressor = pinocchio::computeJointTorqueRegressor(
-        s.model_without_gravity, *s.data, s.configuration, s.zero_velocity, s.unit_acceleration);
+        s.model_without_gravity, w.data, w.configuration, w.zero_velocity, w.unit_acceleration);
     for (Eigen::Index k = 0; k < parameter_count(); ++k) out.col(k * n + j) = regressor.col(k);
   }
 }

@@ -115,9 +115,10 @@ BaseParameters base_parameters(const PinocchioArm& arm, int samples, std::uint64
   Eigen::MatrixXd regressor(n, n * p);
   Eigen::VectorXd q(n);
   SplitMix64 random{seed};
+  PinocchioArm::Workspace workspace = arm.workspace();
   for (Eigen::Index s = 0; s < samples; ++s) {
     for (Eigen::Index j = 0; j < n; ++j) q[j] = lower[j] + (upper[j] - lower[j]) * random.uniform();
-    arm.mass_regressor(q, regressor);
+    arm.mass_regressor(q, regressor, workspace);
     Eigen::Index row = s * entries;
     for (Eigen::Index i = 0; i < n; ++i)
       for (Eigen::Index j = i; j < n; ++j, ++row)
@@ -170,21 +171,42 @@ struct Group {
   Eigen::Index begin, end;
 };
 
-// Everything but Pinocchio's work space (in `arm`, which a copy builds afresh).
+// The basis, copied as is.
 struct PinocchioStructuredBasis::Impl {
-  PinocchioArm::Impl arm;  // model, configuration buffer, set_configuration
+  PinocchioArm::Impl arm;  // model, set_configuration
   BaseParameters base;
   std::vector<std::string> names;
   std::vector<pinocchio::JointIndex> joint;  // per base parameter: the joint whose body it is
   std::vector<int> local;                    // per base parameter: its index 0..9 in that body
   std::vector<Group> groups;                 // the base parameters body by body
-  mutable Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6> gradients;
-  mutable Eigen::VectorXd position;      // q = qd - e1
-  mutable Eigen::VectorXd acceleration;  // zero (computeForwardKinematicsDerivatives needs one)
-  mutable pinocchio::Data::Matrix6x dv_dq, dv_dv;
 
   explicit Impl(const PinocchioArm::Impl& arm_impl) : arm(arm_impl) {}
 };
+
+// The work space of one evaluation.
+struct PinocchioStructuredBasis::WorkspaceData {
+  PinocchioArm::WorkspaceData arm;  // pinocchio::Data, configuration and velocity
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6> gradients;
+  Eigen::VectorXd position;      // q = qd - e1
+  Eigen::VectorXd acceleration;  // zero (computeForwardKinematicsDerivatives needs one)
+  pinocchio::Data::Matrix6x dv_dq, dv_dv;
+
+  WorkspaceData(const pinocchio::Model& model, Eigen::Index n)
+      : arm(model),
+        gradients(Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6>::Zero(10, 6)),
+        position(Eigen::VectorXd::Zero(n)),
+        acceleration(Eigen::VectorXd::Zero(n)),
+        dv_dq(pinocchio::Data::Matrix6x::Zero(6, n)),
+        dv_dv(pinocchio::Data::Matrix6x::Zero(6, n)) {}
+};
+
+void PinocchioStructuredBasis::WorkspaceDeleter::operator()(WorkspaceData* workspace) const {
+  delete workspace;
+}
+
+PinocchioStructuredBasis::Workspace PinocchioStructuredBasis::workspace() const {
+  return Workspace(new WorkspaceData(impl_->arm.model, joints_));
+}
 
 PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
     : impl_(std::make_unique<Impl>(arm.impl())), joints_(arm.dof()) {
@@ -219,11 +241,6 @@ PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
       s.groups.push_back({s.joint[b], index, index});
     s.groups.back().end = index + 1;
   }
-  s.gradients.setZero(10, 6);
-  s.position = Eigen::VectorXd::Zero(n);
-  s.acceleration = Eigen::VectorXd::Zero(n);
-  s.dv_dq = pinocchio::Data::Matrix6x::Zero(6, n);
-  s.dv_dv = pinocchio::Data::Matrix6x::Zero(6, n);
 }
 
 PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioStructuredBasis& other)
@@ -244,8 +261,9 @@ void PinocchioStructuredBasis::set_check_positions(
   const Eigen::Index r = static_cast<Eigen::Index>(base.columns.size());
   Eigen::MatrixXd regressor(n, static_cast<Eigen::Index>(n) * arm.parameter_count());
   check_blocks_.assign(static_cast<std::size_t>(positions.cols()), Eigen::MatrixXd(n * n, r));
+  PinocchioArm::Workspace workspace = arm.workspace();
   for (Eigen::Index s = 0; s < positions.cols(); ++s) {
-    arm.mass_regressor(positions.col(s), regressor);
+    arm.mass_regressor(positions.col(s), regressor, workspace);
     for (Eigen::Index b = 0; b < r; ++b) {
       const auto M_b = regressor.middleCols(static_cast<Eigen::Index>(base.columns[b]) * n, n);
       check_blocks_[static_cast<std::size_t>(s)].col(b) =
@@ -300,7 +318,8 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
                                            const Eigen::Ref<const Eigen::VectorXd>& dqd,
                                            Eigen::Ref<Eigen::VectorXd> phi,
                                            Eigen::Ref<Eigen::MatrixXd> jacobian,
-                                           Eigen::Ref<Eigen::VectorXd> desired_rate) const {
+                                           Eigen::Ref<Eigen::VectorXd> desired_rate,
+                                           Workspace& workspace) const {
   const Eigen::Index n = joints_;
   check_size(x, 2 * n, 1, "x");
   check_size(qd, n, 1, "qd");
@@ -309,8 +328,9 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
   check_size(jacobian, size_, 2 * n, "jacobian");
   check_size(desired_rate, size_, 1, "desired_rate");
   const Impl& s = *impl_;
-  const PinocchioArm::Impl& arm = s.arm;  // its buffers (mutable) and Data are this basis' own
-  pinocchio::Data& data = *arm.data;
+  const PinocchioArm::Impl& arm = s.arm;
+  WorkspaceData& w = *workspace;
+  pinocchio::Data& data = w.arm.data;
   jacobian.setZero();
   desired_rate.setZero();
 
@@ -324,27 +344,27 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
     }
 
   // e2 block: 2 T_b(q, e2) at q = qd - e1, with the kinematics derivatives of each body
-  s.position = qd - x.head(n);
-  arm.set_configuration(s.position);
-  arm.velocity = x.tail(n);
-  pinocchio::computeForwardKinematicsDerivatives(arm.model, data, arm.configuration, arm.velocity,
-                                                 s.acceleration);
+  w.position = qd - x.head(n);
+  arm.set_configuration(w.position, w.arm.configuration);
+  w.arm.velocity = x.tail(n);
+  pinocchio::computeForwardKinematicsDerivatives(arm.model, data, w.arm.configuration,
+                                                 w.arm.velocity, w.acceleration);
   // per body: its rows' gradients G (rows x 6), then d phi / d(q, v) = G [dv/dq, dv/dv]
   for (const Group& group : s.groups) {
-    s.dv_dq.setZero();
-    s.dv_dv.setZero();
-    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, s.dv_dq,
-                                           s.dv_dv);
+    w.dv_dq.setZero();
+    w.dv_dv.setZero();
+    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, w.dv_dq,
+                                           w.dv_dv);
     const auto& velocity = data.v[group.joint];
     const Eigen::Index rows = group.end - group.begin;
     for (Eigen::Index b = 0; b < rows; ++b)
-      s.gradients.row(b) = energy_gradient(s.local[static_cast<std::size_t>(group.begin + b)],
+      w.gradients.row(b) = energy_gradient(s.local[static_cast<std::size_t>(group.begin + b)],
                                            velocity.linear(), velocity.angular());
-    const auto G = s.gradients.topRows(rows);
+    const auto G = w.gradients.topRows(rows);
     phi.segment(k, rows).noalias() = 0.5 * G.lazyProduct(velocity.toVector());
     // q = qd - e1: d phi / d e1 = -G dv/dq, and the desired rate is G dv/dq dqd
-    jacobian.block(k, 0, rows, n).noalias() = -G.lazyProduct(s.dv_dq);
-    jacobian.block(k, n, rows, n).noalias() = G.lazyProduct(s.dv_dv);
+    jacobian.block(k, 0, rows, n).noalias() = -G.lazyProduct(w.dv_dq);
+    jacobian.block(k, n, rows, n).noalias() = G.lazyProduct(w.dv_dv);
     desired_rate.segment(k, rows).noalias() = -jacobian.block(k, 0, rows, n).lazyProduct(dqd);
     k += rows;
   }

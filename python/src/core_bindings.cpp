@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "adparm/any_simulation.hpp"
 #include "adparm/basis.hpp"
 #include "adparm/batch.hpp"
 #include "adparm/expression_basis.hpp"
@@ -16,7 +17,6 @@
 #include "adparm/open_loop.hpp"
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
-#include "adparm/simulation.hpp"
 
 namespace py = pybind11;
 using namespace adparm;
@@ -24,27 +24,59 @@ using namespace adparm;
 namespace {
 
 using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-using ExpressionLoop = ClosedLoop<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>;
-using UrdfLoop = ClosedLoop<UrdfLoopArm, ExpressionLoopBasis>;
-using UrdfStructuredLoop = ClosedLoop<UrdfLoopArm, PinocchioStructuredBasis>;
 
-// Calls f(Loop*) (a null pointer of the loop type) for the loop of the settings: a URDF arm's
-// (expression basis), or the two-link loop of settings.basis: the fixed-size loop of a built-in
-// basis, the dynamic-size loop of the expression basis.
-template <class F>
-decltype(auto) with_loop(const Settings& settings, F&& f) {
-  if (!settings.plant_urdf.urdf.empty()) {
-    if (settings.basis == BasisKind::structured)
-      return f(static_cast<UrdfStructuredLoop*>(nullptr));
-    if (settings.basis != BasisKind::expression)
-      throw std::invalid_argument(
-          "controller.basis: a URDF arm takes the structured basis or an expression basis");
-    return f(static_cast<UrdfLoop*>(nullptr));
+// Settings::arm (a std::variant of the two-link arm's parameters and a URDF arm's settings) as
+// the four attributes plant, model (two-link) and plant_urdf, model_urdf (URDF). A getter of the
+// alternative held returns a reference into the settings (s.plant.p1 = ... changes them, as for
+// any member); of the other alternative, a default copy. Such a reference stands for the arm held
+// when it was taken: assigning plant_urdf (which changes the alternative) leaves it dangling, so
+// Python code assigns whole values (as core_settings does) rather than keeping one across that.
+template <class Member, class Alternative>
+py::object arm_member(py::handle self, Member Alternative::* member) {
+  Settings& settings = self.cast<Settings&>();
+  if (Alternative* arms = std::get_if<Alternative>(&settings.arm))
+    return py::cast(&(arms->*member), py::return_value_policy::reference_internal, self);
+  return py::cast(Member());
+}
+
+template <TwoLinkArmParameters TwoLinkArms::* member>
+py::object two_link_arm(py::handle self) {
+  return arm_member(self, member);
+}
+
+template <TwoLinkArmParameters TwoLinkArms::* member>
+void set_two_link_arm(Settings& settings, const TwoLinkArmParameters& parameters) {
+  TwoLinkArms* arms = std::get_if<TwoLinkArms>(&settings.arm);
+  if (arms == nullptr)
+    throw std::invalid_argument(
+        std::string(member == &TwoLinkArms::plant ? "plant" : "model") +
+        ": the settings' arm is a URDF arm (plant_urdf), which has no two-link parameters");
+  arms->*member = parameters;
+}
+
+template <UrdfArmSettings UrdfArms::* member>
+py::object urdf_arm(py::handle self) {
+  return arm_member(self, member);
+}
+
+// A path makes the arm a URDF arm (keeping a URDF model given before); an empty one, the two-link
+// arm (keeping its parameters, if it was one).
+void set_urdf_plant(Settings& settings, const UrdfArmSettings& plant) {
+  if (plant.urdf.empty()) {
+    if (!std::holds_alternative<TwoLinkArms>(settings.arm)) settings.arm = TwoLinkArms{};
+    return;
   }
-  if (settings.basis == BasisKind::expression) return f(static_cast<ExpressionLoop*>(nullptr));
-  return with_basis(settings.basis, [&](auto basis) {
-    return f(static_cast<ClosedLoop<TwoLinkArm, decltype(basis)>*>(nullptr));
-  });
+  if (UrdfArms* arms = std::get_if<UrdfArms>(&settings.arm))
+    arms->plant = plant;
+  else
+    settings.arm = UrdfArms{plant, UrdfArmSettings()};
+}
+
+void set_urdf_model(Settings& settings, const UrdfArmSettings& model) {
+  if (UrdfArms* arms = std::get_if<UrdfArms>(&settings.arm))
+    arms->model = model;
+  else if (!model.urdf.empty())
+    throw std::invalid_argument("model.urdf: a URDF model needs a URDF plant (plant_urdf)");
 }
 
 void bind_settings(py::module_& m) {
@@ -166,10 +198,23 @@ void bind_settings(py::module_& m) {
                        "dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) "
                        "loop.")
       .def(py::init<>())
-      .def_readwrite("plant", &Settings::plant)
-      .def_readwrite("model", &Settings::model)
-      .def_readwrite("plant_urdf", &Settings::plant_urdf)
-      .def_readwrite("model_urdf", &Settings::model_urdf)
+      .def_property("plant", &two_link_arm<&TwoLinkArms::plant>,
+                    &set_two_link_arm<&TwoLinkArms::plant>,
+                    "The two-link arm's parameters (the default arm; assigning plant_urdf makes "
+                    "the arm a URDF arm, whose plant and model are default ArmParameters here).")
+      .def_property("model", &two_link_arm<&TwoLinkArms::model>,
+                    &set_two_link_arm<&TwoLinkArms::model>,
+                    "The parameters of the two-link arm the controller believes.")
+      .def_property("plant_urdf", &urdf_arm<&UrdfArms::plant>, &set_urdf_plant,
+                    "A URDF plant: assigning one with a path makes the arm a URDF arm (one with "
+                    "an empty path, the two-link arm); urdf empty when the arm is the two-link "
+                    "arm.")
+      .def_property("model_urdf", &urdf_arm<&UrdfArms::model>, &set_urdf_model,
+                    "The URDF arm's believed model (urdf empty: the plant, an exact model); "
+                    "assign plant_urdf first.")
+      .def_property_readonly(
+          "is_urdf", [](const Settings& s) { return std::holds_alternative<UrdfArms>(s.arm); },
+          "Whether the arm is a URDF arm (plant_urdf) rather than the two-link arm.")
       .def_readwrite("disturbance", &Settings::disturbance)
       .def_readwrite("task", &Settings::task)
       .def_readwrite("Q", &Settings::Q)
@@ -360,11 +405,12 @@ void bind_urdf_structured_basis(py::module_& m) {
               py::gil_scoped_release release;
               Eigen::VectorXd p(N), r(N), row_x(2 * n), row_qd(n), row_dqd(n);
               Eigen::MatrixXd j(N, 2 * n);
+              PinocchioStructuredBasis::Workspace workspace = basis.workspace();
               for (Eigen::Index i = 0; i < rows; ++i) {
                 row_x = x.row(i).transpose();
                 row_qd = qd.row(i).transpose();
                 row_dqd = dqd.row(i).transpose();
-                basis.evaluate_at(row_x, row_qd, row_dqd, p, j, r);
+                basis.evaluate_at(row_x, row_qd, row_dqd, p, j, r, workspace);
                 Eigen::Map<Eigen::VectorXd>(phi_out + i * N, N) = p;
                 Eigen::Map<Eigen::VectorXd>(rate_out + i * N, N) = r;
                 Eigen::Map<RowsX>(jacobian_out + i * N * 2 * n, N, 2 * n) = j;
@@ -515,9 +561,9 @@ void bind_hjb(py::module_& m) {
         check_finite(actor_weights, "actor_weights");
         check_finite(states, "x");
         check_finite(t, "t");
-        return with_loop(settings, [&](auto* tag) {
-          using Loop = std::remove_pointer_t<decltype(tag)>;
-          const Loop loop(settings);
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          const Loop loop = make_loop<Loop>(settings);
           check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
           check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
           check_size(states, states.rows(), 2 * loop.dof(), "x");
@@ -546,16 +592,17 @@ void bind_closed_loop(py::module_& m) {
       [](const Settings& settings, double t, const Eigen::VectorXd& state) {
         check_finite(state, "state");
         check_finite(t, "t");
-        return with_loop(settings, [&](auto* tag) {
-          using Loop = std::remove_pointer_t<decltype(tag)>;
-          Loop loop(settings);
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          Loop loop = make_loop<Loop>(settings);
           check_size(state, loop.state_size(), 1, "state");
           typename Loop::TimeSignals signals;
           typename Loop::State x = state, rate = Loop::State::Zero(loop.state_size());
           typename Loop::Outputs outputs;
-          loop.begin_step(t, x);
+          typename Loop::Data data = loop.make_data();
+          loop.begin_step(t, x, data);
           loop.time_signals(t, signals);
-          loop.derivative(signals, x, rate, &outputs);
+          loop.derivative(signals, x, rate, &outputs, data);
           py::dict out;
           out["qd"] = outputs.qd;
           out["e1"] = outputs.errors.e1;
@@ -578,17 +625,18 @@ void bind_closed_loop(py::module_& m) {
   m.def(
       "initial_state",
       [](const Settings& settings) {
-        return with_loop(settings, [&](auto* tag) {
-          using Loop = std::remove_pointer_t<decltype(tag)>;
-          return Eigen::VectorXd(Loop(settings).initial_state());
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          return Eigen::VectorXd(make_loop<Loop>(settings).initial_state());
         });
       },
       py::arg("settings"), "The closed loop's initial state (S,).");
   m.def(
       "extrapolation_points",
       [](const Settings& settings) {
-        return with_loop(settings, [&](auto* tag) {
-          const std::remove_pointer_t<decltype(tag)> loop(settings);
+        return visit_loop(settings, [&](auto loop_type) {
+          using Loop = typename decltype(loop_type)::type;
+          const Loop loop = make_loop<Loop>(settings);
           const auto& points = loop.extrapolation().points();
           RowsXX out(static_cast<Eigen::Index>(points.size()), 2 * loop.dof());
           for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
@@ -602,6 +650,9 @@ void bind_closed_loop(py::module_& m) {
 }
 
 void bind_simulation(py::module_& m) {
+  py::tuple names(kRecordedSeries.size());
+  for (std::size_t i = 0; i < kRecordedSeries.size(); ++i) names[i] = kRecordedSeries[i].name;
+  m.attr("RECORDED_SERIES") = names;
   py::class_<AnySimulation>(m, "Simulation",
                             "The closed-loop run (basis from settings.basis); advance(n) takes up "
                             "to n RK4 steps.")
@@ -632,25 +683,16 @@ void bind_simulation(py::module_& m) {
             // twice besides the run's own recording.
             Recording r = s.recording();
             py::dict out;
-            const auto give = [&out](const char* name, auto& series) {
-              out[name] = series;
-              series.resize(0, series.cols() == 1 ? 1 : 0);
-            };
-            give("t", r.t);
-            give("q", r.q);
-            give("dq", r.dq);
-            give("qd", r.qd);
-            give("e1", r.e1);
-            give("e2", r.e2);
-            give("tau", r.tau);
-            give("u", r.u);
-            give("u_hat", r.u_hat);
-            give("mu", r.mu);
-            give("probe", r.probe);
-            give("critic_weights", r.critic_weights);
-            give("actor_weights", r.actor_weights);
-            give("hjb_error", r.hjb_error);
-            give("cost", r.cost);
+            for (const RecordedSeries& series : kRecordedSeries) {
+              Recording::Rows& rows = r.*series.member;
+              if (series.width == SeriesWidth::one)  // a 1-D array
+                out[series.name] =
+                    py::cast(Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.rows()),
+                             py::return_value_policy::copy);
+              else
+                out[series.name] = rows;
+              rows.resize(0, 0);
+            }
             return out;
           },
           "Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2), "

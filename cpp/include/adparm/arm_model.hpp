@@ -28,11 +28,11 @@
 //
 // JointVector / JointMatrix come from types.hpp: for kDof = Dynamic they are bounded dynamic types
 // (inline storage for up to kMaxDof joints), so that Terms, and every expression the loop builds
-// from them, never touch the heap. An arm with its own buffers (e.g. a PinocchioArm keeping a
-// pinocchio::Model and a mutable pinocchio::Data behind a pimpl, compute() in a .cpp) copies its
-// results into the Terms members. Two arms of one type are the plant and the model the controller
-// believes; each Arm is constructed once per run, outside the step. Extra members of Terms (like
-// the two-link arm's cos q2) are for bases written for that arm.
+// from them, never touch the heap. An arm with buffers of its own (e.g. UrdfLoopArm: a
+// PinocchioArm, a pinocchio::Model behind a pimpl, whose pinocchio::Data rides in the Terms,
+// compute() in a .cpp) copies its results into the Terms members. Two arms of one type are the
+// plant and the model the controller believes; each Arm is constructed once per run, outside the
+// step. Extra members of Terms (like the two-link arm's cos q2) are for bases written for that arm.
 #pragma once
 
 #include <cmath>

@@ -7,7 +7,10 @@
 //   evaluate(x, desired, terms, phi, jacobian, desired_rate)
 // and the loop takes it unchanged. The second form also receives the arm model's terms at the
 // matching joint state (q = qd - e1), which the loop has computed anyway, so that a basis built
-// on the arm (cos q2 of M(q)) need not evaluate them again.
+// on the arm (cos q2 of M(q)) need not evaluate them again. A basis that needs work buffers (the
+// expression basis, a URDF arm's structured basis) declares Workspace and workspace() const, and
+// takes the workspace as a last argument of the second form: evaluate_basis below, the loop's one
+// call, passes it (the caller owns it: the loop's Data).
 //
 // PaperBasis: the paper's 8 functions in the ERRATA's ordering,
 //   phi(x) = [x1^2, x2^2, x1 x2, x3^2, x3^2 cos x2, x4^2, x3 x4, x3 x4 cos x2]
@@ -22,6 +25,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 #include "adparm/types.hpp"
 
@@ -134,6 +138,35 @@ struct StructuredBasis {
 
 // expression: a user-defined basis compiled from terms (expression_basis.hpp), carried in
 // Settings::basis_program; it runs on the dynamic-size loop only (simulation.hpp).
+// A basis' work buffers: its Workspace, or nothing for a basis without one.
+template <class Basis, class = void>
+struct BasisWorkspaceOf {
+  struct type {};
+  static type make(const Basis&) { return {}; }
+};
+template <class Basis>
+struct BasisWorkspaceOf<Basis, std::void_t<typename Basis::Workspace>> {
+  using type = typename Basis::Workspace;
+  static type make(const Basis& basis) { return basis.workspace(); }
+};
+template <class Basis>
+using BasisWorkspace = typename BasisWorkspaceOf<Basis>::type;
+template <class Basis>
+BasisWorkspace<Basis> basis_workspace(const Basis& basis) {
+  return BasisWorkspaceOf<Basis>::make(basis);
+}
+
+// The basis seam's second form, with the basis' workspace if it has one.
+template <class Basis, class X, class Desired, class Terms, class Vector, class Jacobian>
+void evaluate_basis(const Basis& basis, const X& x, const Desired& desired, const Terms& terms,
+                    Vector& phi, Jacobian& jacobian, Vector& desired_rate,
+                    BasisWorkspace<Basis>& workspace) {
+  if constexpr (std::is_empty_v<BasisWorkspace<Basis>>)
+    basis.evaluate(x, desired, terms, phi, jacobian, desired_rate);
+  else
+    basis.evaluate(x, desired, terms, phi, jacobian, desired_rate, workspace);
+}
+
 enum class BasisKind { paper, augmented, structured, expression };
 
 // Calls f(Basis{}) with the basis type of `kind` (the binding and the bench pick a basis at run

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <Eigen/Eigenvalues>
+#include <type_traits>
 
 #include "adparm/basis.hpp"
 #include "adparm/controller.hpp"
@@ -52,35 +53,11 @@ inline void check_hurwitz(const Eigen::MatrixXd& alpha1) {
         "control.alpha1: every eigenvalue must have a positive real part (-alpha1 Hurwitz)");
 }
 
-// The basis a loop builds from its settings: a fixed basis has nothing to build; the expression
-// basis compiles settings.basis_program for the arm's n joints.
-template <class Basis>
-Basis settings_basis(const Settings&, Eigen::Index) {
-  return Basis();
-}
-template <>
-inline ExpressionLoopBasis settings_basis<ExpressionLoopBasis>(const Settings& settings,
-                                                               Eigen::Index joints) {
-  return ExpressionLoopBasis(static_cast<int>(joints), settings.basis_program);
-}
-
-// The plant and model a loop builds from its settings (`model` false: the plant): a two-link arm
-// from settings.plant and settings.model. Another arm type overloads both for ArmTag<ItsType>
-// (found at instantiation by argument-dependent lookup; urdf_loop_arm.hpp).
-template <class Arm>
-struct ArmTag {};
-template <class Arm>
-Arm settings_arm(ArmTag<Arm>, const Settings& settings, bool model) {
-  return model ? Arm(settings.model, "model") : Arm(settings.plant, "plant");
-}
-template <class Arm>
-bool settings_model_is_plant(ArmTag<Arm>, const Settings& settings) {
-  return settings.plant == settings.model;
-}
-
 template <class Arm, class Basis>
 class ClosedLoop {
  public:
+  using ArmType = Arm;
+  using BasisType = Basis;
   static constexpr int kDof = Arm::kDof;
   static constexpr int kBasisSize = Basis::kSize;
   static constexpr bool kFixed = kDof != Dynamic && kBasisSize != Dynamic;
@@ -114,6 +91,16 @@ class ClosedLoop {
     Desired desired;    // qd(t), dqd(t), ddqd(t)
   };
 
+  // The loop's work buffers (Crocoddyl's Data beside its Model): sized once by make_data(), owned
+  // by the caller (Simulation) and passed to the calls that write them; the loop itself stays
+  // const during an evaluation.
+  struct Data {
+    Terms plant_terms, believed_terms;  // dynamic sizes (fixed sizes keep them on the stack)
+    Terms point_terms;                  // the model's terms at an extrapolation point
+    typename Critic<Basis>::Workspace critic;
+    BasisWorkspace<Basis> basis;  // the basis' work buffers (basis.hpp)
+  };
+
   struct Outputs {
     Errors errors;
     Joint qd;                // desired position
@@ -125,22 +112,9 @@ class ClosedLoop {
     double hjb_error = 0.0;  // eq. (21)
   };
 
-  // The two-link arm (or an arm built from TwoLinkArmParameters) of settings.plant and
-  // settings.model, with the basis of the settings (settings_basis below).
-  explicit ClosedLoop(const Settings& settings)
-      : ClosedLoop(settings, settings_arm(ArmTag<Arm>(), settings, false)) {}
-  ClosedLoop(const Settings& settings, const Basis& basis)
-      : ClosedLoop(settings, settings_arm(ArmTag<Arm>(), settings, false),
-                   settings_arm(ArmTag<Arm>(), settings, true),
-                   settings_model_is_plant(ArmTag<Arm>(), settings), basis) {}
-  // The arm of the settings' plant, given already built (its joint count sizes the basis).
-  ClosedLoop(const Settings& settings, const Arm& plant)
-      : ClosedLoop(settings, plant, settings_arm(ArmTag<Arm>(), settings, true),
-                   settings_model_is_plant(ArmTag<Arm>(), settings),
-                   settings_basis<Basis>(settings, plant.dof())) {}
-
-  // Any arm: the plant, the model the controller believes (`model_is_plant`: the same arm, whose
-  // terms are then computed once per evaluation) and the basis.
+  // The plant, the model the controller believes (`model_is_plant`: the same arm, whose terms are
+  // then computed once per evaluation) and the basis, built already (from Settings:
+  // make_loop in any_simulation.hpp).
   ClosedLoop(const Settings& settings, const Arm& plant, const Arm& model, bool model_is_plant,
              const Basis& basis = Basis())
       : plant_(plant),
@@ -169,8 +143,6 @@ class ClosedLoop {
     check_size(settings.actor_weights, k, 1, "init.actor_weights");
     check_finite(settings.critic_weights, "init.critic_weights");
     check_finite(settings.actor_weights, "init.actor_weights");
-    plant_.init_terms(plant_terms_);
-    error_system_.model().init_terms(believed_terms_);
     const Joint q0 = settings.task.q0, dq0 = settings.task.dq0;
     const Errors initial = tracking_errors<kDof>(q0, dq0, trajectory_(0.0), error_system_.alpha1());
     rise_ = RiseT<kDof>(settings.control.rise, initial.e2);
@@ -193,6 +165,16 @@ class ClosedLoop {
   Eigen::Index state_size() const { return cost_offset() + 1; }
 
   const State& initial_state() const { return initial_state_; }
+
+  Data make_data() const {
+    Data data;
+    plant_.init_terms(data.plant_terms);
+    error_system_.model().init_terms(data.believed_terms);
+    error_system_.model().init_terms(data.point_terms);
+    data.critic = critic_.workspace();
+    data.basis = basis_workspace(basis_);
+    return data;
+  }
   const Arm& plant() const { return plant_; }
   const Basis& basis() const { return basis_; }
   const ErrorSystem<Arm>& error_system() const { return error_system_; }
@@ -216,18 +198,19 @@ class ClosedLoop {
 
   // Called at the start of each step (and before the first evaluation): draws local
   // extrapolation points around the current error state, or prepares fixed ones once.
-  void begin_step(double t, const State& state) {
+  void begin_step(double t, const State& state, Data& data) {
     if (!extrapolation_.needs_begin_step()) return;
     const Eigen::Index n = dof();
     const Desired desired = trajectory_(t);
     const Errors errors = tracking_errors<kDof>(state.template segment<kDof>(kQ, n),
                                                 state.template segment<kDof>(dq_offset(), n),
                                                 desired, error_system_.alpha1());
-    extrapolation_.begin_step(basis_, error_system_, cost_, errors.x(), desired);
+    extrapolation_.begin_step(basis_, error_system_, cost_, errors.x(), desired, data.point_terms,
+                              data.basis);
   }
 
-  void derivative(const TimeSignals& signals, const State& state, State& rate,
-                  Outputs* outputs) const {
+  void derivative(const TimeSignals& signals, const State& state, State& rate, Outputs* outputs,
+                  Data& data) const {
     const Eigen::Index n = dof(), k = basis_size();
     const Joint q = state.template segment<kDof>(kQ, n);
     const Joint dq = state.template segment<kDof>(dq_offset(), n);
@@ -240,16 +223,17 @@ class ClosedLoop {
     const Error x = errors.x();
 
     // fixed sizes: the terms on the stack; dynamic: in the buffers sized once
-    Terms local_plant_terms, local_believed_terms;
-    Terms& plant_terms = kFixed ? local_plant_terms : plant_terms_;
-    Terms& believed_terms = kFixed ? local_believed_terms : believed_terms_;
+    [[maybe_unused]] std::conditional_t<kFixed, Terms, NoTerms> local_plant_terms,
+        local_believed_terms;
+    Terms& plant_terms = pick_terms(local_plant_terms, data.plant_terms);
+    Terms& believed_terms = pick_terms(local_believed_terms, data.believed_terms);
     plant_.compute(q, dq, plant_terms);
     if (!model_is_plant_) error_system_.model().compute(q, dq, believed_terms);
     const Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
 
     Point point;
     prepare_hjb_point<Basis, kDof>(basis_, x, desired, error_system_.drift(x, model_terms),
-                                   model_terms, cost_, point);
+                                   model_terms, cost_, point, data.basis);
     Evaluation hjb;
     evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
 
@@ -263,7 +247,7 @@ class ClosedLoop {
       const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
         if constexpr (kBasisSize == Dynamic) {  // (23)-(24), gathered in blocks (critic.hpp)
           if (gathers_)
-            critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
+            critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, data.critic);
           else
             critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         } else {
@@ -274,8 +258,9 @@ class ClosedLoop {
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
-                              learn);
-      if constexpr (kBasisSize == Dynamic) critic_.flush(gamma, critic_rate, gamma_rate);
+                              data.point_terms, data.basis, learn);
+      if constexpr (kBasisSize == Dynamic)
+        critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
         critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
                                              actor_.settings().e2_margin, gamma);
@@ -314,13 +299,22 @@ class ClosedLoop {
   }
 
   // Resets Gamma to gamma0 I when lambda_min(Gamma) < epsilon_T; returns whether it did.
-  bool reset_covariance_if_needed(State& state) const {
-    if (!critic_.needs_reset(covariance(state))) return false;
+  bool reset_covariance_if_needed(State& state, Data& data) const {
+    if (!critic_.needs_reset(covariance(state), data.critic)) return false;
     critic_.reset(covariance(state));
     return true;
   }
 
  private:
+  struct NoTerms {};
+  template <class Local>
+  static Terms& pick_terms(Local& local, Terms& buffer) {
+    if constexpr (kFixed)
+      return local;
+    else
+      return buffer;
+  }
+
   static Eigen::Index checked_dof(const Arm& plant, const Arm& model, const Basis& basis) {
     const Eigen::Index n = plant.dof();
     if (model.dof() != n)
@@ -357,7 +351,6 @@ class ClosedLoop {
   // whose coefficient-wise products beat a call of Eigen's matrix-vector kernel.
   bool gathers_;
   State initial_state_;
-  mutable Terms plant_terms_, believed_terms_;  // dynamic sizes: the terms' buffers
 };
 
 using PaperClosedLoop = ClosedLoop<TwoLinkArm, PaperBasis>;

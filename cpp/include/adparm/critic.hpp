@@ -40,17 +40,20 @@ class Critic {
   static constexpr Eigen::Index kBlock = 64;
   using Block = Eigen::Matrix<double, kSize, Eigen::Dynamic>;  // K x kBlock, sized once
 
+  // The critic's work buffers, sized once (workspace()), passed to the calls that use them; each
+  // run has its own.
+  struct Workspace {
+    Covariance factor;  // needs_reset's
+    // gather/flush (dynamic sizes): omega_i, Gamma omega_i, g_i Gamma omega_i, eps_i (then
+    // g_i eps_i), w_i; `gathered` samples so far. Buffers of one evaluation.
+    Block omegas, gamma_omegas, scaled;
+    Eigen::VectorXd coefficients, weights;
+    Eigen::Index gathered = 0;
+  };
+
   Critic() = default;
   // `size`: the basis size K (== kSize when it is fixed).
-  Critic(const CriticSettings& settings, Eigen::Index size)
-      : settings_(settings), factor_(size, size) {
-    if constexpr (kSize == Dynamic) {
-      omegas_.setZero(size, kBlock);
-      gamma_omegas_.setZero(size, kBlock);
-      scaled_.setZero(size, kBlock);
-      coefficients_.setZero(kBlock);
-      weights_.setZero(kBlock);
-    }
+  Critic(const CriticSettings& settings, Eigen::Index size) : settings_(settings), size_(size) {
     check_non_negative(settings.eta_c, "critic.eta_c");
     check_non_negative(settings.nu, "critic.nu");
     check_positive(settings.gamma0, "critic.gamma0");
@@ -60,6 +63,19 @@ class Critic {
   }
 
   const CriticSettings& settings() const { return settings_; }
+
+  Workspace workspace() const {
+    Workspace w;
+    w.factor.resize(size_, size_);
+    if constexpr (kSize == Dynamic) {
+      w.omegas.setZero(size_, kBlock);
+      w.gamma_omegas.setZero(size_, kBlock);
+      w.scaled.setZero(size_, kBlock);
+      w.coefficients.setZero(kBlock);
+      w.weights.setZero(kBlock);
+    }
+    return w;
+  }
 
   // Adds one sample's share of eqs. (23)-(24) to the rates:
   //   weight_rate -= w eta_c Gamma omega eps / rho
@@ -80,12 +96,12 @@ class Critic {
   // the last sample of an evaluation, with the same gamma and rates.
   template <class CovarianceIn, class CovarianceOut>
   void gather(const Vector& omega, double hjb_error, const CovarianceIn& gamma, double weight,
-              Vector& weight_rate, CovarianceOut&& gamma_rate) const {
+              Vector& weight_rate, CovarianceOut&& gamma_rate, Workspace& w) const {
     static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
-    omegas_.col(gathered_) = omega;
-    coefficients_[gathered_] = hjb_error;
-    weights_[gathered_] = weight;
-    if (++gathered_ == kBlock) flush(gamma, weight_rate, gamma_rate);
+    w.omegas.col(w.gathered) = omega;
+    w.coefficients[w.gathered] = hjb_error;
+    w.weights[w.gathered] = weight;
+    if (++w.gathered == kBlock) flush(gamma, weight_rate, gamma_rate, w);
   }
 
   // Adds the gathered samples' shares (eqs. 23-24) to the rates, then empties the block:
@@ -93,22 +109,23 @@ class Critic {
   //   g_i = w_i eta_c / (1 + nu omega_i^T G_i)
   //   weight_rate -= G [g_i eps_i],  gamma_rate -= [g_i G_i] G^T   (rank s)
   template <class CovarianceIn, class CovarianceOut>
-  void flush(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut&& gamma_rate) const {
+  void flush(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut&& gamma_rate,
+             Workspace& w) const {
     static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
-    const Eigen::Index s = gathered_;
+    const Eigen::Index s = w.gathered;
     if (s == 0) return;
-    gathered_ = 0;
-    const auto omegas = omegas_.leftCols(s);
-    auto gamma_omegas = gamma_omegas_.leftCols(s);
-    auto scaled = scaled_.leftCols(s);
+    w.gathered = 0;
+    const auto omegas = w.omegas.leftCols(s);
+    auto gamma_omegas = w.gamma_omegas.leftCols(s);
+    auto scaled = w.scaled.leftCols(s);
     gamma_omegas.noalias() = gamma * omegas;
     for (Eigen::Index i = 0; i < s; ++i) {
-      const double gain = weights_[i] * settings_.eta_c /
+      const double gain = w.weights[i] * settings_.eta_c /
                           (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
-      coefficients_[i] *= gain;
+      w.coefficients[i] *= gain;
       scaled.col(i) = gain * gamma_omegas.col(i);
     }
-    weight_rate.noalias() -= gamma_omegas * coefficients_.head(s);
+    weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
     if (s == 1)  // an outer product (no GEMM for one column)
       gamma_rate.noalias() -= scaled.col(0).lazyProduct(gamma_omegas.col(0).transpose());
     else
@@ -123,10 +140,10 @@ class Critic {
   // by one matrix-vector product with the columns before it, contiguous in the column-major
   // buffer); smaller ones use the loop below, whose short rows stay in cache.
   template <class CovarianceIn>
-  bool needs_reset(const CovarianceIn& gamma) const {
-    const Eigen::Index n = factor_.rows();
-    Covariance& factor = factor_;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
-    factor = gamma;                // (a buffer sized once: no allocation)
+  bool needs_reset(const CovarianceIn& gamma, Workspace& w) const {
+    const Eigen::Index n = w.factor.rows();
+    Covariance& factor = w.factor;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
+    factor = gamma;                 // (a buffer sized once: no allocation)
     if constexpr (kSize == Dynamic) {
       if (n > 24) {
         for (Eigen::Index j = 0; j < n; ++j) {
@@ -165,12 +182,7 @@ class Critic {
 
  private:
   CriticSettings settings_{};
-  mutable Covariance factor_;  // needs_reset's work buffer
-  // gather/flush (dynamic sizes): omega_i, Gamma omega_i, g_i Gamma omega_i, eps_i (then
-  // g_i eps_i), w_i; gathered_ samples so far. Work buffers of one evaluation.
-  mutable Block omegas_, gamma_omegas_, scaled_;
-  mutable Eigen::VectorXd coefficients_, weights_;
-  mutable Eigen::Index gathered_ = 0;
+  Eigen::Index size_ = kSize == Dynamic ? 0 : kSize;
 };
 
 }  // namespace adparm

@@ -641,9 +641,9 @@ class ExpressionBasis {
 
 // The expression basis behind the loop's basis seam (basis.hpp) with dynamic sizes, for
 // ClosedLoop<Arm, ExpressionLoopBasis> with a dynamic-size arm (DynamicArm<TwoLinkArm>). The
-// compiled basis is shared (immutable); each instance has its own Workspace, sized once, so a loop
-// (one thread) evaluates it without heap allocation. The arm's terms are not used. It has no paper
-// e2 block (positive_block.hpp leaves its weights alone).
+// compiled basis is shared (immutable); the loop owns a Workspace (workspace(), sized once) and
+// passes it, so a loop (one thread) evaluates it without heap allocation. The arm's terms are not
+// used. It has no paper e2 block (positive_block.hpp leaves its weights alone).
 class ExpressionLoopBasis {
  public:
   static constexpr int kSize = Dynamic;
@@ -654,26 +654,23 @@ class ExpressionLoopBasis {
   // `name` names the settings field in the errors (an empty or malformed program).
   ExpressionLoopBasis(int joints, const ExpressionProgram& program,
                       const std::string& name = "basis_program")
-      : basis_(std::make_shared<const ExpressionBasis>(joints, checked(program, name))),
-        workspace_(basis_->workspace()) {}
+      : basis_(std::make_shared<const ExpressionBasis>(joints, checked(program, name))) {}
+
+  using Workspace = ExpressionBasis::Workspace;
+  Workspace workspace() const { return basis_->workspace(); }
 
   int size() const { return basis_->size(); }
   int joints() const { return basis_->joints(); }
   const ExpressionBasis& expression() const { return *basis_; }
 
-  template <class Desired>
-  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,
-                Jacobian& jacobian, Vector& desired_rate) const {
+  template <class Desired, class Terms>
+  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,
+                Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
     const Eigen::Index k = size(), n_x = basis_->state_dim();
     phi.resize(k);  // bounded storage: no allocation
     jacobian.resize(k, n_x);
     desired_rate.resize(k);
-    basis_->evaluate(x, desired.q, desired.dq, phi, jacobian, desired_rate, nullptr, workspace_);
-  }
-  template <class Desired, class Terms>
-  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,
-                Jacobian& jacobian, Vector& desired_rate) const {
-    evaluate(x, desired, phi, jacobian, desired_rate);
+    basis_->evaluate(x, desired.q, desired.dq, phi, jacobian, desired_rate, nullptr, workspace);
   }
 
  private:
@@ -687,7 +684,6 @@ class ExpressionLoopBasis {
   }
 
   std::shared_ptr<const ExpressionBasis> basis_;
-  mutable ExpressionBasis::Workspace workspace_;
 };
 
 }  // namespace adparm

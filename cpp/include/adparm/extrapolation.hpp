@@ -62,8 +62,8 @@ class Extrapolation {
   using Points = std::vector<Error, Eigen::aligned_allocator<Error>>;
 
   Extrapolation() = default;
-  // `constant_desired`: the desired state never changes, so points can be prepared once. `model`
-  // sizes the terms buffer of points evaluated afresh.
+  // `constant_desired`: the desired state never changes, so points can be prepared once. `model`:
+  // the believed arm (its joint count sizes the points).
   Extrapolation(const ExtrapolationSettings& settings, bool constant_desired, const Arm& model)
       : settings_(settings), draws_(settings.seed), constant_desired_(constant_desired) {
     const Eigen::Index dim = 2 * Eigen::Index(model.dof());
@@ -75,7 +75,6 @@ class Extrapolation {
     if (!(settings.box.array() > 0.0).all())
       throw std::invalid_argument("extrapolation.box: half-widths must be > 0");
     box_ = settings.box;
-    model.init_terms(terms_);
     const long n = settings.points;
     points_.assign(n, Error::Zero(dim));
     prepared_.resize(n);
@@ -114,9 +113,11 @@ class Extrapolation {
   const Points& points() const { return points_; }
 
   // Start of a step at error state x: draws new local points; prepares points that are fixed for
-  // the step when the desired state is constant.
+  // the step when the desired state is constant. `terms`: a buffer of the model's terms at a point
+  // (Arm::init_terms), and the basis' workspace (basis.hpp), the caller's.
   void begin_step(const Basis& basis, const ErrorSystem<Arm>& system,
-                  const QuadraticCostT<kDof>& cost, const Error& x, const Desired& desired) {
+                  const QuadraticCostT<kDof>& cost, const Error& x, const Desired& desired,
+                  typename Arm::Terms& terms, BasisWorkspace<Basis>& workspace) {
     if (!needs_begin_step()) return;
     if (settings_.mode == ExtrapolationMode::local) {
       draw(x);
@@ -124,17 +125,19 @@ class Extrapolation {
     }
     if (constant_desired_ && !prepared_valid_) {
       for (long i = 0; i < size(); ++i)
-        prepare_hjb_point(basis, system, cost, points_[i], desired, terms_, prepared_[i]);
+        prepare_hjb_point(basis, system, cost, points_[i], desired, terms, prepared_[i], workspace);
       prepared_valid_ = true;
     }
   }
 
-  // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state.
+  // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state
+  // (`terms`, `workspace` as for begin_step).
   template <class F>
   void for_each(const Basis& basis, const ErrorSystem<Arm>& system,
                 const QuadraticCostT<kDof>& cost, const Desired& desired,
                 const typename Basis::Vector& critic_weights,
-                const typename Basis::Vector& actor_weights, F&& f) const {
+                const typename Basis::Vector& actor_weights, typename Arm::Terms& terms,
+                BasisWorkspace<Basis>& workspace, F&& f) const {
     if (!enabled()) return;
     const double weight = 1.0 / static_cast<double>(size());
     Point fresh;
@@ -142,7 +145,7 @@ class Extrapolation {
     for (long i = 0; i < size(); ++i) {
       const Point* point = &prepared_[i];
       if (!prepared_valid_) {
-        prepare_hjb_point(basis, system, cost, points_[i], desired, terms_, fresh);
+        prepare_hjb_point(basis, system, cost, points_[i], desired, terms, fresh, workspace);
         point = &fresh;
       }
       evaluate_hjb(*point, cost, critic_weights, actor_weights, evaluation);
@@ -164,7 +167,6 @@ class Extrapolation {
   bool prepared_valid_ = false;
   Points points_;
   std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
-  mutable typename Arm::Terms terms_;  // model terms at a point (a buffer sized once)
 };
 
 }  // namespace adparm

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "adparm/actor.hpp"
+#include "adparm/basis.hpp"
 #include "adparm/cost.hpp"
 #include "adparm/error_system.hpp"
 
@@ -32,16 +33,17 @@ struct HjbEvaluation {
 };
 
 // The weight-free part at x, given the desired state, the drift f(x) and the model terms at the
-// matching joint state (their M^-1 gives g(x) = [0; M^-1]; the basis may use them too).
+// matching joint state (their M^-1 gives g(x) = [0; M^-1]; the basis may use them too), with the
+// basis' workspace (basis.hpp; the caller's).
 template <class Basis, int Dof, class Terms>
 void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
                        const DesiredStateT<Dof>& desired, const ErrorVector<Dof>& drift,
                        const Terms& terms, const QuadraticCostT<Dof>& cost,
-                       HjbPoint<Basis, Dof>& point) {
+                       HjbPoint<Basis, Dof>& point, BasisWorkspace<Basis>& workspace) {
   const Eigen::Index n = desired.q.size();
   typename Basis::Vector phi;
   typename Basis::Jacobian jacobian;
-  basis.evaluate(x, desired, terms, phi, jacobian, point.drift_rate);
+  evaluate_basis(basis, x, desired, terms, phi, jacobian, point.drift_rate, workspace);
   point.drift_rate.noalias() += jacobian * drift;
   if constexpr (Dof == Dynamic)  // coefficient-based: no GEMM (its blocking may allocate)
     point.input_gradient.noalias() =
@@ -68,12 +70,12 @@ template <class Basis, class Arm>
 void prepare_hjb_point(const Basis& basis, const ErrorSystem<Arm>& system,
                        const QuadraticCostT<Arm::kDof>& cost, const ErrorVector<Arm::kDof>& x,
                        const DesiredStateT<Arm::kDof>& desired, typename Arm::Terms& terms,
-                       HjbPoint<Basis, Arm::kDof>& point) {
+                       HjbPoint<Basis, Arm::kDof>& point, BasisWorkspace<Basis>& workspace) {
   JointVector<Arm::kDof> q, dq;
   system.joint_state(x, desired, q, dq);
   system.model().compute(q, dq, terms);
-  prepare_hjb_point<Basis, Arm::kDof>(basis, x, desired, system.drift(x, terms), terms, cost,
-                                      point);
+  prepare_hjb_point<Basis, Arm::kDof>(basis, x, desired, system.drift(x, terms), terms, cost, point,
+                                      workspace);
 }
 
 // eq. (21) at an error state x with the desired state `desired`.
@@ -85,8 +87,9 @@ double hjb_error(const Basis& basis, const ErrorSystem<Arm>& system,
                  const typename Basis::Vector& actor_weights) {
   typename Arm::Terms terms;
   system.model().init_terms(terms);
+  BasisWorkspace<Basis> workspace = basis_workspace(basis);
   HjbPoint<Basis, Arm::kDof> point;
-  prepare_hjb_point(basis, system, cost, x, desired, terms, point);
+  prepare_hjb_point(basis, system, cost, x, desired, terms, point, workspace);
   HjbEvaluation<Basis, Arm::kDof> evaluation;
   evaluate_hjb(point, cost, critic_weights, actor_weights, evaluation);
   return evaluation.error;

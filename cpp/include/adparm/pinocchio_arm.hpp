@@ -23,8 +23,9 @@
 // does not include Pinocchio (pimpl): everything that does is compiled once, in cpp/src/ (the
 // static library adparm_pinocchio).
 //
-// Not thread-safe: compute() works in buffers (pinocchio::Data) that the arm owns, allocated at
-// construction, so that it never allocates; give each thread its own copy of the arm.
+// The arm is immutable once read: compute() works in the caller's buffers (pinocchio::Data, in the
+// Terms of make_terms(), allocated once), so that it never allocates; threads may share an arm,
+// each with its own Terms.
 #pragma once
 
 #include <Eigen/Core>
@@ -54,13 +55,25 @@ class PinocchioArm {
  public:
   static constexpr int kDof = Eigen::Dynamic;
 
-  // Model terms at one (q, dq); sized by make_terms().
+  // Pinocchio's work space of one evaluation (pinocchio::Data, Pinocchio's q and v; opaque,
+  // cpp/src/pinocchio_arm_impl.hpp), owned by the caller: the arm itself is never written.
+  struct WorkspaceData;
+  struct WorkspaceDeleter {
+    void operator()(WorkspaceData* workspace) const;
+  };
+  using Workspace = std::unique_ptr<WorkspaceData, WorkspaceDeleter>;
+  // A work space for this arm (allocates; once per run).
+  Workspace workspace() const;
+
+  // Model terms at one (q, dq), and compute()'s work space; made by make_terms() (move-only).
   struct Terms {
     Eigen::MatrixXd mass;          // M(q)
     Eigen::MatrixXd mass_inverse;  // M(q)^-1
     Eigen::MatrixXd coriolis;      // C(q, dq)
     Eigen::VectorXd gravity;       // G(q)
     Eigen::VectorXd friction;      // F(dq)
+    Eigen::VectorXd residual;      // acceleration()'s work space
+    Workspace workspace;           // compute()'s (this arm's)
   };
 
   // Joint position limits (+-inf for a continuous joint), velocity and effort limits, as the URDF
@@ -112,20 +125,20 @@ class PinocchioArm {
 
   Terms make_terms() const;
 
-  // All terms at (q, dq), without heap allocation (terms from make_terms()). Throws
-  // std::invalid_argument for a q or dq that is not of size dof().
+  // All terms at (q, dq), without heap allocation (terms from this arm's make_terms(), whose
+  // work space it uses). Throws std::invalid_argument for a q or dq that is not of size dof().
   void compute(const Eigen::Ref<const Eigen::VectorXd>& q,
                const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms) const;
 
   // Joint acceleration of eq. (1) for a given torque and disturbance, written into ddq (size
-  // dof()); no heap allocation.
-  void acceleration(const Terms& terms, const Eigen::Ref<const Eigen::VectorXd>& dq,
+  // dof()); no heap allocation (terms.residual is its work space).
+  void acceleration(Terms& terms, const Eigen::Ref<const Eigen::VectorXd>& dq,
                     const Eigen::Ref<const Eigen::VectorXd>& tau,
                     const Eigen::Ref<const Eigen::VectorXd>& tau_d,
                     Eigen::Ref<Eigen::VectorXd> ddq) const {
-    residual_ = tau - terms.gravity - terms.friction - tau_d;
-    residual_.noalias() -= terms.coriolis * dq;
-    ddq.noalias() = terms.mass_inverse * residual_;
+    terms.residual = tau - terms.gravity - terms.friction - tau_d;
+    terms.residual.noalias() -= terms.coriolis * dq;
+    ddq.noalias() = terms.mass_inverse * terms.residual;
   }
 
   // The inertial parameters pi of the URDF (10 per joint, Pinocchio's order for the body that
@@ -134,13 +147,17 @@ class PinocchioArm {
   int parameter_count() const { return 10 * dof_; }
   Eigen::VectorXd inertial_parameters() const;
 
-  // M_k(q) = dM/dpi_k for every inertial parameter k, so that M(q) = sum_k pi_k M_k(q):
-  // out (dof, dof * parameter_count()) holds M_k in columns [k dof, (k + 1) dof). Column j of M_k
-  // is column k of Pinocchio's joint torque regressor Y(q, dq = 0, ddq = e_j) without gravity.
+  // M_k(q) = dM/dpi_k for every inertial parameter k (allocates a work space), so that M(q) = sum_k
+  // pi_k M_k(q): out (dof, dof * parameter_count()) holds M_k in columns [k dof, (k + 1) dof).
+  // Column j of M_k is column k of Pinocchio's joint torque regressor Y(q, dq = 0, ddq = e_j)
+  // without gravity.
   void mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
                       Eigen::Ref<Eigen::MatrixXd> out) const;
+  // The same in a work space of this arm (no work space to allocate: for many positions).
+  void mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Ref<Eigen::MatrixXd> out,
+                      Workspace& workspace) const;
 
-  struct Impl;  // opaque: Pinocchio's model and data (cpp/src/pinocchio_arm_impl.hpp)
+  struct Impl;  // opaque: Pinocchio's model (cpp/src/pinocchio_arm_impl.hpp)
   // For the other Pinocchio translation units of the core (pinocchio_structured_basis.cpp).
   const Impl& impl() const { return *impl_; }
 
@@ -149,7 +166,6 @@ class PinocchioArm {
 
   std::unique_ptr<Impl> impl_;
   int dof_ = 0;
-  mutable Eigen::VectorXd residual_;  // acceleration()'s work space
 };
 
 }  // namespace adparm

@@ -109,27 +109,38 @@ class PinocchioStructuredBasis {
       const Eigen::Ref<const Eigen::MatrixXd>& K,
       const Eigen::Ref<const Eigen::VectorXd>& inertial_parameters) const;
 
+  // The work space of an evaluation (Pinocchio's data and buffers; opaque, in the .cpp), owned by
+  // the caller (the loop's Data): the basis itself is never written.
+  struct WorkspaceData;
+  struct WorkspaceDeleter {
+    void operator()(WorkspaceData* workspace) const;
+  };
+  using Workspace = std::unique_ptr<WorkspaceData, WorkspaceDeleter>;
+  // A work space for this basis (allocates; once per run).
+  Workspace workspace() const;
+
   // phi (size()), d phi / dx (size() x 2n) and (d phi / d qd) dqd (size()) at x = [e1; e2] (2n)
-  // and the desired qd, dqd (n); no heap allocation. Sizes are checked.
+  // and the desired qd, dqd (n), in a work space of this basis; no heap allocation. Sizes are
+  // checked.
   void evaluate_at(const Eigen::Ref<const Eigen::VectorXd>& x,
                    const Eigen::Ref<const Eigen::VectorXd>& qd,
                    const Eigen::Ref<const Eigen::VectorXd>& dqd, Eigen::Ref<Eigen::VectorXd> phi,
-                   Eigen::Ref<Eigen::MatrixXd> jacobian,
-                   Eigen::Ref<Eigen::VectorXd> desired_rate) const;
+                   Eigen::Ref<Eigen::MatrixXd> jacobian, Eigen::Ref<Eigen::VectorXd> desired_rate,
+                   Workspace& workspace) const;
 
   // The loop's seam (bounded storage: resizing allocates nothing).
   template <class Desired>
   void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,
-                Jacobian& jacobian, Vector& desired_rate) const {
+                Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
     phi.resize(size_);
     jacobian.resize(size_, 2 * joints_);
     desired_rate.resize(size_);
-    evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate);
+    evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate, workspace);
   }
   template <class Desired, class Terms>
   void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,
-                Jacobian& jacobian, Vector& desired_rate) const {
-    evaluate(x, desired, phi, jacobian, desired_rate);
+                Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
+    evaluate(x, desired, phi, jacobian, desired_rate, workspace);
   }
 
   // The check positions of the positive_e2 projection (n x S, S >= 0) with `arm` the arm whose
@@ -144,7 +155,7 @@ class PinocchioStructuredBasis {
     return check_blocks_[static_cast<std::size_t>(s)];
   }
 
-  struct Impl;  // opaque: Pinocchio's model, data and the work space
+  struct Impl;  // opaque: Pinocchio's model and the basis' tables
 
  private:
   std::unique_ptr<Impl> impl_;

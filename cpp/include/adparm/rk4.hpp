@@ -1,7 +1,7 @@
 // Classical fixed-step Runge-Kutta 4 for any System offering
 //   State, TimeSignals, Outputs,
 //   time_signals(t, TimeSignals&) and derivative(const TimeSignals&, const State&, State&,
-//   Outputs*).
+//   Outputs*, Data&...) (Data: the system's work buffers, if it has any, passed through).
 // Signals that depend on time only (disturbance, probing) are evaluated once per distinct time: the
 // two midpoint stages share them, and a step's end signals are the next step's start signals.
 #pragma once
@@ -29,22 +29,22 @@ struct Rk4Workspace {
 
 // Advances x from t_begin to t_end (h = t_end - t_begin) into x_next, which may be x itself. If
 // outputs is given, it receives the system's outputs at (t_begin, x) computed by the first stage.
-template <class System>
+template <class System, class... Data>
 void rk4_step(const System& system, double t_begin, double t_end, const typename System::State& x,
               typename System::State& x_next, Rk4Workspace<System>& w,
-              typename System::Outputs* outputs = nullptr) {
+              typename System::Outputs* outputs = nullptr, Data&... data) {
   const double h = t_end - t_begin;
   if (!(w.begin_time == t_begin)) system.time_signals(t_begin, w.begin);
   system.time_signals(t_begin + 0.5 * h, w.middle);
   system.time_signals(t_end, w.end);
 
-  system.derivative(w.begin, x, w.k1, outputs);
+  system.derivative(w.begin, x, w.k1, outputs, data...);
   w.stage = x + (0.5 * h) * w.k1;
-  system.derivative(w.middle, w.stage, w.k2, nullptr);
+  system.derivative(w.middle, w.stage, w.k2, nullptr, data...);
   w.stage = x + (0.5 * h) * w.k2;
-  system.derivative(w.middle, w.stage, w.k3, nullptr);
+  system.derivative(w.middle, w.stage, w.k3, nullptr, data...);
   w.stage = x + h * w.k3;
-  system.derivative(w.end, w.stage, w.k4, nullptr);
+  system.derivative(w.end, w.stage, w.k4, nullptr, data...);
   x_next =
       x + (h / 6.0) * (w.k1 + 2.0 * w.k2 + 2.0 * w.k3 + w.k4);  // coefficient-wise: x may alias
 
@@ -53,10 +53,10 @@ void rk4_step(const System& system, double t_begin, double t_end, const typename
 }
 
 // In place: x advances from t_begin to t_end.
-template <class System>
+template <class System, class... Data>
 void rk4_step(const System& system, double t_begin, double t_end, typename System::State& x,
-              Rk4Workspace<System>& w, typename System::Outputs* outputs = nullptr) {
-  rk4_step(system, t_begin, t_end, x, x, w, outputs);
+              Rk4Workspace<System>& w, typename System::Outputs* outputs = nullptr, Data&... data) {
+  rk4_step(system, t_begin, t_end, x, x, w, outputs, data...);
 }
 
 }  // namespace adparm

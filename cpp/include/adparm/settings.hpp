@@ -1,14 +1,15 @@
 // The one settings struct of a closed-loop run, passed whole from Python (or built in C++ by
 // paper_settings()). Python's adparm.paper_config() holds the same values; a test keeps them equal.
 // Every sized member follows the arm's joint count n (the defaults are for n = 2) and the basis
-// size K; the loop checks each against n and K and names the member when a size is wrong. The arm
-// itself is given to the loop (closed_loop.hpp); `plant` and `model` are the two-link arm's, and
-// `plant_urdf` / `model_urdf` name a URDF arm instead (urdf_loop_arm.hpp).
+// size K; the loop checks each against n and K and names the member when a size is wrong. `arm`
+// holds the arm of the run: the two-link arm's parameters (TwoLinkArms) or a URDF arm's settings
+// (UrdfArms, urdf_loop_arm.hpp); make_loop (any_simulation.hpp) builds the loop's arms from it.
 #pragma once
 
 #include <cmath>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "adparm/actor.hpp"
@@ -42,8 +43,8 @@ struct SimSettings {
   double divergence_bound = 1e6;  // |q|, |dq|, |Wc|, |Wa| above this stop the run as diverged
 };
 
-// A URDF arm of the loop (urdf_loop_arm.hpp): an empty path is the two-link arm of
-// TwoLinkArmParameters. coulomb, viscous: one value per joint, one value for all, or empty (0).
+// A URDF arm of the loop (urdf_loop_arm.hpp). coulomb, viscous: one value per joint, one value for
+// all, or empty (0).
 struct UrdfArmSettings {
   std::string urdf;
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);
@@ -59,11 +60,24 @@ struct UrdfArmSettings {
   }
 };
 
-struct Settings {
+// The two-link arm of a run: the plant and the model the controller believes (feedforward h, f,
+// g).
+struct TwoLinkArms {
   TwoLinkArmParameters plant{};
-  TwoLinkArmParameters model{};  // the arm the controller believes (feedforward h, f, g)
-  UrdfArmSettings plant_urdf{};  // a URDF plant (urdf not empty): the arm of the run
-  UrdfArmSettings model_urdf{};  // its believed model; empty urdf: the plant (an exact model)
+  TwoLinkArmParameters model{};
+};
+
+// A URDF arm of a run: the plant and its believed model (an empty model.urdf: the plant, an exact
+// model).
+struct UrdfArms {
+  UrdfArmSettings plant{};
+  UrdfArmSettings model{};
+};
+
+using ArmSettings = std::variant<TwoLinkArms, UrdfArms>;
+
+struct Settings {
+  ArmSettings arm = TwoLinkArms{};               // the arm of the run
   Eigen::VectorXd disturbance = Vec2(0.1, 0.1);  // n amplitudes (arm_model.hpp)
   TaskSettings task{};
   Eigen::MatrixXd Q = Mat4::Identity();  // 2n x 2n

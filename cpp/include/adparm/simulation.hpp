@@ -8,13 +8,10 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <variant>
 #include <vector>
 
 #include "adparm/closed_loop.hpp"
-#include "adparm/dynamic_size.hpp"
 #include "adparm/rk4.hpp"
-#include "adparm/urdf_loop_arm.hpp"
 
 namespace adparm {
 
@@ -28,48 +25,68 @@ struct RunControl {
   std::atomic<long>* step = nullptr;
 };
 
-// One row per recorded step; matrices are (rows x columns), row-major.
+// One row per recorded step; every series is (rows x columns), row-major: one column (t,
+// hjb_error, cost), one per joint or one per basis function (kRecordedSeries below).
 struct Recording {
   using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  Eigen::VectorXd t, hjb_error, cost;  // cost: accumulated cost of eq. (10) from t = 0
+  Rows t;                                            // s
   Rows q, dq, qd, e1, e2, tau, u, u_hat, mu, probe;  // one column per joint
   Rows critic_weights, actor_weights;                // one column per basis function
+  Rows hjb_error;                                    // eq. (21)
+  Rows cost;                                         // accumulated cost of eq. (10) from t = 0
   Eigen::Index rows = 0;
 
-  void allocate(Eigen::Index capacity, int dof, int basis_size) {
-    for (Eigen::VectorXd* v : series()) v->resize(capacity);
-    for (Rows* m : joint_series()) m->resize(capacity, dof);
-    for (Rows* m : weight_series()) m->resize(capacity, basis_size);
-  }
-
+  inline void allocate(Eigen::Index capacity, int dof, int basis_size);
   // A copy of the rows written (not of the whole capacity, which a long run interrupted early
   // leaves mostly unwritten).
-  Recording written() const {
-    Recording out;
-    out.rows = rows;
-    copy_rows(series(), out.series());
-    copy_rows(joint_series(), out.joint_series());
-    copy_rows(weight_series(), out.weight_series());
-    return out;
-  }
+  inline Recording written() const;
+};
 
- private:
-  std::array<Eigen::VectorXd*, 3> series() { return {&t, &hjb_error, &cost}; }
-  std::array<Rows*, 10> joint_series() {
-    return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
-  }
-  std::array<Rows*, 2> weight_series() { return {&critic_weights, &actor_weights}; }
-  std::array<const Eigen::VectorXd*, 3> series() const { return {&t, &hjb_error, &cost}; }
-  std::array<const Rows*, 10> joint_series() const {
-    return {&q, &dq, &qd, &e1, &e2, &tau, &u, &u_hat, &mu, &probe};
-  }
-  std::array<const Rows*, 2> weight_series() const { return {&critic_weights, &actor_weights}; }
+// The columns of a recorded series.
+enum class SeriesWidth { one, joints, basis };
 
-  template <class From, class To>
-  void copy_rows(const From& from, const To& to) const {
-    for (std::size_t i = 0; i < from.size(); ++i) *to[i] = from[i]->topRows(rows);
+struct RecordedSeries {
+  const char* name;
+  SeriesWidth width;
+  Recording::Rows Recording::* member;
+
+  Eigen::Index columns(Eigen::Index dof, Eigen::Index basis_size) const {
+    return width == SeriesWidth::one ? 1 : width == SeriesWidth::joints ? dof : basis_size;
   }
 };
+
+// The one table of the recorded series, in the order Python shows them (adparm._core's
+// RECORDED_SERIES and Simulation.recording() iterate it).
+inline constexpr std::array<RecordedSeries, 15> kRecordedSeries = {{
+    {"t", SeriesWidth::one, &Recording::t},
+    {"q", SeriesWidth::joints, &Recording::q},
+    {"dq", SeriesWidth::joints, &Recording::dq},
+    {"qd", SeriesWidth::joints, &Recording::qd},
+    {"e1", SeriesWidth::joints, &Recording::e1},
+    {"e2", SeriesWidth::joints, &Recording::e2},
+    {"tau", SeriesWidth::joints, &Recording::tau},
+    {"u", SeriesWidth::joints, &Recording::u},
+    {"u_hat", SeriesWidth::joints, &Recording::u_hat},
+    {"mu", SeriesWidth::joints, &Recording::mu},
+    {"probe", SeriesWidth::joints, &Recording::probe},
+    {"critic_weights", SeriesWidth::basis, &Recording::critic_weights},
+    {"actor_weights", SeriesWidth::basis, &Recording::actor_weights},
+    {"hjb_error", SeriesWidth::one, &Recording::hjb_error},
+    {"cost", SeriesWidth::one, &Recording::cost},
+}};
+
+void Recording::allocate(Eigen::Index capacity, int dof, int basis_size) {
+  for (const RecordedSeries& series : kRecordedSeries)
+    (this->*series.member).resize(capacity, series.columns(dof, basis_size));
+}
+
+Recording Recording::written() const {
+  Recording out;
+  out.rows = rows;
+  for (const RecordedSeries& series : kRecordedSeries)
+    out.*series.member = (this->*series.member).topRows(rows);
+  return out;
+}
 
 template <class Arm, class Basis>
 class Simulation {
@@ -77,14 +94,13 @@ class Simulation {
   using System = ClosedLoop<Arm, Basis>;
   using State = typename System::State;
 
-  // The two-link arm of settings.plant and settings.model.
-  explicit Simulation(const Settings& settings) : Simulation(System(settings), settings.sim) {}
-  // Any arm (closed_loop.hpp).
+  // A loop built already (from Settings: AnySimulation and make_loop in any_simulation.hpp).
   Simulation(const Settings& settings, const Arm& plant, const Arm& model, bool model_is_plant,
              const Basis& basis = Basis())
       : Simulation(System(settings, plant, model, model_is_plant, basis), settings.sim) {}
 
-  Simulation(System&& system, const SimSettings& sim) : system_(std::move(system)), sim_(sim) {
+  Simulation(System&& system, const SimSettings& sim)
+      : system_(std::move(system)), data_(system_.make_data()), sim_(sim) {
     check_positive(sim_.T, "sim.T");
     check_positive(sim_.dt, "sim.dt");
     check_positive(sim_.divergence_bound, "sim.divergence_bound");
@@ -101,7 +117,7 @@ class Simulation {
     states_[1] = states_[0];  // sizes every state buffer once
     record_rate_ = states_[0];
     workspace_.resize(states_[0].size());
-    system_.begin_step(0.0, states_[0]);
+    system_.begin_step(0.0, states_[0], data_);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, static_cast<int>(system_.dof()),
                         static_cast<int>(system_.basis_size()));
@@ -124,7 +140,7 @@ class Simulation {
       State& state = states_[1 - current_];
       const bool row_due = row_due_;
       rk4_step(system_, t_begin, t_end, previous, state, workspace_,
-               row_due ? &row_outputs_ : nullptr);
+               row_due ? &row_outputs_ : nullptr, data_);
       row_due_ = false;
       if (row_due && !record(t_begin, previous, row_outputs_)) {
         stop_diverged(t_begin);  // the step is not taken: state() stays at t_begin
@@ -141,8 +157,8 @@ class Simulation {
       }
       current_ = 1 - current_;
       if (control.step != nullptr) control.step->store(step_, std::memory_order_relaxed);
-      if (system_.reset_covariance_if_needed(state)) reset_times_.push_back(t_end);
-      system_.begin_step(t_end, state);  // for the next step (and the row recorded at t_end)
+      if (system_.reset_covariance_if_needed(state, data_)) reset_times_.push_back(t_end);
+      system_.begin_step(t_end, state, data_);  // for the next step (and the row recorded at t_end)
       if (step_ == steps_) {
         if (record(t_end, state))
           status_ = RunStatus::finished;
@@ -191,7 +207,7 @@ class Simulation {
 
   bool record(double t, const State& state) {
     system_.time_signals(t, record_signals_);
-    system_.derivative(record_signals_, state, record_rate_, &row_outputs_);
+    system_.derivative(record_signals_, state, record_rate_, &row_outputs_, data_);
     return record(t, state, row_outputs_);
   }
 
@@ -201,7 +217,7 @@ class Simulation {
     if (!finite(outputs)) return false;
     Recording& r = recording_;
     const Eigen::Index i = r.rows++;
-    r.t[i] = t;
+    r.t(i, 0) = t;
     const Eigen::Index n = system_.dof(), k = system_.basis_size();
     r.q.row(i) = state.template segment<System::kDof>(0, n).transpose();
     r.dq.row(i) = state.template segment<System::kDof>(system_.dq_offset(), n).transpose();
@@ -217,12 +233,13 @@ class Simulation {
         state.template segment<System::kBasisSize>(system_.critic_offset(), k).transpose();
     r.actor_weights.row(i) =
         state.template segment<System::kBasisSize>(system_.actor_offset(), k).transpose();
-    r.hjb_error[i] = outputs.hjb_error;
-    r.cost[i] = state[system_.cost_offset()];
+    r.hjb_error(i, 0) = outputs.hjb_error;
+    r.cost(i, 0) = state[system_.cost_offset()];
     return true;
   }
 
   System system_;
+  typename System::Data data_;  // the loop's work buffers
   SimSettings sim_;
   long steps_ = 0;
   long step_ = 0;
@@ -240,77 +257,5 @@ class Simulation {
 };
 
 using PaperSimulation = Simulation<TwoLinkArm, PaperBasis>;
-
-// The runs of a URDF arm (settings.plant_urdf.urdf not empty): the structured basis of the
-// believed model (pinocchio_structured_basis.hpp) or an expression basis, on the dynamic-size
-// loop. The two-link bases (paper, augmented) are refused, naming controller.basis.
-using UrdfSimulation = Simulation<UrdfLoopArm, ExpressionLoopBasis>;
-using UrdfStructuredSimulation = Simulation<UrdfLoopArm, PinocchioStructuredBasis>;
-
-// A simulation picked at run time: the two-link arm with the basis of settings.basis, or a URDF
-// arm (settings.plant_urdf) with an expression basis.
-class AnySimulation {
- public:
-  explicit AnySimulation(const Settings& settings) : impl_(make(settings)) {}
-
-  long advance(long max_steps, const RunControl& control = {}) {
-    return std::visit([&](auto& s) { return s.advance(max_steps, control); }, impl_);
-  }
-  RunStatus status() const {
-    return std::visit([](const auto& s) { return s.status(); }, impl_);
-  }
-  long steps() const {
-    return std::visit([](const auto& s) { return s.steps(); }, impl_);
-  }
-  long step() const {
-    return std::visit([](const auto& s) { return s.step(); }, impl_);
-  }
-  double divergence_time() const {
-    return std::visit([](const auto& s) { return s.divergence_time(); }, impl_);
-  }
-  const std::vector<double>& reset_times() const {
-    return std::visit([](const auto& s) -> const std::vector<double>& { return s.reset_times(); },
-                      impl_);
-  }
-  Eigen::VectorXd state() const {
-    return std::visit([](const auto& s) { return Eigen::VectorXd(s.state()); }, impl_);
-  }
-  Recording recording() const {
-    return std::visit([](const auto& s) { return s.recording(); }, impl_);
-  }
-
- private:
-  using Variant =
-      std::variant<Simulation<TwoLinkArm, PaperBasis>, Simulation<TwoLinkArm, AugmentedBasis>,
-                   Simulation<TwoLinkArm, StructuredBasis>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<PaperBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<AugmentedBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<StructuredBasis>>,
-                   Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>, UrdfSimulation,
-                   UrdfStructuredSimulation>;
-  static Variant make(const Settings& settings) {
-    if (!settings.plant_urdf.urdf.empty()) {
-      if (settings.basis == BasisKind::structured)
-        return Variant(std::in_place_type<UrdfStructuredSimulation>, settings);
-      if (settings.basis != BasisKind::expression)
-        throw std::invalid_argument(
-            "controller.basis: the paper and augmented bases are the two-link arm's; a URDF arm "
-            "(plant.urdf) takes the structured basis or an expression basis (quadratic, "
-            "polynomial, terms)");
-      return Variant(std::in_place_type<UrdfSimulation>, settings);
-    }
-    if (settings.basis == BasisKind::expression)  // dynamic sizes only
-      return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, ExpressionLoopBasis>>,
-                     settings);
-    return with_basis(settings.basis, [&](auto basis) {
-      using Basis = decltype(basis);
-      if (settings.dynamic_sizes)
-        return Variant(std::in_place_type<Simulation<DynamicArm<TwoLinkArm>, DynamicBasis<Basis>>>,
-                       settings);
-      return Variant(std::in_place_type<Simulation<TwoLinkArm, Basis>>, settings);
-    });
-  }
-  Variant impl_;
-};
 
 }  // namespace adparm

@@ -3,8 +3,7 @@
 // runs the paper's laws (eqs. 1-28) on any fixed-base serial arm of up to kMaxDof joints.
 //   M, M^-1, C, G, F   PinocchioArm::compute, copied into the loop's bounded Terms
 //   ddq                eq. (1): M^-1 (tau - C dq - G - F - tau_d)
-// The loop builds its plant from Settings::plant_urdf and its model from Settings::model_urdf (an
-// empty model path: the plant, an exact model) through settings_arm below.
+// make_loop (any_simulation.hpp) builds the plant and the model of a run from its UrdfArmSettings.
 //
 // Not thread-safe, like PinocchioArm: compute() works in buffers the arm owns; every run has its
 // own arms.
@@ -14,9 +13,7 @@
 #include <string>
 #include <utility>
 
-#include "adparm/closed_loop.hpp"
 #include "adparm/pinocchio_arm.hpp"
-#include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/settings.hpp"
 #include "adparm/types.hpp"
 
@@ -27,18 +24,20 @@ class UrdfLoopArm {
   static constexpr int kDof = Dynamic;
   using Joint = JointVector<Dynamic>;
 
-  using Terms = DynamicTerms;
+  // The loop's bounded terms, and Pinocchio's (dynamic) terms that compute() copies into them.
+  struct Terms : DynamicTerms {
+    PinocchioArm::Terms pinocchio;
+  };
 
   // Reads the URDF of `arm`; errors name `field` (plant.urdf or model.urdf).
-  UrdfLoopArm(const UrdfArmSettings& arm, const std::string& field)
-      : arm_(read(arm, field)), buffer_(arm_.make_terms()) {
+  UrdfLoopArm(const UrdfArmSettings& arm, const std::string& field) : arm_(read(arm, field)) {
     if (arm_.dof() > kMaxDof)
       throw std::invalid_argument(field + ": the arm has " + std::to_string(arm_.dof()) +
                                   " joints; the core supports 1 to " + std::to_string(kMaxDof));
   }
 
   // An arm already read (the bench builds its arms so).
-  explicit UrdfLoopArm(const PinocchioArm& arm) : arm_(arm), buffer_(arm_.make_terms()) {
+  explicit UrdfLoopArm(const PinocchioArm& arm) : arm_(arm) {
     if (arm_.dof() > kMaxDof)
       throw std::invalid_argument("the arm has " + std::to_string(arm_.dof()) +
                                   " joints; the core supports 1 to " + std::to_string(kMaxDof));
@@ -47,16 +46,19 @@ class UrdfLoopArm {
   int dof() const { return arm_.dof(); }
   const PinocchioArm& arm() const { return arm_; }
 
-  void init_terms(Terms& terms) const { init_dynamic_terms(terms, dof()); }
+  void init_terms(Terms& terms) const {
+    init_dynamic_terms(terms, dof());
+    terms.pinocchio = arm_.make_terms();
+  }
 
-  // No heap allocation: Pinocchio fills the arm's buffers, copied into the bounded terms.
+  // No heap allocation: Pinocchio fills the terms' own buffers, copied into the bounded terms.
   void compute(const Joint& q, const Joint& dq, Terms& terms) const {
-    arm_.compute(q, dq, buffer_);
-    terms.mass = buffer_.mass;
-    terms.mass_inverse = buffer_.mass_inverse;
-    terms.coriolis = buffer_.coriolis;
-    terms.gravity = buffer_.gravity;
-    terms.friction = buffer_.friction;
+    arm_.compute(q, dq, terms.pinocchio);
+    terms.mass = terms.pinocchio.mass;
+    terms.mass_inverse = terms.pinocchio.mass_inverse;
+    terms.coriolis = terms.pinocchio.coriolis;
+    terms.gravity = terms.pinocchio.gravity;
+    terms.friction = terms.pinocchio.friction;
   }
 
   // eq. (1)
@@ -78,37 +80,6 @@ class UrdfLoopArm {
   }
 
   PinocchioArm arm_;
-  mutable PinocchioArm::Terms buffer_;
 };
-
-// The plant of settings.plant_urdf; the model of settings.model_urdf, or the plant's when its
-// path is empty.
-inline UrdfLoopArm settings_arm(ArmTag<UrdfLoopArm>, const Settings& settings, bool model) {
-  if (model && !settings.model_urdf.urdf.empty()) {
-    UrdfLoopArm arm(settings.model_urdf, "model.urdf");
-    const int n = UrdfLoopArm(settings.plant_urdf, "plant.urdf").dof();
-    if (arm.dof() != n)
-      throw std::invalid_argument("model.urdf: the model has " + std::to_string(arm.dof()) +
-                                  " joints, the plant (plant.urdf) " + std::to_string(n));
-    return arm;
-  }
-  return UrdfLoopArm(settings.plant_urdf, "plant.urdf");
-}
-
-inline bool settings_model_is_plant(ArmTag<UrdfLoopArm>, const Settings& settings) {
-  return settings.model_urdf.urdf.empty() || settings.model_urdf == settings.plant_urdf;
-}
-
-// The structured basis of a URDF run is the believed model's (model.urdf, or the plant's): its
-// base parameters are those the controller can know.
-template <>
-inline PinocchioStructuredBasis settings_basis<PinocchioStructuredBasis>(const Settings& settings,
-                                                                         Eigen::Index) {
-  const UrdfLoopArm model = settings_arm(ArmTag<UrdfLoopArm>(), settings, true);
-  PinocchioStructuredBasis basis(model.arm());
-  if (settings.actor.positive_e2)  // not in the paper: pinocchio_structured_basis.hpp
-    basis.set_check_positions(model.arm(), settings.actor.e2_check_positions);
-  return basis;
-}
 
 }  // namespace adparm
