@@ -465,6 +465,14 @@ def test_short_simulation_matches_numpy_rk4_samples_pd() -> None:
     assert np.abs(recording["qd"]).max() > 0.1
 
 
+def _set_arm(settings, which: str, **values: float) -> None:
+    # the settings' arms are copies on access (a std::variant in the core): assign them whole
+    arm = getattr(settings, which)
+    for key, value in values.items():
+        setattr(arm, key, value)
+    setattr(settings, which, arm)
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
@@ -475,8 +483,8 @@ def test_short_simulation_matches_numpy_rk4_samples_pd() -> None:
         (lambda s: setattr(s.sim, "dt", 0.0), "sim.dt: must be a finite number > 0"),
         (lambda s: setattr(s.sim, "record_every", 0), "sim.record_every: must be >= 1"),
         (lambda s: setattr(s.critic, "gamma0", -1.0), "critic.gamma0"),
-        (lambda s: setattr(s.plant, "p2", 0.0), "plant.p2: must be > 0"),
-        (lambda s: setattr(s.model, "p1", 0.5), "model.p1, p2, p3"),
+        (lambda s: _set_arm(s, "plant", p2=0.0), "plant.p2: must be > 0"),
+        (lambda s: _set_arm(s, "model", p1=0.5), "model.p1, p2, p3"),
         (lambda s: setattr(s.probe, "phases", np.zeros((2, 1))), "probe.phases: expected shape"),
         (lambda s: setattr(s.extrapolation, "box", -np.ones(4)), "extrapolation.box: half-widths"),
         (lambda s: setattr(s.controller, "kp", np.full((2, 2), np.nan)), "controller.kp: must be"),

@@ -317,6 +317,14 @@ def test_from_dict_refuses_a_base_that_is_no_config() -> None:
         adparm.Config.from_dict({}, base={})  # type: ignore[arg-type]
 
 
+def _set_arm(settings, which: str, **values: float) -> None:
+    # the settings' arms are copies on access (a std::variant in the core): assign them whole
+    arm = getattr(settings, which)
+    for key, value in values.items():
+        setattr(arm, key, value)
+    setattr(settings, which, arm)
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
@@ -328,8 +336,8 @@ def test_from_dict_refuses_a_base_that_is_no_config() -> None:
         (lambda s: setattr(s.control, "alpha1", [[1, 2], [2, 1]]), "control.alpha1: every eigen"),
         (lambda s: setattr(s.control, "alpha1", [[0, 1], [-1, 0]]), "control.alpha1: every eigen"),
         (lambda s: setattr(s.control, "alpha1", np.zeros((2, 2))), "control.alpha1: every eigen"),
-        (lambda s: setattr(s.plant, "p2", 1e200), "plant.p1, p2, p3: M.*and finite"),
-        (lambda s: (setattr(s.model, "p1", 1e200), setattr(s.model, "p2", 1e200)), "model.p1, p2"),
+        (lambda s: _set_arm(s, "plant", p2=1e200), "plant.p1, p2, p3: M.*and finite"),
+        (lambda s: _set_arm(s, "model", p1=1e200, p2=1e200), "model.p1, p2"),
         (
             lambda s: setattr(s.extrapolation, "points", 10**6 + 1),
             "extrapolation.points: must be <=",

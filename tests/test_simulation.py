@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -202,3 +204,23 @@ def test_divergence_mid_chunk_keeps_the_last_finite_state_as_the_last_row() -> N
     np.testing.assert_array_equal(state[0:2], last["q"][-1])
     np.testing.assert_array_equal(state[4:12], last["critic_weights"][-1])
     assert run.step * config.sim.dt == pytest.approx(run.divergence_time)
+
+
+def test_the_core_table_of_recorded_series_is_what_a_result_holds() -> None:
+    # one table (C++ kRecordedSeries) names the series: the core's recording, the result's arrays
+    # and the CSV columns all follow it
+    from adparm.result import RECORDED_SERIES
+    from adparm.translate import core_settings
+
+    names = [name for name, _ in RECORDED_SERIES]
+    assert names[0] == "t" and len(set(names)) == len(names)
+    fields = {f.name for f in dataclasses.fields(adparm.SimulationResult)}
+    assert set(names) <= fields
+    config = adparm.paper_config().updated({"sim": {"T": 0.01}})
+    run = adparm._core.Simulation(core_settings(config))
+    run.advance(100)
+    assert list(run.recording()) == names
+    result = adparm.simulate(config)
+    assert list(result.to_dict())[: len(names)] == [
+        n for w in ("one", "joints", "basis") for n, width in RECORDED_SERIES if width == w
+    ]

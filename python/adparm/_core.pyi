@@ -1,495 +1,964 @@
-"""Type stubs for adparm._core, the pybind11 binding of the C++ core (python/src/core_bindings.cpp).
-
-Private: use the adparm package. Eigen members of the settings structs are copied on access, so
-assign them whole (``task.q0 = [0.1, 0.2]``); they are returned as float64 arrays. Argument errors
-in the core raise ValueError.
 """
-
-from typing import Literal, TypeAlias
-
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
-
-_FloatArray: TypeAlias = NDArray[np.float64]
-
-#: Size of the closed loop's state [q (2), dq (2), Wc (8), Wa (8), Gamma (64), nu (2), J (1)].
-STATE_SIZE: int
-
-# --- settings -----------------------------------------------------------------------------------
-
+adparm's C++ core (private; use the adparm package).
+"""
+from __future__ import annotations
+import collections.abc
+import numpy
+import numpy.typing
+import typing
+__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'simulate_open_loop', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
 class ArmParameters:
-    """Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous."""
-
-    p1: float
-    p2: float
-    p3: float
-    g1: float
-    g2: float
-    coulomb: float
-    viscous: float
-    def __init__(self) -> None: ...
-
+    """
+    Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def coulomb(self) -> float:
+        ...
+    @coulomb.setter
+    def coulomb(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def g1(self) -> float:
+        ...
+    @g1.setter
+    def g1(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def g2(self) -> float:
+        ...
+    @g2.setter
+    def g2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def p1(self) -> float:
+        ...
+    @p1.setter
+    def p1(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def p2(self) -> float:
+        ...
+    @p2.setter
+    def p2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def p3(self) -> float:
+        ...
+    @p3.setter
+    def p3(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def viscous(self) -> float:
+        ...
+    @viscous.setter
+    def viscous(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class RiseGains:
-    """RISE gains ks, alpha2, beta1 (eqs. 27-28)."""
-
-    ks: float
-    alpha2: float
-    beta1: float
-    def __init__(self) -> None: ...
-
+    """
+    RISE gains ks, alpha2, beta1 (eqs. 27-28).
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def alpha2(self) -> float:
+        ...
+    @alpha2.setter
+    def alpha2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def beta1(self) -> float:
+        ...
+    @beta1.setter
+    def beta1(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ks(self) -> float:
+        ...
+    @ks.setter
+    def ks(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class CriticSettings:
-    """eta_c, nu, gamma0, epsilon_T (eqs. 23-24)."""
-
-    eta_c: float
-    nu: float
-    gamma0: float
-    epsilon_T: float
-    def __init__(self) -> None: ...
-
+    """
+    eta_c, nu, gamma0, epsilon_T (eqs. 23-24).
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def epsilon_T(self) -> float:
+        ...
+    @epsilon_T.setter
+    def epsilon_T(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def eta_c(self) -> float:
+        ...
+    @eta_c.setter
+    def eta_c(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gamma0(self) -> float:
+        ...
+    @gamma0.setter
+    def gamma0(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def nu(self) -> float:
+        ...
+    @nu.setter
+    def nu(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class ActorSettings:
-    """eta_a1, eta_a2, weight_bound (eq. 26), positive_e2, e2_margin."""
-
-    eta_a1: float
-    eta_a2: float
-    weight_bound: float
+    """
+    eta_a1, eta_a2, weight_bound (eq. 26), positive_e2, e2_margin.
+    """
     positive_e2: bool
-    e2_margin: float
-    e2_check_positions: np.ndarray
-    def __init__(self) -> None: ...
-
+    def __init__(self) -> None:
+        ...
+    @property
+    def e2_check_positions(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @e2_check_positions.setter
+    def e2_check_positions(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
+    @property
+    def e2_margin(self) -> float:
+        ...
+    @e2_margin.setter
+    def e2_margin(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def eta_a1(self) -> float:
+        ...
+    @eta_a1.setter
+    def eta_a1(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def eta_a2(self) -> float:
+        ...
+    @eta_a2.setter
+    def eta_a2(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def weight_bound(self) -> float:
+        ...
+    @weight_bound.setter
+    def weight_bound(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class ProbeSettings:
-    """amplitude (2, n), until, ramp, frequencies (n,), phases (2, n)."""
-
-    until: float
-    ramp: float
-    def __init__(self) -> None: ...
+    """
+    amplitude (n, k), until, ramp, frequencies (k,), phases (n, k) for n joints and k sinusoids.
+    """
+    def __init__(self) -> None:
+        ...
     @property
-    def amplitude(self) -> _FloatArray:
-        """(2, n) N m"""
+    def amplitude(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
     @amplitude.setter
-    def amplitude(self, value: ArrayLike) -> None: ...
+    def amplitude(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
     @property
-    def frequencies(self) -> _FloatArray:
-        """(n,) rad/s"""
+    def frequencies(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
     @frequencies.setter
-    def frequencies(self, value: ArrayLike) -> None: ...
+    def frequencies(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
     @property
-    def phases(self) -> _FloatArray:
-        """(2, n) rad"""
+    def phases(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
     @phases.setter
-    def phases(self, value: ArrayLike) -> None: ...
-
+    def phases(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
+    @property
+    def ramp(self) -> float:
+        ...
+    @ramp.setter
+    def ramp(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def until(self) -> float:
+        ...
+    @until.setter
+    def until(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class TrajectoryKind:
-    constant: TrajectoryKind
-    sinusoid: TrajectoryKind
-    spline: TrajectoryKind
-
+    """
+    Members:
+    
+      constant
+    
+      sinusoid
+    
+      spline
+    """
+    __members__: typing.ClassVar[dict[str, TrajectoryKind]]
+    constant: typing.ClassVar[TrajectoryKind]
+    sinusoid: typing.ClassVar[TrajectoryKind]
+    spline: typing.ClassVar[TrajectoryKind]
+    @typing.overload
+    def __eq__(self, other: TrajectoryKind) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: TrajectoryKind) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class TrajectorySettings:
-    """kind, offset (2,); sinusoid: amplitude, frequency, phase (2, n); spline: breaks (n + 1,),
-    coefficients (n, 8)."""
-
+    """
+    kind, offset (n,); sinusoid: amplitude, frequency, phase (n, k); spline: breaks (m + 1,), coefficients (m, 4 n).
+    """
     kind: TrajectoryKind
-    offset: _FloatArray
-    amplitude: _FloatArray
-    frequency: _FloatArray
-    phase: _FloatArray
-    breaks: _FloatArray
-    coefficients: _FloatArray
-    def __init__(self) -> None: ...
-
+    def __init__(self) -> None:
+        ...
+    @property
+    def amplitude(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @amplitude.setter
+    def amplitude(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
+    @property
+    def breaks(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @breaks.setter
+    def breaks(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def coefficients(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @coefficients.setter
+    def coefficients(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
+    @property
+    def frequency(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @frequency.setter
+    def frequency(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
+    @property
+    def offset(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @offset.setter
+    def offset(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def phase(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @phase.setter
+    def phase(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
 class TaskSettings:
-    """q0 (2,), dq0 (2,), qd (TrajectorySettings)."""
-
+    """
+    q0 (n,), dq0 (n,), qd (TrajectorySettings).
+    """
     qd: TrajectorySettings
-
-    def __init__(self) -> None: ...
+    def __init__(self) -> None:
+        ...
     @property
-    def q0(self) -> _FloatArray: ...
-    @q0.setter
-    def q0(self, value: ArrayLike) -> None: ...
-    @property
-    def dq0(self) -> _FloatArray: ...
+    def dq0(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
     @dq0.setter
-    def dq0(self, value: ArrayLike) -> None: ...
-
-class ControlSettings:
-    """alpha1 (2, 2) and the RISE gains."""
-
-    rise: RiseGains
-    def __init__(self) -> None: ...
+    def dq0(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
     @property
-    def alpha1(self) -> _FloatArray:
-        """(2, 2)"""
+    def q0(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @q0.setter
+    def q0(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+class ControlSettings:
+    """
+    alpha1 (n, n) and the RISE gains.
+    """
+    rise: RiseGains
+    def __init__(self) -> None:
+        ...
+    @property
+    def alpha1(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
     @alpha1.setter
-    def alpha1(self, value: ArrayLike) -> None: ...
-
+    def alpha1(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
 class ControllerKind:
-    adp: ControllerKind
-    rise: ControllerKind
-    pd: ControllerKind
-    optimal: ControllerKind
-
+    """
+    Members:
+    
+      adp
+    
+      rise
+    
+      pd
+    
+      optimal
+    """
+    __members__: typing.ClassVar[dict[str, ControllerKind]]
+    adp: typing.ClassVar[ControllerKind]
+    optimal: typing.ClassVar[ControllerKind]
+    pd: typing.ClassVar[ControllerKind]
+    rise: typing.ClassVar[ControllerKind]
+    @typing.overload
+    def __eq__(self, other: ControllerKind) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: ControllerKind) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class ControllerSettings:
-    """kind, rise, kp (2, 2), kd (2, 2)."""
-
+    """
+    kind, rise, kp (n, n), kd (n, n).
+    """
     kind: ControllerKind
     rise: bool
-    kp: _FloatArray
-    kd: _FloatArray
-    def __init__(self) -> None: ...
-
+    def __init__(self) -> None:
+        ...
+    @property
+    def kd(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @kd.setter
+    def kd(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
+    @property
+    def kp(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @kp.setter
+    def kp(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
 class BasisKind:
-    paper: BasisKind
-    augmented: BasisKind
-    structured: BasisKind
-    expression: BasisKind
-
+    """
+    Members:
+    
+      paper
+    
+      augmented
+    
+      structured
+    
+      expression
+    """
+    __members__: typing.ClassVar[dict[str, BasisKind]]
+    augmented: typing.ClassVar[BasisKind]
+    expression: typing.ClassVar[BasisKind]
+    paper: typing.ClassVar[BasisKind]
+    structured: typing.ClassVar[BasisKind]
+    @typing.overload
+    def __eq__(self, other: BasisKind) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: BasisKind) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class ExpressionProgram:
-    """The compiled terms of an expression basis (adparm.bases.compile_terms): opcodes and one
-    argument per opcode. Copied on access: assign the lists whole."""
-
-    opcodes: list[int]
-    arguments: list[float]
-    def __init__(self) -> None: ...
-
+    """
+    The compiled terms of an expression basis: opcodes and one argument per opcode (adparm.bases.compile_terms).
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def arguments(self) -> list[float]:
+        ...
+    @arguments.setter
+    def arguments(self, arg0: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex]) -> None:
+        ...
+    @property
+    def opcodes(self) -> list[int]:
+        ...
+    @opcodes.setter
+    def opcodes(self, arg0: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]) -> None:
+        ...
 class ExtrapolationMode:
-    fixed: ExtrapolationMode
-    grid: ExtrapolationMode
-    local: ExtrapolationMode
-
+    """
+    Members:
+    
+      fixed
+    
+      grid
+    
+      local
+    """
+    __members__: typing.ClassVar[dict[str, ExtrapolationMode]]
+    fixed: typing.ClassVar[ExtrapolationMode]
+    grid: typing.ClassVar[ExtrapolationMode]
+    local: typing.ClassVar[ExtrapolationMode]
+    @typing.overload
+    def __eq__(self, other: ExtrapolationMode) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: ExtrapolationMode) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class ExtrapolationSettings:
-    """points, box (4,), mode, seed."""
-
-    points: int
-    box: _FloatArray
+    """
+    points, box (2 n,), mode, seed.
+    """
     mode: ExtrapolationMode
-    seed: int
-    def __init__(self) -> None: ...
-
+    def __init__(self) -> None:
+        ...
+    @property
+    def box(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @box.setter
+    def box(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def points(self) -> int:
+        ...
+    @points.setter
+    def points(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        ...
+    @seed.setter
+    def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class SimSettings:
-    """T, dt, record_every, divergence_bound."""
-
-    T: float
-    dt: float
-    record_every: int
-    divergence_bound: float
-    def __init__(self) -> None: ...
-
+    """
+    T, dt, record_every, divergence_bound.
+    """
+    def __init__(self) -> None:
+        ...
+    @property
+    def T(self) -> float:
+        ...
+    @T.setter
+    def T(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def divergence_bound(self) -> float:
+        ...
+    @divergence_bound.setter
+    def divergence_bound(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def dt(self) -> float:
+        ...
+    @dt.setter
+    def dt(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def record_every(self) -> int:
+        ...
+    @record_every.setter
+    def record_every(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class UrdfArmSettings:
-    """A URDF arm of the loop: urdf (path; empty: the two-link arm of ArmParameters), gravity
-    (3,), coulomb and viscous (n values, 1 for every joint, or 0: none). Eigen members are copied
-    on access: assign them whole."""
-
+    """
+    A URDF arm of the loop: urdf (path; empty: the two-link arm), gravity (3,), coulomb and viscous (n, 1 or 0 values), locked_joints ([(name, position), ...]).
+    """
     urdf: str
-    def __init__(self) -> None: ...
+    def __init__(self) -> None:
+        ...
     @property
-    def gravity(self) -> _FloatArray:
-        """(3,)"""
-    @gravity.setter
-    def gravity(self, value: ArrayLike) -> None: ...
-    @property
-    def coulomb(self) -> _FloatArray:
-        """(n,), (1,) or (0,)"""
+    def coulomb(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
     @coulomb.setter
-    def coulomb(self, value: ArrayLike) -> None: ...
+    def coulomb(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
     @property
-    def viscous(self) -> _FloatArray:
-        """(n,), (1,) or (0,)"""
-    @viscous.setter
-    def viscous(self, value: ArrayLike) -> None: ...
+    def gravity(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        ...
+    @gravity.setter
+    def gravity(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"]) -> None:
+        ...
     @property
     def locked_joints(self) -> list[tuple[str, float]]:
-        """Joints held at a position: [(name, rad or m), ...]"""
+        ...
     @locked_joints.setter
-    def locked_joints(self, value: list[tuple[str, float]]) -> None: ...
-
+    def locked_joints(self, arg0: collections.abc.Sequence[tuple[str, typing.SupportsFloat | typing.SupportsIndex]]) -> None:
+        ...
+    @property
+    def viscous(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @viscous.setter
+    def viscous(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
 class Settings:
-    """All settings of one run. Eigen members are copied on access: assign them whole.
-    Q (2n, 2n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,) for n joints
-    (2 for the two-link arm) and K basis functions. dynamic_sizes runs the two-link arm through
-    the n-joint (dynamic-size) loop, a check of that loop."""
-
-    plant: ArmParameters
-    model: ArmParameters
-    plant_urdf: UrdfArmSettings  # urdf not empty: a URDF arm (expression basis) replaces plant
-    model_urdf: UrdfArmSettings  # its believed model; urdf empty: the plant (an exact model)
-    task: TaskSettings
-    control: ControlSettings
-    critic: CriticSettings
+    """
+    All settings of one run. Eigen members and the arms (plant, model, plant_urdf, model_urdf) are copied on access: assign them whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,); n = 2 joints for the two-link arm, K the basis size. dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) loop.
+    """
     actor: ActorSettings
-    controller: ControllerSettings
     basis: BasisKind
-    basis_program: ExpressionProgram  # basis = expression (run on the dynamic-size loop)
+    basis_program: ExpressionProgram
+    control: ControlSettings
+    controller: ControllerSettings
+    critic: CriticSettings
     dynamic_sizes: bool
     extrapolation: ExtrapolationSettings
     probe: ProbeSettings
     sim: SimSettings
-    def __init__(self) -> None: ...
+    task: TaskSettings
+    def __init__(self) -> None:
+        ...
     @property
-    def disturbance(self) -> _FloatArray:
-        """(n,)"""
-    @disturbance.setter
-    def disturbance(self, value: ArrayLike) -> None: ...
-    @property
-    def Q(self) -> _FloatArray:
-        """(2n, 2n)"""
+    def Q(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
     @Q.setter
-    def Q(self, value: ArrayLike) -> None: ...
+    def Q(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
     @property
-    def R(self) -> _FloatArray:
-        """(n, n)"""
+    def R(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
     @R.setter
-    def R(self, value: ArrayLike) -> None: ...
+    def R(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
+        ...
     @property
-    def critic_weights(self) -> _FloatArray:
-        """(8,)"""
-    @critic_weights.setter
-    def critic_weights(self, value: ArrayLike) -> None: ...
-    @property
-    def actor_weights(self) -> _FloatArray:
-        """(8,)"""
+    def actor_weights(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
     @actor_weights.setter
-    def actor_weights(self, value: ArrayLike) -> None: ...
-
-def paper_settings() -> Settings:
-    """The C++ core's copy of the paper preset."""
-
-# --- arm, basis, HJB ------------------------------------------------------------------------------
-
-def arm_terms(parameters: ArmParameters, q: ArrayLike, dq: ArrayLike) -> dict[str, _FloatArray]:
-    """Model terms at q (2,), dq (2,): dict of M, M_inv, C (2, 2) and G, F (2,)."""
-
-def simulate_open_loop(
-    parameters: ArmParameters,
-    disturbance: ArrayLike,
-    initial_state: ArrayLike,
-    dt: float,
-    steps: int,
-    compensate_gravity: bool,
-) -> _FloatArray:
-    """RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4)."""
-
+    def actor_weights(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def critic_weights(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @critic_weights.setter
+    def critic_weights(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def disturbance(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @disturbance.setter
+    def disturbance(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def is_urdf(self) -> bool:
+        """
+        Whether the arm is a URDF arm (plant_urdf) rather than the two-link arm.
+        """
+    @property
+    def model(self) -> typing.Any:
+        """
+        The parameters of the two-link arm the controller believes.
+        """
+    @model.setter
+    def model(self, arg1: ArmParameters) -> None:
+        ...
+    @property
+    def model_urdf(self) -> typing.Any:
+        """
+        The URDF arm's believed model (urdf empty: the plant, an exact model); assign plant_urdf first.
+        """
+    @model_urdf.setter
+    def model_urdf(self, arg1: UrdfArmSettings) -> None:
+        ...
+    @property
+    def plant(self) -> typing.Any:
+        """
+        The two-link arm's parameters (the default arm; assigning plant_urdf makes the arm a URDF arm, whose plant and model are default ArmParameters here).
+        """
+    @plant.setter
+    def plant(self, arg1: ArmParameters) -> None:
+        ...
+    @property
+    def plant_urdf(self) -> typing.Any:
+        """
+        A URDF plant: assigning one with a path makes the arm a URDF arm (one with an empty path, the two-link arm); urdf empty when the arm is the two-link arm.
+        """
+    @plant_urdf.setter
+    def plant_urdf(self, arg1: UrdfArmSettings) -> None:
+        ...
 class UrdfArm:
-    """A fixed-base serial arm from a URDF file, through Pinocchio (cpp/src/pinocchio_arm.cpp).
-    gravity (3,), coulomb and viscous: one number or one per joint; locked_joints: joints held at
-    a position (Pinocchio's reduced model). A URDF that cannot be read or parsed, without a free
-    revolute/continuous/prismatic joint, with a floating or planar joint, or that fails a
-    physical check raises ValueError naming the file (and the link); a problem with the locked
-    joints (or a free mimic joint) raises ValueError starting "locked_joints: "."""
-
-    def __init__(
-        self,
-        urdf_path: str,
-        gravity: ArrayLike = ...,
-        coulomb: float | ArrayLike = 0.0,
-        viscous: float | ArrayLike = 0.0,
-        locked_joints: list[tuple[str, float]] = ...,
-    ) -> None: ...
+    """
+    A fixed-base serial arm from a URDF file, through Pinocchio. gravity (3,), coulomb and viscous: one number or one per joint.
+    """
     @staticmethod
-    def from_xml(
-        xml: str,
-        gravity: ArrayLike = ...,
-        coulomb: float | ArrayLike = 0.0,
-        viscous: float | ArrayLike = 0.0,
-        name: str = "<URDF string>",
-        locked_joints: list[tuple[str, float]] = ...,
-    ) -> UrdfArm:
-        """The same from the URDF's XML text; name stands for the file in error messages."""
+    def from_xml(xml: str, gravity: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"] = ..., coulomb: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0, viscous: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0, name: str = '<URDF string>', locked_joints: collections.abc.Sequence[tuple[str, typing.SupportsFloat | typing.SupportsIndex]] = []) -> UrdfArm:
+        """
+        The same from the URDF's XML text; name stands for the file in error messages.
+        """
+    def __init__(self, urdf_path: str, gravity: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"] = ..., coulomb: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0, viscous: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0, locked_joints: collections.abc.Sequence[tuple[str, typing.SupportsFloat | typing.SupportsIndex]] = []) -> None:
+        ...
+    def base_parameters(self, samples: typing.SupportsInt | typing.SupportsIndex = 100, seed: typing.SupportsInt | typing.SupportsIndex = 0, tolerance: typing.SupportsFloat | typing.SupportsIndex = 1e-09) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], list[int], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]]:
+        """
+        (values (r,), columns (r,), combination (r, 10 n)): the base inertial parameters (pinocchio_structured_basis.hpp).
+        """
+    def mass_regressor(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        """
+        M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns [k n, (k + 1) n).
+        """
+    def terms(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> dict:
+        """
+        Model terms at q (n,), dq (n,): dict of M, M_inv, C (n, n) and G, F (n,).
+        """
     @property
-    def dof(self) -> int: ...
+    def coulomb(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
     @property
-    def source(self) -> str: ...
+    def dof(self) -> int:
+        ...
     @property
-    def joint_names(self) -> list[str]: ...
-    @property
-    def joint_types(self) -> list[str]: ...
-    @property
-    def locked_joints(self) -> list[tuple[str, float]]: ...
-    @property
-    def gravity(self) -> _FloatArray: ...
-    @property
-    def coulomb(self) -> _FloatArray: ...
-    @property
-    def viscous(self) -> _FloatArray: ...
-    @property
-    def limits(self) -> dict[str, _FloatArray]:
-        """lower, upper (+-inf for a continuous joint), velocity, effort (n,)."""
-    @property
-    def inertial_parameters(self) -> _FloatArray:
-        """pi (10 n,): per joint m, m c (3), I about the joint origin (xx, xy, yy, xz, yz, zz)."""
-    def terms(self, q: ArrayLike, dq: ArrayLike) -> dict[str, _FloatArray]:
-        """Model terms at q (n,), dq (n,): dict of M, M_inv, C (n, n) and G, F (n,)."""
-    def mass_regressor(self, q: ArrayLike) -> _FloatArray:
-        """M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns
-        [k n, (k + 1) n)."""
+    def gravity(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[3, 1]"]:
+        ...
     @property
     def inertial_parameter_names(self) -> list[str]:
-        """ "m link1", "mc_x link1", ..., "I_zz linkn" (10 n)."""
-    def base_parameters(
-        self, samples: int = 100, seed: int = 0, tolerance: float = 1e-9
-    ) -> tuple[_FloatArray, list[int], _FloatArray]:
-        """(values (r,), columns (r,), combination (r, 10 n)): the base inertial parameters."""
-
+        ...
+    @property
+    def inertial_parameters(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @property
+    def joint_names(self) -> list[str]:
+        ...
+    @property
+    def joint_types(self) -> list[str]:
+        ...
+    @property
+    def limits(self) -> dict:
+        ...
+    @property
+    def locked_joints(self) -> list[tuple[str, float]]:
+        ...
+    @property
+    def source(self) -> str:
+        ...
+    @property
+    def viscous(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
 class UrdfStructuredBasis:
-    """The structured basis of a URDF arm: [e1_i e1_j (i <= j); e2^T M_b(q) e2 per base
-    inertial parameter b] (pinocchio_structured_basis.hpp)."""
-
-    def __init__(self, arm: UrdfArm) -> None: ...
+    """
+    The structured basis of a URDF arm: [e1_i e1_j (i <= j); e2^T M_b(q) e2 per base inertial parameter b] (pinocchio_structured_basis.hpp).
+    """
+    def __init__(self, arm: UrdfArm) -> None:
+        ...
+    def evaluate_rows(self, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], qd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], dqd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        """
+        At rows x (m, 2n), qd (m, n), dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and (d phi / d qd) dqd (m, N).
+        """
+    def optimal_weights(self, K: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], inertial_parameters: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        """
+        W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n); the base parameters of inertial_parameters (10 n) of an arm of the same kinematics if given.
+        """
     @property
-    def size(self) -> int: ...
+    def base_parameters(self) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], list[int], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]]:
+        ...
     @property
-    def joints(self) -> int: ...
+    def joints(self) -> int:
+        ...
     @property
-    def names(self) -> list[str]: ...
+    def names(self) -> list[str]:
+        ...
     @property
-    def base_parameters(self) -> tuple[_FloatArray, list[int], _FloatArray]: ...
-    def optimal_weights(
-        self, K: ArrayLike, inertial_parameters: ArrayLike | None = None
-    ) -> _FloatArray:
-        """W* = [K_ii on squares, K_ij + K_ji on cross terms; base parameters] for K (n, n); the
-        base parameters of inertial_parameters (10 n) of an arm of the same kinematics if
-        given."""
-    def evaluate_rows(
-        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
-    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-        """At rows x (m, 2n), qd (m, n), dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and
-        (d phi / d qd) dqd (m, N)."""
-
-def desired_state(trajectory: TrajectorySettings, t: ArrayLike) -> _FloatArray:
-    """The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)]
-    (m, 3 n)."""
-
-def basis(
-    kind: BasisKind, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
-) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-    """A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4)
-    and (d phi / d qd) dqd (K,)."""
-
+    def size(self) -> int:
+        ...
 class ExpressionOp:
-    """Opcodes of an ExpressionBasis program (cpp/include/adparm/expression_basis.hpp)."""
-
-    constant: ExpressionOp
-    variable: ExpressionOp
-    add: ExpressionOp
-    subtract: ExpressionOp
-    multiply: ExpressionOp
-    negate: ExpressionOp
-    power: ExpressionOp
-    sin: ExpressionOp
-    cos: ExpressionOp
-    tan: ExpressionOp
-    exp: ExpressionOp
-    log: ExpressionOp
-    sqrt: ExpressionOp
-    tanh: ExpressionOp
-    store: ExpressionOp
-    def __int__(self) -> int: ...
-
+    """
+    Members:
+    
+      constant
+    
+      variable
+    
+      add
+    
+      subtract
+    
+      multiply
+    
+      negate
+    
+      power
+    
+      sin
+    
+      cos
+    
+      tan
+    
+      exp
+    
+      log
+    
+      sqrt
+    
+      tanh
+    
+      store
+    """
+    __members__: typing.ClassVar[dict[str, ExpressionOp]]
+    add: typing.ClassVar[ExpressionOp]
+    constant: typing.ClassVar[ExpressionOp]
+    cos: typing.ClassVar[ExpressionOp]
+    exp: typing.ClassVar[ExpressionOp]
+    log: typing.ClassVar[ExpressionOp]
+    multiply: typing.ClassVar[ExpressionOp]
+    negate: typing.ClassVar[ExpressionOp]
+    power: typing.ClassVar[ExpressionOp]
+    sin: typing.ClassVar[ExpressionOp]
+    sqrt: typing.ClassVar[ExpressionOp]
+    store: typing.ClassVar[ExpressionOp]
+    subtract: typing.ClassVar[ExpressionOp]
+    tan: typing.ClassVar[ExpressionOp]
+    tanh: typing.ClassVar[ExpressionOp]
+    variable: typing.ClassVar[ExpressionOp]
+    @typing.overload
+    def __eq__(self, other: ExpressionOp) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: ExpressionOp) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class ExpressionBasis:
-    """A basis compiled from a postfix program over z = [x (2n); qd (n)]
-    (cpp/include/adparm/expression_basis.hpp)."""
-
-    def __init__(self, joints: int, opcodes: list[int], arguments: list[float]) -> None: ...
-    def __len__(self) -> int: ...
+    """
+    A basis compiled from a postfix program over z = [x (2n); qd (n)] (cpp/include/adparm/expression_basis.hpp).
+    """
+    def __init__(self, joints: typing.SupportsInt | typing.SupportsIndex, opcodes: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], arguments: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex]) -> None:
+        ...
+    def __len__(self) -> int:
+        ...
+    def evaluate(self, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], qd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], dqd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]]:
+        """
+        At x (2n,), qd (n,), dqd (n,): phi (N,), d phi / dx (N, 2n), (d phi / d qd) dqd (N,) and d phi / d qd (N, n).
+        """
+    def evaluate_rows(self, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], qd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], dqd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        """
+        Row by row, x (m, 2n), qd and dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and (d phi / d qd) dqd (m, N).
+        """
     @property
-    def size(self) -> int: ...
+    def joints(self) -> int:
+        ...
     @property
-    def joints(self) -> int: ...
+    def size(self) -> int:
+        ...
     @property
-    def state_dim(self) -> int: ...
+    def stack_depth(self) -> int:
+        ...
     @property
-    def stack_depth(self) -> int: ...
-    def evaluate(
-        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
-    ) -> tuple[_FloatArray, _FloatArray, _FloatArray, _FloatArray]:
-        """At x (2n,), qd (n,), dqd (n,): phi (N,), d phi / dx (N, 2n), (d phi / d qd) dqd (N,)
-        and d phi / d qd (N, n)."""
-    def evaluate_rows(
-        self, x: ArrayLike, qd: ArrayLike, dqd: ArrayLike
-    ) -> tuple[_FloatArray, _FloatArray, _FloatArray]:
-        """Row by row, x (m, 2n), qd and dqd (m, n): phi (m, N), d phi / dx (m, N, 2n) and
-        (d phi / d qd) dqd (m, N)."""
-
-def hjb_residual(
-    settings: Settings,
-    x: ArrayLike,
-    critic_weights: ArrayLike,
-    actor_weights: ArrayLike,
-    t: float,
-) -> _FloatArray:
-    """HJB error of eq. (21) at each row of x (m, 2n) for weights (K,), with the desired state at
-    time t; returns (m,)."""
-
-# --- closed loop ----------------------------------------------------------------------------------
-
-def closed_loop_derivative(
-    settings: Settings, t: float, state: ArrayLike
-) -> tuple[_FloatArray, dict[str, _FloatArray | float]]:
-    """Right-hand side at t of state (87,) = [q, dq, Wc (8), Wa (8), Gamma (64, column-major),
-    nu (2), J]; local extrapolation points are drawn around this state first. Returns
-    (rate (87,), outputs dict of qd, e1, e2, tau, u, u_hat, mu, probe (2,) and hjb_error
-    (float))."""
-
-def initial_state(settings: Settings) -> _FloatArray:
-    """The closed loop's initial state (87,)."""
-
-def extrapolation_points(settings: Settings) -> _FloatArray:
-    """The fixed or grid extrapolation points (N, 2n) in x (zeros for mode local)."""
-
+    def state_dim(self) -> int:
+        ...
 class Simulation:
-    """The closed-loop run (basis from settings.basis); advance(n) takes up to n RK4 steps."""
-
-    def __init__(self, settings: Settings) -> None: ...
-    def advance(self, max_steps: int) -> int:
-        """Take at most max_steps steps (GIL released); returns the number taken."""
-    @property
-    def status(self) -> Literal["running", "finished", "diverged"]: ...
-    @property
-    def steps(self) -> int:
-        """Total number of steps of the run."""
-    @property
-    def step(self) -> int:
-        """Steps taken so far."""
+    """
+    The closed-loop run (basis from settings.basis); advance(n) takes up to n RK4 steps.
+    """
+    def __init__(self, settings: Settings) -> None:
+        ...
+    def advance(self, max_steps: typing.SupportsInt | typing.SupportsIndex) -> int:
+        ...
+    def recording(self) -> dict:
+        """
+        Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2), weights (n, 8).
+        """
     @property
     def divergence_time(self) -> float:
-        """Time of divergence (s), NaN unless status is "diverged"."""
+        ...
     @property
     def reset_times(self) -> list[float]:
-        """Times (s) of the covariance resets so far."""
+        ...
     @property
-    def state(self) -> _FloatArray:
-        """Current closed-loop state (87,); after divergence, the last finite state (that of
-        the last recorded row), while ``step`` counts the diverging step too."""
-    def recording(self) -> dict[str, _FloatArray]:
-        """Recorded rows so far: dict of arrays t, hjb_error, cost (n,), q ... (n, 2),
-        weights (n, 8)."""
-
+    def state(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @property
+    def status(self) -> str:
+        ...
+    @property
+    def step(self) -> int:
+        ...
+    @property
+    def steps(self) -> int:
+        ...
 class Batch:
-    """Independent runs on a pool of C++ worker threads that take runs from a shared queue and
-    run each to its end (no barrier between threads); the caller polls with wait() and takes
-    each run as it ends. Not for use from several Python threads at once."""
-
-    def __init__(self, settings: list[Settings]) -> None:
-        """Checks every run's settings (ValueError naming settings[i])."""
-    def __len__(self) -> int: ...
-    def start(self, threads: int, window: int = ...) -> None:
-        """Start min(threads, len) workers; at most `window` runs are built and not yet
-        taken at any time."""
-    def wait(self, seconds: float) -> list[int]:
-        """Wait up to `seconds` (GIL released) for a run to end; the indices of the runs that
-        ended since the last call. Re-raises an error a worker met."""
+    """
+    Independent runs on a pool of C++ threads that take runs from a shared queue and run each to the end; the caller polls with wait().
+    """
+    def __init__(self, settings: collections.abc.Sequence[Settings]) -> None:
+        ...
+    def __len__(self) -> int:
+        ...
+    def seconds(self, index: typing.SupportsInt | typing.SupportsIndex) -> float:
+        """
+        Wall time spent building and advancing run `index`, s.
+        """
+    def start(self, threads: typing.SupportsInt | typing.SupportsIndex, window: typing.SupportsInt | typing.SupportsIndex = 18446744073709551615) -> None:
+        """
+        Starts the workers; at most `window` runs are built and not yet taken.
+        """
+    def stop(self) -> None:
+        """
+        Stops every worker within one step and joins them.
+        """
+    def take(self, index: typing.SupportsInt | typing.SupportsIndex) -> Simulation:
+        """
+        Hands run `index` over (ended, stopped part-way, or built now if never started).
+        """
+    def wait(self, seconds: typing.SupportsFloat | typing.SupportsIndex) -> list[int]:
+        """
+        Waits up to `seconds` for a run to end; returns the indices of the runs that ended since the last call.
+        """
     @property
     def done(self) -> bool:
-        """Every run ended (or the batch was stopped) and every ending was reported."""
-    def stop(self) -> None:
-        """Stop every worker within one step of its run and join them (GIL released)."""
+        ...
     @property
     def steps_done(self) -> int:
-        """Steps taken so far by all runs (readable while the workers run)."""
+        ...
     @property
-    def total_steps(self) -> int: ...
-    def take(self, index: int) -> Simulation:
-        """Hand run `index` over: ended, stopped part-way, or built now if it never started
-        (RuntimeError if it is still running or already taken)."""
-    def seconds(self, index: int) -> float:
-        """Wall time spent building and advancing run `index`, s."""
+    def total_steps(self) -> int:
+        ...
+def arm_terms(parameters: ArmParameters, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"]) -> dict:
+    """
+    Model terms at q (2,), dq (2,): dict of M, M_inv, C (2, 2) and G, F (2,).
+    """
+def basis(kind: BasisKind, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 1]"], qd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], dqd: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"]) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]]:
+    """
+    A basis of K functions at x (4,) and desired qd, dqd (2,): phi (K,), d phi / dx (K, 4) and (d phi / d qd) dqd (K,).
+    """
+def closed_loop_derivative(settings: Settings, t: typing.SupportsFloat | typing.SupportsIndex, state: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], dict]:
+    """
+    Right-hand side at t of state (S,) = [q, dq, Wc (K), Wa (K), Gamma (K^2, column-major), nu (2), J] (S = 87 for the 8-function bases, 55 for the structured basis, 2 K + K^2 + 7 for an expression basis of K functions); local extrapolation points are drawn around this state first. Returns (rate (S,), outputs dict).
+    """
+def desired_state(trajectory: TrajectorySettings, t: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+    """
+    The desired state of n joints at times t (m,): rows [qd (n), dqd (n), ddqd (n)] (m, 3 n).
+    """
+def extrapolation_points(settings: Settings) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+    """
+    The fixed or grid extrapolation points (N, 2 n) in x (zeros for mode local, whose points are drawn around the state at each step).
+    """
+def hjb_residual(settings: Settings, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], critic_weights: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], actor_weights: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+    """
+    HJB error of eq. (21) at each row of x (m, 2 n) for weights (K,) of settings.basis, with the desired state at time t; returns (n,).
+    """
+def initial_state(settings: Settings) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+    """
+    The closed loop's initial state (S,).
+    """
+def paper_settings() -> Settings:
+    """
+    The C++ core's copy of the paper preset.
+    """
+def simulate_open_loop(parameters: ArmParameters, disturbance: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], initial_state: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 1]"], dt: typing.SupportsFloat | typing.SupportsIndex, steps: typing.SupportsInt | typing.SupportsIndex, compensate_gravity: bool) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 4]"]:
+    """
+    RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4).
+    """
+RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'))
+STATE_SIZE: int = 87

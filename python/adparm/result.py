@@ -60,8 +60,15 @@ def presenter(method: str) -> Callable[..., Any]:
 #: (SimulationInterrupted) or is still running (a result read from a run in progress).
 STATUSES = ("finished", "diverged", "interrupted", "running")
 
-ARRAYS_2 = ("q", "dq", "qd", "e1", "e2", "tau", "u", "u_hat", "mu", "probe")
-ARRAYS_N = ("critic_weights", "actor_weights")
+#: The series a run records, (name, width) in the core's order (adparm._core.RECORDED_SERIES, the
+#: C++ table kRecordedSeries): width "one" (a value per row), "joints" (a column per joint) or
+#: "basis" (a column per basis function). Each is an array attribute of SimulationResult.
+RECORDED_SERIES: tuple[tuple[str, str], ...] = tuple(
+    (str(name), str(width)) for name, width in _core.RECORDED_SERIES
+)
+ARRAYS_1 = tuple(name for name, width in RECORDED_SERIES if width == "one")
+ARRAYS_2 = tuple(name for name, width in RECORDED_SERIES if width == "joints")
+ARRAYS_N = tuple(name for name, width in RECORDED_SERIES if width == "basis")
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,7 +140,7 @@ class SimulationResult:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
         if n < 0:
             raise ValueError(f"t: expected a 1-d array, got shape {np.shape(self.t)}")
-        shapes = {"t": (n,), "hjb_error": (n,), "cost": (n,)}
+        shapes = {name: (n,) for name in ARRAYS_1}
         joints = self.config.dof if isinstance(self.config, Config) else 2
         shapes.update({name: (n, joints) for name in ARRAYS_2})
         size = self.config.basis_size if isinstance(self.config, Config) else 8
@@ -165,7 +172,7 @@ class SimulationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The arrays by name (copies), with status and wall_time."""
-        names = ("t", "hjb_error", "cost", *ARRAYS_2, *ARRAYS_N, "covariance_reset_times")
+        names = (*ARRAYS_1, *ARRAYS_2, *ARRAYS_N, "covariance_reset_times")
         out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
         out["status"] = self.status
         out["wall_time"] = self.wall_time

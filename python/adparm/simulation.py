@@ -20,7 +20,9 @@ from .desired import desired_state
 from .divergence import divergence_causes
 from .rates import check_step
 from .result import (
+    ARRAYS_1,
     ARRAYS_2,
+    ARRAYS_N,
     SimulationDiverged,
     SimulationInterrupted,
     SimulationResult,
@@ -181,7 +183,7 @@ def _recording_bytes(config: Config) -> int:
     values of each joint series and the K critic and K actor weights per row."""
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
-    width = 3 + config.dof * len(ARRAYS_2) + 2 * config.basis_size
+    width = len(ARRAYS_1) + config.dof * len(ARRAYS_2) + config.basis_size * len(ARRAYS_N)
     return 8 * rows * width
 
 

@@ -18,31 +18,25 @@ import numpy as np
 
 from ._files import atomic_write
 from .config import Config
-from .result import ARRAYS_2, ARRAYS_N, SimulationResult, register
+from .result import ARRAYS_1, ARRAYS_2, ARRAYS_N, RECORDED_SERIES, SimulationResult, register
 from .simulation import available_memory
 
 __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
 
 FORMAT_VERSION = 2
 
-# (result attribute, column names); one column per joint j = 1 ... n ("{j}") and per basis function
-# i = 1 ... K ("{i}", in the order of adparm.basis_names(config)).
-_COLUMNS: tuple[tuple[str, str], ...] = (
-    ("t", "t"),
-    ("q", "q{j}"),
-    ("dq", "dq{j}"),
-    ("qd", "qd{j}"),
-    ("e1", "e1_{j}"),
-    ("e2", "e2_{j}"),
-    ("tau", "tau{j}"),
-    ("u", "u{j}"),
-    ("u_hat", "u_hat{j}"),
-    ("mu", "mu{j}"),
-    ("probe", "probe{j}"),
-    ("critic_weights", "Wc{i}"),
-    ("actor_weights", "Wa{i}"),
-    ("hjb_error", "hjb_error"),
-    ("cost", "cost"),
+# (result attribute, column names) of each recorded series, in the core's order; one column per
+# joint j = 1 ... n ("{j}") and per basis function i = 1 ... K ("{i}", in the order of
+# adparm.basis_names(config)). A joint series' columns are its name and j, except those below.
+_COLUMN_NAMES = {
+    "e1": "e1_{j}",
+    "e2": "e2_{j}",
+    "critic_weights": "Wc{i}",
+    "actor_weights": "Wa{i}",
+}
+_COLUMNS: tuple[tuple[str, str], ...] = tuple(
+    (name, _COLUMN_NAMES.get(name, name + "{j}" if width == "joints" else name))
+    for name, width in RECORDED_SERIES
 )
 
 
@@ -217,7 +211,7 @@ def write_result_csv(result: SimulationResult, path: Path) -> None:
 
 
 def write_result_npz(result: SimulationResult, path: Path) -> None:
-    names = ("t", "hjb_error", "cost", *_RESULT_ARRAYS, "covariance_reset_times")
+    names = (*ARRAYS_1, *_RESULT_ARRAYS, "covariance_reset_times")
     config = result.config.to_dict()
     np.savez_compressed(
         path,
@@ -230,7 +224,7 @@ def write_result_npz(result: SimulationResult, path: Path) -> None:
     )
 
 
-_RESULT_ARRAYS = tuple(attr for attr, _ in _COLUMNS if attr not in ("t", "hjb_error", "cost"))
+_RESULT_ARRAYS = (*ARRAYS_2, *ARRAYS_N)
 
 
 def save_result(result: SimulationResult, path: str | Path) -> Path:
@@ -329,7 +323,7 @@ def _check_npz_sizes(path: Path, archive: zipfile.ZipFile, config: Config) -> No
     rows = steps // config.sim.record_every + 2
     n, k = config.dof, config.basis_size
     expected: dict[str, tuple[int, ...]] = {"covariance_reset_times": (steps + 1,)}
-    expected.update({name: (rows,) for name in ("t", "hjb_error", "cost")})
+    expected.update({name: (rows,) for name in ARRAYS_1})
     expected.update({name: (rows, n) for name in ARRAYS_2})
     expected.update({name: (rows, k) for name in ARRAYS_N})
     unknown = [

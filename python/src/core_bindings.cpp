@@ -26,16 +26,14 @@ namespace {
 using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 // Settings::arm (a std::variant of the two-link arm's parameters and a URDF arm's settings) as
-// the four attributes plant, model (two-link) and plant_urdf, model_urdf (URDF). A getter of the
-// alternative held returns a reference into the settings (s.plant.p1 = ... changes them, as for
-// any member); of the other alternative, a default copy. Such a reference stands for the arm held
-// when it was taken: assigning plant_urdf (which changes the alternative) leaves it dangling, so
-// Python code assigns whole values (as core_settings does) rather than keeping one across that.
+// the four attributes plant, model (two-link) and plant_urdf, model_urdf (URDF). A getter returns a
+// copy (of the other alternative, a default one): a reference into the variant would dangle once
+// plant_urdf changes the alternative, so an arm is changed by assigning it whole.
 template <class Member, class Alternative>
 py::object arm_member(py::handle self, Member Alternative::* member) {
-  Settings& settings = self.cast<Settings&>();
-  if (Alternative* arms = std::get_if<Alternative>(&settings.arm))
-    return py::cast(&(arms->*member), py::return_value_policy::reference_internal, self);
+  const Settings& settings = self.cast<const Settings&>();
+  if (const Alternative* arms = std::get_if<Alternative>(&settings.arm))
+    return py::cast(arms->*member);
   return py::cast(Member());
 }
 
@@ -192,9 +190,10 @@ void bind_settings(py::module_& m) {
       .def_readwrite("viscous", &UrdfArmSettings::viscous)
       .def_readwrite("locked_joints", &UrdfArmSettings::locked_joints);
   py::class_<Settings>(m, "Settings",
-                       "All settings of one run. Eigen members are copied on access: assign them "
-                       "whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and "
-                       "actor_weights (K,); n = 2 joints for the two-link arm, K the basis size. "
+                       "All settings of one run. Eigen members and the arms (plant, model, "
+                       "plant_urdf, model_urdf) are copied on access: assign them whole. Q (2 n, "
+                       "2 n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,); n "
+                       "= 2 joints for the two-link arm, K the basis size. "
                        "dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) "
                        "loop.")
       .def(py::init<>())
@@ -645,14 +644,19 @@ void bind_closed_loop(py::module_& m) {
       },
       py::arg("settings"),
       "The fixed or grid extrapolation points (N, 2 n) in x (zeros for mode local, whose points "
-      "are "
-      "drawn around the state at each step).");
+      "are drawn around the state at each step).");
 }
 
 void bind_simulation(py::module_& m) {
-  py::tuple names(kRecordedSeries.size());
-  for (std::size_t i = 0; i < kRecordedSeries.size(); ++i) names[i] = kRecordedSeries[i].name;
-  m.attr("RECORDED_SERIES") = names;
+  // (name, width) of each recorded series, in order; width "one", "joints" or "basis"
+  py::tuple series(kRecordedSeries.size());
+  for (std::size_t i = 0; i < kRecordedSeries.size(); ++i) {
+    const SeriesWidth width = kRecordedSeries[i].width;
+    series[i] = py::make_tuple(kRecordedSeries[i].name, width == SeriesWidth::one      ? "one"
+                                                        : width == SeriesWidth::joints ? "joints"
+                                                                                       : "basis");
+  }
+  m.attr("RECORDED_SERIES") = series;
   py::class_<AnySimulation>(m, "Simulation",
                             "The closed-loop run (basis from settings.basis); advance(n) takes up "
                             "to n RK4 steps.")
@@ -738,4 +742,10 @@ PYBIND11_MODULE(_core, m) {
   bind_closed_loop(m);
   bind_simulation(m);
   bind_batch(m);
+  py::list names;  // __all__: every public name bound above, in order
+  for (const auto& item : m.attr("__dict__").cast<py::dict>()) {
+    const std::string name = py::str(item.first);
+    if (name.rfind("_", 0) != 0) names.append(name);
+  }
+  m.attr("__all__") = names;
 }
