@@ -27,6 +27,7 @@ LAYERS = {
     # 1 schema: the configuration's sections, value checks and TOML text
     "_fields": 1,
     "_arm_sections": 1,
+    "_run_sections": 1,
     "_sections": 1,
     "_schema": 1,
     # 2 model: the arm, the basis, the exact optimum and the defaults derived from them

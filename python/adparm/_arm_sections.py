@@ -32,6 +32,7 @@ from ._fields import (
     read_text_file,
     rows_value,
     scalar_value,
+    setting,
     value_text,
     vector_value,
 )
@@ -199,17 +200,56 @@ class PlantConfig:
     holds joints of the URDF at a position (Pinocchio's reduced model): the arm's joints are
     the free ones."""
 
-    p1: float = 5.0
-    p2: float = 1.0
-    p3: float = 1.0
-    g1: float = 9.8 * 1.2
-    g2: float = 9.8
-    coulomb: float | Vector = -0.1  # as printed: F = -0.1 sgn(dq)
-    viscous: float | Vector = 0.0  # not in the paper; 0 keeps its plant
-    disturbance: Vector = (0.1, 0.1)
-    urdf: str | None = None
-    gravity: Vector | None = None
-    locked_joints: dict[str, float] | None = None
+    p1: float = setting(
+        5.0,
+        "M(q) = [[p1 + 2 p3 cos q2, p2 + p3 cos q2], [p2 + p3 cos q2, p2]] (eq. 1); C follows "
+        "from M. See :func:`adparm.two_link_parameters` for physical links.",
+    )
+    p2: float = setting(1.0, "See p1.")
+    p3: float = setting(1.0, "See p1.")
+    g1: float = setting(
+        9.8 * 1.2,
+        "G(q) = [g1 cos q1 + g2 cos(q1 + q2), g2 cos(q1 + q2)] (N m); the paper's 9.8 x 1.2.",
+    )
+    g2: float = setting(9.8, "See g1 (N m); the paper's 9.8.")
+    # as printed: F = -0.1 sgn(dq)
+    coulomb: float | Vector = setting(
+        -0.1,
+        "Friction F = coulomb sgn(dq) + viscous dq; the paper prints F = -0.1 sgn(dq). One "
+        "number; with ``urdf`` one number or one per joint.",
+    )
+    # not in the paper; 0 keeps its plant
+    viscous: float | Vector = setting(
+        0.0,
+        "Viscous friction coefficient. Not in the paper. One number; with ``urdf`` one number or "
+        "one per joint.",
+    )
+    disturbance: Vector = setting((0.1, 0.1), "tau_d = [d1 sin t, d2 cos t] (N m).")
+    urdf: str | None = setting(
+        None,
+        "A URDF file of any fixed-base serial arm (through Pinocchio) instead of the two-link "
+        "arm: relative to the TOML file (in a config built from a dict, to the current "
+        "directory), stored absolute. The actuated joints are its revolute, continuous and "
+        "prismatic joints in model order; n follows from it and every sized setting takes the "
+        'n-joint default. ``"example-robot-data:ur5"`` names a robot of the example-robot-data '
+        "package. p1 ... g2 may not be set with it; its default basis is ``structured`` (the "
+        "arm's own: W* = [K; base inertial parameters]); the bases ``paper`` and ``augmented`` "
+        "are refused. See :doc:`/guide/urdf-arms`.",
+    )
+    gravity: Vector | None = setting(
+        None,
+        "Acceleration of gravity [gx, gy, gz] in the URDF's root frame (m/s^2); only with "
+        "``urdf``.",
+    )
+    locked_joints: dict[str, float] | None = setting(
+        None,
+        "Joints of the URDF held at a position, a table ``{name = position, ...}`` (rad or m), "
+        "through Pinocchio's reduced model: their links become part of the parent body and n "
+        "counts the free joints only. A mimic joint must be locked or follow a locked joint (it "
+        "is then locked at multiplier x position + offset). An unknown name (the message lists "
+        "the arm's joints) or a position outside the joint's limits is refused; only with "
+        "``urdf``. See :doc:`/guide/urdf-arms`.",
+    )
 
     def __post_init__(self) -> None:
         for key in TWO_LINK_KEYS:
@@ -241,16 +281,31 @@ class ModelConfig:
     ``urdf`` may name another URDF of the same joint count (a model error), with its own
     ``gravity``, coulomb, viscous and ``locked_joints`` (each left out: the plant's)."""
 
-    p1: float | None = None
-    p2: float | None = None
-    p3: float | None = None
-    g1: float | None = None
-    g2: float | None = None
-    coulomb: float | Vector | None = None
-    viscous: float | Vector | None = None
-    urdf: str | None = None
-    gravity: Vector | None = None
-    locked_joints: dict[str, float] | None = None
+    p1: float | None = setting(
+        None,
+        "The arm the controller believes (feedforward h, f, g and W*). Each key left out takes "
+        "the plant's value; set one to introduce a model error.",
+    )
+    p2: float | None = setting(None, "As p1.")
+    p3: float | None = setting(None, "As p1.")
+    g1: float | None = setting(None, "As p1.")
+    g2: float | None = setting(None, "As p1.")
+    coulomb: float | Vector | None = setting(None, "As p1.")
+    viscous: float | Vector | None = setting(None, "As p1.")
+    urdf: str | None = setting(
+        None,
+        "Another URDF of the same joint count as the controller's believed arm (a model error); "
+        "only with ``plant.urdf``.",
+    )
+    gravity: Vector | None = setting(
+        None,
+        "The believed gravity [gx, gy, gz]; only with ``plant.urdf``.",
+    )
+    locked_joints: dict[str, float] | None = setting(
+        None,
+        "The believed locked joints (a table as ``plant.locked_joints``); the model must have the "
+        "plant's number of free joints; only with ``plant.urdf``.",
+    )
 
     def __post_init__(self) -> None:
         for key in TWO_LINK_KEYS:
@@ -299,10 +354,14 @@ class SinusoidTrajectory:
     ``kind = "sinusoid"``."""
 
     kind: ClassVar[str] = "sinusoid"
-    amplitude: Vector | Matrix = (0.5, 0.3)
-    frequency: Vector | Matrix = (1.0, 1.0)
-    phase: Vector | Matrix | None = None
-    offset: Vector = (0.0, 0.0)
+    amplitude: Vector | Matrix = setting(
+        (0.5, 0.3),
+        '``kind = "sinusoid"``: qd_j = offset_j + sum_k amplitude_jk sin(frequency_jk t + '
+        "phase_jk) (rad). A pair, or a 2 x n matrix for n sinusoids per joint.",
+    )
+    frequency: Vector | Matrix = setting((1.0, 1.0), "rad/s, same shape as amplitude.")
+    phase: Vector | Matrix | None = setting(None, "rad, same shape as amplitude.")
+    offset: Vector = setting((0.0, 0.0), "rad, one per joint.")
 
     def __post_init__(self) -> None:
         amplitude = rows_value(self.amplitude, "task.qd.amplitude", None)
@@ -331,10 +390,20 @@ class SampledTrajectory:
     ``[task.qd]`` with ``kind = "samples"``."""
 
     kind: ClassVar[str] = "samples"
-    t: Vector = ()
-    q: Matrix = ()
-    file: str | None = None
-    boundary: str = "not-a-knot"
+    t: Vector = setting(
+        (),
+        '``kind = "samples"``: sample times (s), from t <= 0 to t >= sim.T; qd through a cubic '
+        "spline (SciPy's CubicSpline).",
+    )
+    q: Matrix = setting((), "Samples of qd, one row [qd1, qd2] per time (rad).")
+    file: str | None = setting(
+        None,
+        "Instead of t and q: a CSV file with columns t, qd1, qd2 (relative to the TOML file).",
+    )
+    boundary: str = setting(
+        "not-a-knot",
+        "Spline end conditions: ``not-a-knot``, ``clamped`` or ``natural``.",
+    )
 
     def __post_init__(self) -> None:
         if self.file is not None:
@@ -444,9 +513,16 @@ class TaskConfig:
     (in TOML a ``[task.qd]`` table with ``kind = "sinusoid"`` or ``"samples"``). The feedforward
     uses qd, dqd and ddqd (eq. 5 in full). dq0 = 0 is our choice (the paper is silent)."""
 
-    q0: Vector = (0.1598, 0.2257)
-    dq0: Vector = (0.0, 0.0)
-    qd: Trajectory = (0.0, 0.0)
+    q0: Vector = setting((0.1598, 0.2257), "Initial joint angles (rad).")
+    dq0: Vector = setting(
+        (0.0, 0.0),
+        "Initial joint velocities (rad/s). The paper is silent; 0 here.",
+    )
+    qd: Trajectory = setting(
+        (0.0, 0.0),
+        "Desired trajectory: a constant set-point (rad), or a ``[task.qd]`` table (below and "
+        ":doc:`/guide/tracking`).",
+    )
 
     def __post_init__(self) -> None:
         for key in ("q0", "dq0"):

@@ -6,6 +6,7 @@ adparm._arm_sections) and no arm."""
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import numbers
@@ -21,6 +22,13 @@ Matrix = tuple[tuple[float, ...], ...]
 
 #: The value of a setting that is derived for the run (sim.dt = "auto").
 AUTO = "auto"
+
+
+def setting(default: Any, doc: str) -> Any:
+    """A field of a configuration section: its default and its meaning ``doc``
+    (reStructuredText, shown by the docs' configuration reference), in ``metadata["doc"]``."""
+    return dataclasses.field(default=default, metadata={"doc": doc})
+
 
 # --- field checks: each names the field ("section.key") and what it expects -------------------
 

@@ -1,6 +1,6 @@
-"""The sections of the configuration that set the controller and the run: [cost], [control],
-[critic], [actor], [init], [probe], [controller], [extrapolation], [sim], [diagnostics], and
-SECTIONS, every section's class by its TOML name."""
+"""The sections of the configuration that set the controller: [cost], [control], [critic],
+[actor], [init], [probe], [controller], and SECTIONS, every section's class by its TOML name
+(with those of adparm._arm_sections and adparm._run_sections)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,6 @@ import numpy as np
 
 from ._arm_sections import ModelConfig, PlantConfig, TaskConfig, plain_value
 from ._fields import (
-    AUTO,
     MAX_FREQUENCIES,
     Matrix,
     Vector,
@@ -22,16 +21,17 @@ from ._fields import (
     choice_value,
     did_you_mean,
     gain_value,
-    int_text,
     integer_value,
     is_number,
     matrix_value,
     ndim_of,
     scalar_value,
+    setting,
     square_matrix,
     symmetric_positive_definite,
     vector_value,
 )
+from ._run_sections import DiagnosticsConfig, ExtrapolationConfig, SimConfig
 
 PAPER_Q: Matrix = (
     (40.0, 2.0, -4.0, 4.0),
@@ -45,8 +45,14 @@ PAPER_Q: Matrix = (
 class CostConfig:
     """r(x, u) = x^T Q x + u^T R u (eqs. 10-11); Q (4x4) and R (2x2) symmetric positive definite."""
 
-    Q: Matrix = PAPER_Q
-    R: Matrix = ((0.25, 0.0), (0.0, 0.25))
+    Q: Matrix = setting(
+        PAPER_Q,
+        "4 x 4 state weight of r = x^T Q x + u^T R u (eqs. 10-11), symmetric positive definite.",
+    )
+    R: Matrix = setting(
+        ((0.25, 0.0), (0.0, 0.25)),
+        "2 x 2 input weight, symmetric positive definite.",
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "Q", square_matrix(self.Q, "cost.Q"))
@@ -67,10 +73,16 @@ class ControlConfig:
     condition (29) for the paper's disturbance (``|tau_d| <= 0.1``, ``|dtau_d/dt| <= 0.1``, so
     zeta1 + zeta2 / alpha2 = 0.2 < 0.5)."""
 
-    alpha1: Matrix = ((15.6, 10.6), (10.6, 10.4))
-    ks: float = 10.0
-    alpha2: float = 1.0
-    beta1: float = 0.5
+    alpha1: Matrix = setting(
+        ((15.6, 10.6), (10.6, 10.4)),
+        "Gain in e2 = de1 + alpha1 e1 (the paper's alpha); -alpha1 must be Hurwitz.",
+    )
+    ks: float = setting(10.0, "RISE gain (eqs. 27-28). Not printed in the paper.")
+    alpha2: float = setting(1.0, "RISE gain. Not printed in the paper.")
+    beta1: float = setting(
+        0.5,
+        "RISE gain; condition (29) bounds it from below (0.1 + 0.1/alpha2 = 0.2 < 0.5 here).",
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha1", square_matrix(self.alpha1, "control.alpha1"))
@@ -103,10 +115,14 @@ class CriticConfig:
       actor) moves; with 1e-6 the gain decays and the critic can take minutes (docs: user guide,
       "Bellman-error extrapolation")."""
 
-    eta_c: float = 800.0
-    nu: float = 1.0
-    gamma0: float = 100.0
-    epsilon_T: float | None = None
+    eta_c: float = setting(800.0, "Critic gain (eq. 23).")
+    nu: float = setting(1.0, "Normalisation 1 + nu omega^T Gamma omega (eq. 24, corrected).")
+    gamma0: float = setting(100.0, "Gamma(0) = gamma0 I; Gamma is reset to this value.")
+    epsilon_T: float | None = setting(
+        None,
+        "Reset Gamma when its smallest eigenvalue falls below epsilon_T (< gamma0). See "
+        ":doc:`/paper`.",
+    )
 
     def __post_init__(self) -> None:
         for key in ("eta_c", "nu"):
@@ -135,11 +151,23 @@ class ActorConfig:
     positions of the extrapolation box (rates.check_positions). e2_margin is in the units of M
     (kg m^2); a URDF arm derives it (a tenth of lambda_min(M)) and weight_bound (10 ||W*||)."""
 
-    eta_a1: float = 0.01
-    eta_a2: float = 1.0
-    weight_bound: float = 100.0
-    positive_e2: bool = True
-    e2_margin: float = 0.01
+    eta_a1: float = setting(0.01, "Actor gain on the HJB-error gradient (eq. 26).")
+    eta_a2: float = setting(1.0, "Actor gain pulling Wa towards Wc (eq. 26).")
+    weight_bound: float = setting(
+        100.0,
+        "The projection keeps ||Wa|| <= weight_bound (the paper's proj{} has no printed bound).",
+    )
+    positive_e2: bool = setting(
+        True,
+        "Not in the paper: the projection also keeps the e2 block of the actor's (and critic's) "
+        "value positive definite at cos q2 = +-1 (the structured basis of a URDF arm: at qd(0), "
+        "q(0) and the joint positions of the extrapolation box), which keeps learning away from "
+        "the anti-stabilising HJB solution (see the truth guide).",
+    )
+    e2_margin: float = setting(
+        0.01,
+        "The smallest eigenvalue the e2 block keeps when positive_e2 is on (units of M).",
+    )
 
     def __post_init__(self) -> None:
         for key in ("eta_a1", "eta_a2", "e2_margin"):
@@ -172,8 +200,12 @@ class InitConfig:
       weights describe), so these weights start at u_hat = -R^-1 e2, the optimal policy of the
       believed model; all-ones weights give an indefinite M_w on other arms and blow up."""
 
-    critic_weights: Vector | None = None
-    actor_weights: Vector | None = None
+    critic_weights: Vector | None = setting(
+        None,
+        "Wc(0), in the order of ``adparm.basis_names(config)``. Zero is inadmissible "
+        "(:doc:`/paper`).",
+    )
+    actor_weights: Vector | None = setting(None, "Wa(0); it must stabilise the model.")
 
     def __post_init__(self) -> None:
         for key in ("critic_weights", "actor_weights"):
@@ -195,11 +227,20 @@ class ProbeConfig:
     hardest and is the critic's least excited direction. Phases k rad on both joints (None), so each
     sinusoid keeps that direction; until 100 s, no ramp; until = 0 turns probing off."""
 
-    amplitude: Vector | Matrix = (71.0, 23.0)
-    until: float = 100.0
-    ramp: float = 0.0
-    frequencies: Vector = (1.0, 2.7, 5.3, 9.1)
-    phases: Matrix | None = None  # None: phase k rad for sinusoid k, on both joints
+    amplitude: Vector | Matrix = setting(
+        (71.0, 23.0),
+        "Probing torque probe_j = ramp(t) sum_k amplitude_jk sin(frequencies_k t + phases_jk), N "
+        "m: one number (both joints), a pair (per joint) or a 2 x n matrix (per joint and "
+        "sinusoid). See :doc:`/paper` (excitation).",
+    )
+    until: float = setting(100.0, "Probing stops at this time (s); 0 turns it off.")
+    ramp: float = setting(0.0, "Linear fade-in time (s); 0 starts at full amplitude.")
+    frequencies: Vector = setting((1.0, 2.7, 5.3, 9.1), "rad/s, one per sinusoid.")
+    # None: phase k rad for sinusoid k, on both joints
+    phases: Matrix | None = setting(
+        None,
+        "2 x n (rad). Equal phases on both joints keep each sinusoid along one torque direction.",
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -290,7 +331,6 @@ def name_in(basis: tuple[str, ...], name: str) -> bool:
     return any(item.strip() == name for item in basis)
 
 
-EXTRAPOLATION_MODES = ("fixed", "grid", "local")
 #: The largest controller.degree (adparm.bases.MAX_DEGREE; one joint reaches 128 functions at 22).
 MAX_DEGREE = 20
 
@@ -315,12 +355,32 @@ class ControllerConfig:
     ``["quadratic", "x3^2*cos(q2)"]``) are expression bases (adparm.bases; docs, "Bases"): parsed
     once, evaluated by the C++ core with exact Jacobians on its dynamic-size loop."""
 
-    kind: str = "adp"
-    basis: str | tuple[str, ...] = "augmented"
-    degree: int | None = None
-    rise: bool = True
-    kp: float | Matrix = 50.0
-    kd: float | Matrix = 10.0
+    kind: str = setting(
+        "adp",
+        "``adp`` (u = u_hat + probe; learns), ``rise`` (u = 0), ``pd`` (u = -(kp e1 + kd de1)) or "
+        "``optimal`` (u* = -R^-1 e2). See :doc:`/guide/baselines`.",
+    )
+    basis: str | tuple[str, ...] = setting(
+        "augmented",
+        "``augmented`` (the paper's functions with cos q2 = cos(qd2 - x2), exact for any qd), "
+        "``paper`` (the printed phi(x)), ``structured`` (e1 monomials and e2^T M_k(q) e2, "
+        ":doc:`/guide/structured-basis`), ``quadratic``, ``polynomial`` (with ``degree``), or a "
+        'list of terms and families such as ``["quadratic", "x3^2*cos(q2)"]`` '
+        "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`. A URDF arm takes its own "
+        "``structured`` basis by default (e1 products and e2^T M_b(q) e2 per base inertial "
+        "parameter, :doc:`/guide/urdf-arms`) and refuses ``paper`` and ``augmented``.",
+    )
+    degree: int | None = setting(
+        None,
+        "The highest (even) degree of the ``polynomial`` basis; only with ``basis = "
+        '"polynomial"``.',
+    )
+    rise: bool = setting(
+        True,
+        'Add the RISE term mu (eqs. 27-28); must be true with ``kind = "rise"``.',
+    )
+    kp: float | Matrix = setting(50.0, "PD gain (a number times I, or 2 x 2), ``pd`` only.")
+    kd: float | Matrix = setting(10.0, "PD gain on de1, ``pd`` only.")
 
     def __post_init__(self) -> None:
         choice_value(self.kind, "controller.kind", CONTROLLER_KINDS)
@@ -389,124 +449,6 @@ class ControllerConfig:
         """kp or kd as a (joints x joints) array."""
         value = getattr(self, key)
         return value * np.eye(joints) if isinstance(value, float) else np.array(value)
-
-
-#: The most extrapolation points a run may have. A point costs about 180 ns per RK4 step, so a
-#: million of them take about 0.2 s per step: some 8 hours for the paper's 150 s at dt = 1 ms.
-MAX_POINTS = 10**6
-#: The largest sim.record_every: a run has at most 1e10 steps, so a larger value would change
-#: nothing (only the first and the last step are recorded), and this one fits the core's integer.
-MAX_RECORD_EVERY = 10**10
-
-
-@dataclass(frozen=True)
-class ExtrapolationConfig:
-    """Bellman-error extrapolation: the critic and actor laws also average their terms over the
-    HJB error at ``points`` extra states x (0: off, the paper; at most MAX_POINTS = 10^6, which
-    already takes about 0.2 s per RK4 step). ``mode``: ``fixed`` (points drawn once, uniform in
-    [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points redrawn every
-    step, uniform in x(t) + [-box, box]). ``box``: half-widths in x = [e1; e2], one number or 4.
-    ``seed`` (0 <= seed < 2^32) seeds MT19937, drawn in the order of NumPy's
-    ``RandomState(seed).random_sample((points, 4))``."""
-
-    points: int = 0
-    box: float | Vector = 1.0
-    mode: str = "fixed"
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(
-            self,
-            "points",
-            integer_value(self.points, "extrapolation.points", minimum=0, maximum=MAX_POINTS),
-        )
-        if is_number(self.box):
-            box: float | Vector = scalar_value(
-                self.box, "extrapolation.box", minimum=0.0, strict=True
-            )
-        else:
-            box = vector_value(self.box, "extrapolation.box", None)
-            if min(box) <= 0.0:
-                raise ValueError(f"extrapolation.box: half-widths must be > 0, got {list(box)}")
-        object.__setattr__(self, "box", box)
-        choice_value(self.mode, "extrapolation.mode", EXTRAPOLATION_MODES)
-        object.__setattr__(self, "seed", integer_value(self.seed, "extrapolation.seed", minimum=0))
-        if self.seed >= 2**32:
-            raise ValueError(f"extrapolation.seed: must be < 2^32, got {int_text(self.seed)}")
-        if self.mode == "grid":
-            m = round(self.points**0.25)
-            if m**4 != self.points:
-                raise ValueError(
-                    "extrapolation.points: grid mode needs m^4 points (1, 16, 81, 256, ...), "
-                    f"got {self.points}"
-                )
-
-    def box_vector(self, joints: int = 2) -> np.ndarray:
-        """The half-widths as a (2 joints,) array."""
-        return np.broadcast_to(np.array(self.box, dtype=float), (2 * joints,)).copy()
-
-
-@dataclass(frozen=True)
-class SimConfig:
-    """Fixed-step RK4: horizon T (s), step dt (s), record every record_every-th step, and the
-    bound on ``|q|``, ``|dq|``, ``|Wc|``, ``|Wa|`` beyond which a run stops as diverged. The paper
-    prints no step; dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T
-    is not a multiple of dt, the last step is shortened to end exactly at T. At most 1e10 steps (T /
-    dt); 1 <= record_every <= MAX_RECORD_EVERY = 10^10.
-
-    ``dt = "auto"`` (the default of a URDF arm) picks the largest 1, 2 or 5 x 10^k s, at most 1 ms,
-    at which every fast rate of the closed loop (RISE through M^-1, the initial policy, the error
-    dynamics, the critic) times dt is at most 0.6 of RK4's stability limit 2.785; the config then
-    holds that number. simulate() refuses an explicit dt beyond the limit, naming the term, its
-    rate and a dt that works. A URDF arm's T defaults to 10 s."""
-
-    T: float = 150.0
-    dt: float | str = 1e-3
-    record_every: int = 10
-    divergence_bound: float = 1e6
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "T", scalar_value(self.T, "sim.T", minimum=0.0, strict=True))
-        if not (isinstance(self.dt, str) and self.dt == AUTO):  # "auto": Config resolves it
-            object.__setattr__(
-                self, "dt", scalar_value(self.dt, "sim.dt", minimum=0.0, strict=True)
-            )
-        object.__setattr__(
-            self,
-            "record_every",
-            integer_value(
-                self.record_every, "sim.record_every", minimum=1, maximum=MAX_RECORD_EVERY
-            ),
-        )
-        object.__setattr__(
-            self,
-            "divergence_bound",
-            scalar_value(self.divergence_bound, "sim.divergence_bound", minimum=0.0, strict=True),
-        )
-        if self.dt == AUTO:
-            return
-        if self.dt > self.T:
-            raise ValueError(f"sim.dt: must be <= sim.T = {self.T:g}, got {self.dt:g}")
-        if self.T / self.dt > 1e10:
-            raise ValueError(
-                f"sim.dt: sim.T / sim.dt = {self.T / self.dt:.3g} steps is more than 1e10"
-            )
-
-
-@dataclass(frozen=True)
-class DiagnosticsConfig:
-    """What a run's verdict holds it to (adparm.truth.diagnose). ``tolerance``: "ok" needs the
-    critic weights, the actor weights and the applied policy (``rms |u_hat - u*| / rms |u*|`` over
-    the last 10 % of the run) each within this relative distance of the known optimum; also the
-    band of the summary's "time within tolerance". 0 < tolerance < 1; default 1 %."""
-
-    tolerance: float = 0.01
-
-    def __post_init__(self) -> None:
-        tolerance = scalar_value(self.tolerance, "diagnostics.tolerance", minimum=0.0, strict=True)
-        if tolerance >= 1.0:
-            raise ValueError(f"diagnostics.tolerance: must be < 1, got {tolerance:g}")
-        object.__setattr__(self, "tolerance", tolerance)
 
 
 SECTIONS: dict[str, type] = {

@@ -51,6 +51,7 @@ from ._fields import (
     read_text_file,
     toml_text,
 )
+from ._run_sections import EXTRAPOLATION_MODES, MAX_POINTS, MAX_RECORD_EVERY
 from ._schema import ConfigSchema
 from ._sections import (
     BASIS_KINDS,
@@ -58,9 +59,6 @@ from ._sections import (
     EPSILON_T_EXTRAPOLATION,
     EPSILON_T_PROBING,
     EXPRESSION_FAMILIES,
-    EXTRAPOLATION_MODES,
-    MAX_POINTS,
-    MAX_RECORD_EVERY,
     SECTIONS,
     URDF_DEFAULT_BASIS,
     URDF_REFUSED_BASES,

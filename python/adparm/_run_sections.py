@@ -1,0 +1,163 @@
+"""The sections of the configuration that set the run: [extrapolation], [sim] and
+[diagnostics]."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._fields import (
+    AUTO,
+    Vector,
+    choice_value,
+    int_text,
+    integer_value,
+    is_number,
+    scalar_value,
+    setting,
+    vector_value,
+)
+
+EXTRAPOLATION_MODES = ("fixed", "grid", "local")
+#: The most extrapolation points a run may have. A point costs about 180 ns per RK4 step, so a
+#: million of them take about 0.2 s per step: some 8 hours for the paper's 150 s at dt = 1 ms.
+MAX_POINTS = 10**6
+#: The largest sim.record_every: a run has at most 1e10 steps, so a larger value would change
+#: nothing (only the first and the last step are recorded), and this one fits the core's integer.
+MAX_RECORD_EVERY = 10**10
+
+
+@dataclass(frozen=True)
+class ExtrapolationConfig:
+    """Bellman-error extrapolation: the critic and actor laws also average their terms over the
+    HJB error at ``points`` extra states x (0: off, the paper; at most MAX_POINTS = 10^6, which
+    already takes about 0.2 s per RK4 step). ``mode``: ``fixed`` (points drawn once, uniform in
+    [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points redrawn every
+    step, uniform in x(t) + [-box, box]). ``box``: half-widths in x = [e1; e2], one number or 4.
+    ``seed`` (0 <= seed < 2^32) seeds MT19937, drawn in the order of NumPy's
+    ``RandomState(seed).random_sample((points, 4))``."""
+
+    points: int = setting(
+        0,
+        "Number of extra states at which the HJB error enters the critic and actor laws; 0 is off "
+        "(the paper). See :doc:`/guide/extrapolation`.",
+    )
+    box: float | Vector = setting(
+        1.0,
+        "Half-widths of the sampling box in x = [e1; e2] (one number or 4).",
+    )
+    mode: str = setting(
+        "fixed",
+        "``fixed`` (drawn once in [-box, box]), ``grid`` (m per axis, points = m^4) or ``local`` "
+        "(redrawn every step around x(t)).",
+    )
+    seed: int = setting(0, "Seed of the draws (MT19937, as NumPy's RandomState).")
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self,
+            "points",
+            integer_value(self.points, "extrapolation.points", minimum=0, maximum=MAX_POINTS),
+        )
+        if is_number(self.box):
+            box: float | Vector = scalar_value(
+                self.box, "extrapolation.box", minimum=0.0, strict=True
+            )
+        else:
+            box = vector_value(self.box, "extrapolation.box", None)
+            if min(box) <= 0.0:
+                raise ValueError(f"extrapolation.box: half-widths must be > 0, got {list(box)}")
+        object.__setattr__(self, "box", box)
+        choice_value(self.mode, "extrapolation.mode", EXTRAPOLATION_MODES)
+        object.__setattr__(self, "seed", integer_value(self.seed, "extrapolation.seed", minimum=0))
+        if self.seed >= 2**32:
+            raise ValueError(f"extrapolation.seed: must be < 2^32, got {int_text(self.seed)}")
+        if self.mode == "grid":
+            m = round(self.points**0.25)
+            if m**4 != self.points:
+                raise ValueError(
+                    "extrapolation.points: grid mode needs m^4 points (1, 16, 81, 256, ...), "
+                    f"got {self.points}"
+                )
+
+    def box_vector(self, joints: int = 2) -> np.ndarray:
+        """The half-widths as a (2 joints,) array."""
+        return np.broadcast_to(np.array(self.box, dtype=float), (2 * joints,)).copy()
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Fixed-step RK4: horizon T (s), step dt (s), record every record_every-th step, and the
+    bound on ``|q|``, ``|dq|``, ``|Wc|``, ``|Wa|`` beyond which a run stops as diverged. The paper
+    prints no step; dt = 1 ms and T = 150 s (past its 110 s convergence claim) are our choices. If T
+    is not a multiple of dt, the last step is shortened to end exactly at T. At most 1e10 steps (T /
+    dt); 1 <= record_every <= MAX_RECORD_EVERY = 10^10.
+
+    ``dt = "auto"`` (the default of a URDF arm) picks the largest 1, 2 or 5 x 10^k s, at most 1 ms,
+    at which every fast rate of the closed loop (RISE through M^-1, the initial policy, the error
+    dynamics, the critic) times dt is at most 0.6 of RK4's stability limit 2.785; the config then
+    holds that number. simulate() refuses an explicit dt beyond the limit, naming the term, its
+    rate and a dt that works. A URDF arm's T defaults to 10 s."""
+
+    T: float = setting(150.0, "Horizon (s).")
+    dt: float | str = setting(
+        1e-3,
+        'RK4 step (s), or ``"auto"``: the largest 1, 2 or 5 x 10^k s (at most 1 ms) at which '
+        "every fast rate of the closed loop times dt is at most 0.6 of RK4's limit 2.785 (a URDF "
+        "arm's default). An explicit step beyond the limit is refused before the run.",
+    )
+    record_every: int = setting(10, "Record every n-th step.")
+    divergence_bound: float = setting(
+        1e6,
+        "The run stops as diverged when ``|q|``, ``|dq|``, ``|Wc|`` or ``|Wa|`` exceeds this "
+        "value, or a state or recorded output is not finite.",
+    )
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "T", scalar_value(self.T, "sim.T", minimum=0.0, strict=True))
+        if not (isinstance(self.dt, str) and self.dt == AUTO):  # "auto": Config resolves it
+            object.__setattr__(
+                self, "dt", scalar_value(self.dt, "sim.dt", minimum=0.0, strict=True)
+            )
+        object.__setattr__(
+            self,
+            "record_every",
+            integer_value(
+                self.record_every, "sim.record_every", minimum=1, maximum=MAX_RECORD_EVERY
+            ),
+        )
+        object.__setattr__(
+            self,
+            "divergence_bound",
+            scalar_value(self.divergence_bound, "sim.divergence_bound", minimum=0.0, strict=True),
+        )
+        if self.dt == AUTO:
+            return
+        if self.dt > self.T:
+            raise ValueError(f"sim.dt: must be <= sim.T = {self.T:g}, got {self.dt:g}")
+        if self.T / self.dt > 1e10:
+            raise ValueError(
+                f"sim.dt: sim.T / sim.dt = {self.T / self.dt:.3g} steps is more than 1e10"
+            )
+
+
+@dataclass(frozen=True)
+class DiagnosticsConfig:
+    """What a run's verdict holds it to (adparm.truth.diagnose). ``tolerance``: "ok" needs the
+    critic weights, the actor weights and the applied policy (``rms |u_hat - u*| / rms |u*|`` over
+    the last 10 % of the run) each within this relative distance of the known optimum; also the
+    band of the summary's "time within tolerance". 0 < tolerance < 1; default 1 %."""
+
+    tolerance: float = setting(
+        0.01,
+        'Verdict "ok" needs the critic weights, the actor weights and the applied policy (``rms '
+        "|u_hat - u*| / rms |u*|`` over the last 10 % of the run) each within this relative "
+        "distance of a known optimum; also the band of the summary's time within tolerance.",
+    )
+
+    def __post_init__(self) -> None:
+        tolerance = scalar_value(self.tolerance, "diagnostics.tolerance", minimum=0.0, strict=True)
+        if tolerance >= 1.0:
+            raise ValueError(f"diagnostics.tolerance: must be < 1, got {tolerance:g}")
+        object.__setattr__(self, "tolerance", tolerance)
