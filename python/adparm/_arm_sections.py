@@ -204,27 +204,33 @@ class PlantConfig:
         5.0,
         "M(q) = [[p1 + 2 p3 cos q2, p2 + p3 cos q2], [p2 + p3 cos q2, p2]] (eq. 1); C follows "
         "from M. See :func:`adparm.two_link_parameters` for physical links.",
+        core="plant.p1",
     )
-    p2: float = setting(1.0, "See p1.")
-    p3: float = setting(1.0, "See p1.")
+    p2: float = setting(1.0, "See p1.", core="plant.p2")
+    p3: float = setting(1.0, "See p1.", core="plant.p3")
     g1: float = setting(
         9.8 * 1.2,
         "G(q) = [g1 cos q1 + g2 cos(q1 + q2), g2 cos(q1 + q2)] (N m); the paper's 9.8 x 1.2.",
+        core="plant.g1",
     )
-    g2: float = setting(9.8, "See g1 (N m); the paper's 9.8.")
+    g2: float = setting(9.8, "See g1 (N m); the paper's 9.8.", core="plant.g2")
     # as printed: F = -0.1 sgn(dq)
     coulomb: float | Vector = setting(
         -0.1,
         "Friction F = coulomb sgn(dq) + viscous dq; the paper prints F = -0.1 sgn(dq). One "
         "number; with ``urdf`` one number or one per joint.",
+        core="plant.coulomb",
     )
     # not in the paper; 0 keeps its plant
     viscous: float | Vector = setting(
         0.0,
         "Viscous friction coefficient. Not in the paper. One number; with ``urdf`` one number or "
         "one per joint.",
+        core="plant.viscous",
     )
-    disturbance: Vector = setting((0.1, 0.1), "tau_d = [d1 sin t, d2 cos t] (N m).")
+    disturbance: Vector = setting(
+        (0.1, 0.1), "tau_d = [d1 sin t, d2 cos t] (N m).", core="disturbance"
+    )
     urdf: str | None = setting(
         None,
         "A URDF file of any fixed-base serial arm (through Pinocchio) instead of the two-link "
@@ -235,11 +241,13 @@ class PlantConfig:
         "package. p1 ... g2 may not be set with it; its default basis is ``structured`` (the "
         "arm's own: W* = [K; base inertial parameters]); the bases ``paper`` and ``augmented`` "
         "are refused. See :doc:`/guide/urdf-arms`.",
+        via="the URDF arm: plant_urdf (translate.urdf_settings)",
     )
     gravity: Vector | None = setting(
         None,
         "Acceleration of gravity [gx, gy, gz] in the URDF's root frame (m/s^2); only with "
         "``urdf``.",
+        via="the URDF arm: plant_urdf (translate.urdf_settings)",
     )
     locked_joints: dict[str, float] | None = setting(
         None,
@@ -249,6 +257,7 @@ class PlantConfig:
         "is then locked at multiplier x position + offset). An unknown name (the message lists "
         "the arm's joints) or a position outside the joint's limits is refused; only with "
         "``urdf``. See :doc:`/guide/urdf-arms`.",
+        via="the URDF arm: plant_urdf (translate.urdf_settings)",
     )
 
     def __post_init__(self) -> None:
@@ -285,26 +294,30 @@ class ModelConfig:
         None,
         "The arm the controller believes (feedforward h, f, g and W*). Each key left out takes "
         "the plant's value; set one to introduce a model error.",
+        core="model.p1",
     )
-    p2: float | None = setting(None, "As p1.")
-    p3: float | None = setting(None, "As p1.")
-    g1: float | None = setting(None, "As p1.")
-    g2: float | None = setting(None, "As p1.")
-    coulomb: float | Vector | None = setting(None, "As p1.")
-    viscous: float | Vector | None = setting(None, "As p1.")
+    p2: float | None = setting(None, "As p1.", core="model.p2")
+    p3: float | None = setting(None, "As p1.", core="model.p3")
+    g1: float | None = setting(None, "As p1.", core="model.g1")
+    g2: float | None = setting(None, "As p1.", core="model.g2")
+    coulomb: float | Vector | None = setting(None, "As p1.", core="model.coulomb")
+    viscous: float | Vector | None = setting(None, "As p1.", core="model.viscous")
     urdf: str | None = setting(
         None,
         "Another URDF of the same joint count as the controller's believed arm (a model error); "
         "only with ``plant.urdf``.",
+        via="the believed URDF arm: model_urdf (translate.urdf_settings)",
     )
     gravity: Vector | None = setting(
         None,
         "The believed gravity [gx, gy, gz]; only with ``plant.urdf``.",
+        via="the believed URDF arm: model_urdf (translate.urdf_settings)",
     )
     locked_joints: dict[str, float] | None = setting(
         None,
         "The believed locked joints (a table as ``plant.locked_joints``); the model must have the "
         "plant's number of free joints; only with ``plant.urdf``.",
+        via="the believed URDF arm: model_urdf (translate.urdf_settings)",
     )
 
     def __post_init__(self) -> None:
@@ -358,10 +371,17 @@ class SinusoidTrajectory:
         (0.5, 0.3),
         '``kind = "sinusoid"``: qd_j = offset_j + sum_k amplitude_jk sin(frequency_jk t + '
         "phase_jk) (rad). A pair, or a 2 x n matrix for n sinusoids per joint.",
+        via="task.qd (desired.trajectory_settings)",
     )
-    frequency: Vector | Matrix = setting((1.0, 1.0), "rad/s, same shape as amplitude.")
-    phase: Vector | Matrix | None = setting(None, "rad, same shape as amplitude.")
-    offset: Vector = setting((0.0, 0.0), "rad, one per joint.")
+    frequency: Vector | Matrix = setting(
+        (1.0, 1.0), "rad/s, same shape as amplitude.", via="task.qd (desired.trajectory_settings)"
+    )
+    phase: Vector | Matrix | None = setting(
+        None, "rad, same shape as amplitude.", via="task.qd (desired.trajectory_settings)"
+    )
+    offset: Vector = setting(
+        (0.0, 0.0), "rad, one per joint.", via="task.qd (desired.trajectory_settings)"
+    )
 
     def __post_init__(self) -> None:
         amplitude = rows_value(self.amplitude, "task.qd.amplitude", None)
@@ -394,15 +414,22 @@ class SampledTrajectory:
         (),
         '``kind = "samples"``: sample times (s), from t <= 0 to t >= sim.T; qd through a cubic '
         "spline (SciPy's CubicSpline).",
+        via="task.qd (desired.trajectory_settings)",
     )
-    q: Matrix = setting((), "Samples of qd, one row [qd1, qd2] per time (rad).")
+    q: Matrix = setting(
+        (),
+        "Samples of qd, one row [qd1, qd2] per time (rad).",
+        via="task.qd (desired.trajectory_settings)",
+    )
     file: str | None = setting(
         None,
         "Instead of t and q: a CSV file with columns t, qd1, qd2 (relative to the TOML file).",
+        via="task.qd (desired.trajectory_settings)",
     )
     boundary: str = setting(
         "not-a-knot",
         "Spline end conditions: ``not-a-knot``, ``clamped`` or ``natural``.",
+        via="task.qd (desired.trajectory_settings)",
     )
 
     def __post_init__(self) -> None:
@@ -513,15 +540,17 @@ class TaskConfig:
     (in TOML a ``[task.qd]`` table with ``kind = "sinusoid"`` or ``"samples"``). The feedforward
     uses qd, dqd and ddqd (eq. 5 in full). dq0 = 0 is our choice (the paper is silent)."""
 
-    q0: Vector = setting((0.1598, 0.2257), "Initial joint angles (rad).")
+    q0: Vector = setting((0.1598, 0.2257), "Initial joint angles (rad).", core="task.q0")
     dq0: Vector = setting(
         (0.0, 0.0),
         "Initial joint velocities (rad/s). The paper is silent; 0 here.",
+        core="task.dq0",
     )
     qd: Trajectory = setting(
         (0.0, 0.0),
         "Desired trajectory: a constant set-point (rad), or a ``[task.qd]`` table (below and "
         ":doc:`/guide/tracking`).",
+        via="task.qd (desired.trajectory_settings)",
     )
 
     def __post_init__(self) -> None:

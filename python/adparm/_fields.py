@@ -24,10 +24,15 @@ Matrix = tuple[tuple[float, ...], ...]
 AUTO = "auto"
 
 
-def setting(default: Any, doc: str) -> Any:
-    """A field of a configuration section: its default and its meaning ``doc``
-    (reStructuredText, shown by the docs' configuration reference), in ``metadata["doc"]``."""
-    return dataclasses.field(default=default, metadata={"doc": doc})
+def setting(default: Any, doc: str, *, core: str | None = None, via: str | None = None) -> Any:
+    """A field of a configuration section: its default, its meaning ``doc`` (reStructuredText,
+    shown by the docs' configuration reference) and where the core takes it: ``core``, the
+    attribute of the core's Settings it is copied to as it is ("critic.eta_c";
+    translate.core_settings copies every such field), or ``via``, how the core gets it instead (a
+    conversion, a derived value, or not at all). In ``metadata``: "doc", "core", "via"."""
+    if (core is None) == (via is None):
+        raise TypeError("setting: give either core (the core attribute) or via (why not copied)")
+    return dataclasses.field(default=default, metadata={"doc": doc, "core": core, "via": via})
 
 
 # --- field checks: each names the field ("section.key") and what it expects -------------------

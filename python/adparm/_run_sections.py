@@ -42,17 +42,22 @@ class ExtrapolationConfig:
         0,
         "Number of extra states at which the HJB error enters the critic and actor laws; 0 is off "
         "(the paper). See :doc:`/guide/extrapolation`.",
+        core="extrapolation.points",
     )
     box: float | Vector = setting(
         1.0,
         "Half-widths of the sampling box in x = [e1; e2] (one number or 4).",
+        via="extrapolation.box, one per state (box_vector)",
     )
     mode: str = setting(
         "fixed",
         "``fixed`` (drawn once in [-box, box]), ``grid`` (m per axis, points = m^4) or ``local`` "
         "(redrawn every step around x(t)).",
+        via="extrapolation.mode, an enum (ExtrapolationMode)",
     )
-    seed: int = setting(0, "Seed of the draws (MT19937, as NumPy's RandomState).")
+    seed: int = setting(
+        0, "Seed of the draws (MT19937, as NumPy's RandomState).", core="extrapolation.seed"
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -100,18 +105,20 @@ class SimConfig:
     holds that number. simulate() refuses an explicit dt beyond the limit, naming the term, its
     rate and a dt that works. A URDF arm's T defaults to 10 s."""
 
-    T: float = setting(150.0, "Horizon (s).")
+    T: float = setting(150.0, "Horizon (s).", core="sim.T")
     dt: float | str = setting(
         1e-3,
         'RK4 step (s), or ``"auto"``: the largest 1, 2 or 5 x 10^k s (at most 1 ms) at which '
         "every fast rate of the closed loop times dt is at most 0.6 of RK4's limit 2.785 (a URDF "
         "arm's default). An explicit step beyond the limit is refused before the run.",
+        core="sim.dt",
     )
-    record_every: int = setting(10, "Record every n-th step.")
+    record_every: int = setting(10, "Record every n-th step.", core="sim.record_every")
     divergence_bound: float = setting(
         1e6,
         "The run stops as diverged when ``|q|``, ``|dq|``, ``|Wc|`` or ``|Wa|`` exceeds this "
         "value, or a state or recorded output is not finite.",
+        core="sim.divergence_bound",
     )
 
     def __post_init__(self) -> None:
@@ -154,6 +161,7 @@ class DiagnosticsConfig:
         'Verdict "ok" needs the critic weights, the actor weights and the applied policy (``rms '
         "|u_hat - u*| / rms |u*|`` over the last 10 % of the run) each within this relative "
         "distance of a known optimum; also the band of the summary's time within tolerance.",
+        via="not for the core: the verdict (adparm.truth)",
     )
 
     def __post_init__(self) -> None:

@@ -48,10 +48,12 @@ class CostConfig:
     Q: Matrix = setting(
         PAPER_Q,
         "4 x 4 state weight of r = x^T Q x + u^T R u (eqs. 10-11), symmetric positive definite.",
+        core="Q",
     )
     R: Matrix = setting(
         ((0.25, 0.0), (0.0, 0.25)),
         "2 x 2 input weight, symmetric positive definite.",
+        core="R",
     )
 
     def __post_init__(self) -> None:
@@ -76,12 +78,16 @@ class ControlConfig:
     alpha1: Matrix = setting(
         ((15.6, 10.6), (10.6, 10.4)),
         "Gain in e2 = de1 + alpha1 e1 (the paper's alpha); -alpha1 must be Hurwitz.",
+        core="control.alpha1",
     )
-    ks: float = setting(10.0, "RISE gain (eqs. 27-28). Not printed in the paper.")
-    alpha2: float = setting(1.0, "RISE gain. Not printed in the paper.")
+    ks: float = setting(
+        10.0, "RISE gain (eqs. 27-28). Not printed in the paper.", core="control.rise.ks"
+    )
+    alpha2: float = setting(1.0, "RISE gain. Not printed in the paper.", core="control.rise.alpha2")
     beta1: float = setting(
         0.5,
         "RISE gain; condition (29) bounds it from below (0.1 + 0.1/alpha2 = 0.2 < 0.5 here).",
+        core="control.rise.beta1",
     )
 
     def __post_init__(self) -> None:
@@ -115,13 +121,18 @@ class CriticConfig:
       actor) moves; with 1e-6 the gain decays and the critic can take minutes (docs: user guide,
       "Bellman-error extrapolation")."""
 
-    eta_c: float = setting(800.0, "Critic gain (eq. 23).")
-    nu: float = setting(1.0, "Normalisation 1 + nu omega^T Gamma omega (eq. 24, corrected).")
-    gamma0: float = setting(100.0, "Gamma(0) = gamma0 I; Gamma is reset to this value.")
+    eta_c: float = setting(800.0, "Critic gain (eq. 23).", core="critic.eta_c")
+    nu: float = setting(
+        1.0, "Normalisation 1 + nu omega^T Gamma omega (eq. 24, corrected).", core="critic.nu"
+    )
+    gamma0: float = setting(
+        100.0, "Gamma(0) = gamma0 I; Gamma is reset to this value.", core="critic.gamma0"
+    )
     epsilon_T: float | None = setting(
         None,
         "Reset Gamma when its smallest eigenvalue falls below epsilon_T (< gamma0). See "
         ":doc:`/paper`.",
+        via="critic.epsilon_T, resolved (Config.resolved_epsilon_T)",
     )
 
     def __post_init__(self) -> None:
@@ -151,11 +162,14 @@ class ActorConfig:
     positions of the extrapolation box (rates.check_positions). e2_margin is in the units of M
     (kg m^2); a URDF arm derives it (a tenth of lambda_min(M)) and weight_bound (10 ||W*||)."""
 
-    eta_a1: float = setting(0.01, "Actor gain on the HJB-error gradient (eq. 26).")
-    eta_a2: float = setting(1.0, "Actor gain pulling Wa towards Wc (eq. 26).")
+    eta_a1: float = setting(
+        0.01, "Actor gain on the HJB-error gradient (eq. 26).", core="actor.eta_a1"
+    )
+    eta_a2: float = setting(1.0, "Actor gain pulling Wa towards Wc (eq. 26).", core="actor.eta_a2")
     weight_bound: float = setting(
         100.0,
         "The projection keeps ||Wa|| <= weight_bound (the paper's proj{} has no printed bound).",
+        core="actor.weight_bound",
     )
     positive_e2: bool = setting(
         True,
@@ -163,10 +177,12 @@ class ActorConfig:
         "value positive definite at cos q2 = +-1 (the structured basis of a URDF arm: at qd(0), "
         "q(0) and the joint positions of the extrapolation box), which keeps learning away from "
         "the anti-stabilising HJB solution (see the truth guide).",
+        core="actor.positive_e2",
     )
     e2_margin: float = setting(
         0.01,
         "The smallest eigenvalue the e2 block keeps when positive_e2 is on (units of M).",
+        core="actor.e2_margin",
     )
 
     def __post_init__(self) -> None:
@@ -204,8 +220,13 @@ class InitConfig:
         None,
         "Wc(0), in the order of ``adparm.basis_names(config)``. Zero is inadmissible "
         "(:doc:`/paper`).",
+        via="critic_weights, resolved (Config.initial_weights)",
     )
-    actor_weights: Vector | None = setting(None, "Wa(0); it must stabilise the model.")
+    actor_weights: Vector | None = setting(
+        None,
+        "Wa(0); it must stabilise the model.",
+        via="actor_weights, resolved (Config.initial_weights)",
+    )
 
     def __post_init__(self) -> None:
         for key in ("critic_weights", "actor_weights"):
@@ -232,14 +253,22 @@ class ProbeConfig:
         "Probing torque probe_j = ramp(t) sum_k amplitude_jk sin(frequencies_k t + phases_jk), N "
         "m: one number (both joints), a pair (per joint) or a 2 x n matrix (per joint and "
         "sinusoid). See :doc:`/paper` (excitation).",
+        via="probe.amplitude, a joints x k matrix (amplitude_matrix)",
     )
-    until: float = setting(100.0, "Probing stops at this time (s); 0 turns it off.")
-    ramp: float = setting(0.0, "Linear fade-in time (s); 0 starts at full amplitude.")
-    frequencies: Vector = setting((1.0, 2.7, 5.3, 9.1), "rad/s, one per sinusoid.")
+    until: float = setting(
+        100.0, "Probing stops at this time (s); 0 turns it off.", core="probe.until"
+    )
+    ramp: float = setting(
+        0.0, "Linear fade-in time (s); 0 starts at full amplitude.", core="probe.ramp"
+    )
+    frequencies: Vector = setting(
+        (1.0, 2.7, 5.3, 9.1), "rad/s, one per sinusoid.", core="probe.frequencies"
+    )
     # None: phase k rad for sinusoid k, on both joints
     phases: Matrix | None = setting(
         None,
         "2 x n (rad). Equal phases on both joints keep each sinusoid along one torque direction.",
+        via="probe.phases, a joints x k matrix (phase_matrix)",
     )
 
     def __post_init__(self) -> None:
@@ -359,6 +388,7 @@ class ControllerConfig:
         "adp",
         "``adp`` (u = u_hat + probe; learns), ``rise`` (u = 0), ``pd`` (u = -(kp e1 + kd de1)) or "
         "``optimal`` (u* = -R^-1 e2). See :doc:`/guide/baselines`.",
+        via="controller.kind, an enum (ControllerKind)",
     )
     basis: str | tuple[str, ...] = setting(
         "augmented",
@@ -369,18 +399,27 @@ class ControllerConfig:
         "(:doc:`/guide/bases`). See also :doc:`/guide/tracking`. A URDF arm takes its own "
         "``structured`` basis by default (e1 products and e2^T M_b(q) e2 per base inertial "
         "parameter, :doc:`/guide/urdf-arms`) and refuses ``paper`` and ``augmented``.",
+        via="basis and basis_program (basis_family)",
     )
     degree: int | None = setting(
         None,
         "The highest (even) degree of the ``polynomial`` basis; only with ``basis = "
         '"polynomial"``.',
+        via="basis_program (basis_family)",
     )
     rise: bool = setting(
         True,
         'Add the RISE term mu (eqs. 27-28); must be true with ``kind = "rise"``.',
+        core="controller.rise",
     )
-    kp: float | Matrix = setting(50.0, "PD gain (a number times I, or 2 x 2), ``pd`` only.")
-    kd: float | Matrix = setting(10.0, "PD gain on de1, ``pd`` only.")
+    kp: float | Matrix = setting(
+        50.0,
+        "PD gain (a number times I, or 2 x 2), ``pd`` only.",
+        via="controller.kp, a matrix (gain_matrix)",
+    )
+    kd: float | Matrix = setting(
+        10.0, "PD gain on de1, ``pd`` only.", via="controller.kd, a matrix (gain_matrix)"
+    )
 
     def __post_init__(self) -> None:
         choice_value(self.kind, "controller.kind", CONTROLLER_KINDS)

@@ -3,13 +3,13 @@ run (and extrapolation_points, the core's points for it)."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 
 import adparm._core as _core
 
-from ._fields import ARM_KEYS
 from .basis_family import UrdfStructuredBasis, basis_for
 from .config import Config
 from .desired import trajectory_settings
@@ -19,20 +19,27 @@ __all__ = ["core_settings", "extrapolation_points", "urdf_settings"]
 
 
 def core_settings(config: Config) -> _core.Settings:
-    """The C++ core's Settings struct for ``config`` (passed whole to the core)."""
+    """The C++ core's Settings struct for ``config`` (passed whole to the core): every field that
+    declares a core attribute (``metadata["core"]``, adparm._fields.setting) is copied to it, and
+    the fields that say ``via`` are converted here."""
     if not isinstance(config, Config):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     settings = _core.Settings()
-    plant = _core.ArmParameters()
-    model = _core.ArmParameters()
-    if config.plant.urdf is None:
-        for key in ARM_KEYS:
-            setattr(plant, key, getattr(config.plant, key))
-        for key, value in config.model.resolve(config.plant).items():
-            setattr(model, key, value)
-    settings.plant = plant
-    settings.model = model
-    if config.plant.urdf is not None:  # a URDF arm: the two-link parameters are not used
+    two_link = config.plant.urdf is None
+    for section in dataclasses.fields(config):
+        if section.name.startswith("_"):  # Config._explicit: not a section
+            continue
+        values = getattr(config, section.name)
+        if section.name == "model":  # a key left out takes the plant's value
+            values = config.model.resolve(config.plant)
+        for field in dataclasses.fields(getattr(config, section.name)):
+            target = field.metadata["core"]
+            if target is None or (not two_link and target.split(".")[0] in ("plant", "model")):
+                continue  # a URDF arm: the two-link parameters are not used
+            value = values[field.name] if isinstance(values, dict) else getattr(values, field.name)
+            _set_attribute(settings, target.split("."), value)
+
+    if not two_link:
         settings.plant_urdf = urdf_settings(
             config.plant.urdf,
             config.plant.resolved_gravity,
@@ -41,47 +48,24 @@ def core_settings(config: Config) -> _core.Settings:
             config.plant.locked_joints,
         )
         settings.model_urdf = urdf_settings(**config.model.resolve_urdf(config.plant))
-    settings.disturbance = np.array(config.plant.disturbance)
-
-    task = _core.TaskSettings()
-    task.q0 = np.array(config.task.q0)
-    task.dq0 = np.array(config.task.dq0)
+    task = settings.task
     task.qd = trajectory_settings(config)
     settings.task = task
 
-    settings.Q = np.array(config.cost.Q)
-    settings.R = np.array(config.cost.R)
-
-    control = _core.ControlSettings()
-    control.alpha1 = np.array(config.control.alpha1)
-    rise = _core.RiseGains()
-    rise.ks, rise.alpha2, rise.beta1 = (
-        config.control.ks,
-        config.control.alpha2,
-        config.control.beta1,
-    )
-    control.rise = rise
-    settings.control = control
-
-    critic = _core.CriticSettings()
-    for key in ("eta_c", "nu", "gamma0"):
-        setattr(critic, key, getattr(config.critic, key))
+    critic = settings.critic
     critic.epsilon_T = config.resolved_epsilon_T
     settings.critic = critic
-    actor = _core.ActorSettings()
-    for key in ("eta_a1", "eta_a2", "weight_bound", "positive_e2", "e2_margin"):
-        setattr(actor, key, getattr(config.actor, key))
     if (
         config.actor.positive_e2
         and isinstance(basis_for(config), UrdfStructuredBasis)
         and config.controller.kind == "adp"
     ):  # where the structured basis keeps its e2 block positive (not in the paper)
+        actor = settings.actor
         actor.e2_check_positions = np.asfortranarray(check_positions(config).T)
-    settings.actor = actor
+        settings.actor = actor
 
-    controller = _core.ControllerSettings()
+    controller = settings.controller
     controller.kind = getattr(_core.ControllerKind, config.controller.kind)
-    controller.rise = config.controller.rise
     controller.kp = config.controller.gain_matrix("kp", config.dof)
     controller.kd = config.controller.gain_matrix("kd", config.dof)
     settings.controller = controller
@@ -90,29 +74,30 @@ def core_settings(config: Config) -> _core.Settings:
     program = family.core_program(config)
     if program is not None:
         settings.basis_program = program
-    extrapolation = _core.ExtrapolationSettings()
-    extrapolation.points = config.extrapolation.points
+    extrapolation = settings.extrapolation
     extrapolation.box = config.extrapolation.box_vector(config.dof)
     extrapolation.mode = getattr(_core.ExtrapolationMode, config.extrapolation.mode)
-    extrapolation.seed = config.extrapolation.seed
     settings.extrapolation = extrapolation
 
     settings.critic_weights = config.initial_weights("critic_weights")
     settings.actor_weights = config.initial_weights("actor_weights")
 
-    probe = _core.ProbeSettings()
+    probe = settings.probe
     probe.amplitude = config.probe.amplitude_matrix(config.dof)
-    probe.until = config.probe.until
-    probe.ramp = config.probe.ramp
-    probe.frequencies = np.array(config.probe.frequencies)
     probe.phases = config.probe.phase_matrix(config.dof)
     settings.probe = probe
-
-    sim = _core.SimSettings()
-    for key in ("T", "dt", "record_every", "divergence_bound"):
-        setattr(sim, key, getattr(config.sim, key))
-    settings.sim = sim
     return settings
+
+
+def _set_attribute(settings: Any, path: list[str], value: Any) -> None:
+    """settings.a.b.c = value for path [a, b, c] (a tuple as an array); each struct on the way is
+    read, changed and assigned back (the core's arms are copies on access)."""
+    if len(path) > 1:
+        part = getattr(settings, path[0])
+        _set_attribute(part, path[1:], value)
+        setattr(settings, path[0], part)
+    else:
+        setattr(settings, path[0], np.array(value) if isinstance(value, tuple) else value)
 
 
 def urdf_settings(
