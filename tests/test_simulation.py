@@ -224,3 +224,18 @@ def test_the_core_table_of_recorded_series_is_what_a_result_holds() -> None:
     assert list(result.to_dict())[: len(names)] == [
         n for w in ("one", "joints", "basis") for n, width in RECORDED_SERIES if width == w
     ]
+
+
+def test_an_approximation_warning_made_an_error_keeps_the_run() -> None:
+    # under filterwarnings = error the warning itself is raised (not re-worded as a failed
+    # diagnosis), and the finished run stays reachable from it
+    import warnings
+
+    config = adparm.paper_config().updated({"sim": {"T": 0.5}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", adparm.ApproximationWarning)
+        with pytest.raises(adparm.ApproximationWarning, match="not converged") as caught:
+            adparm.simulate(config)
+    result = caught.value.result
+    assert isinstance(result, adparm.SimulationResult) and result.status == "finished"
+    assert result.t[-1] == pytest.approx(0.5)

@@ -303,7 +303,11 @@ def make_result(run: _core.Simulation, config: Config, wall_time: float) -> Simu
 class ApproximationWarning(UserWarning):
     """A learning run whose critic is not a good approximation of V*: the basis cannot represent
     V* (the HJB residual of the final weights is large off the trajectory while small along it),
-    or learning has not converged. The message says which and what to try."""
+    or learning has not converged. The message says which and what to try.
+
+    Where warnings are made errors (``warnings.simplefilter("error")``, pytest's
+    ``filterwarnings = error``), :func:`adparm.simulate` raises it, and its ``result`` attribute
+    holds the finished run."""
 
 
 def warn_if_approximate(result: SimulationResult, stacklevel: int = 3) -> None:

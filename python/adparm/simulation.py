@@ -23,6 +23,7 @@ from .result import (
     ARRAYS_1,
     ARRAYS_2,
     ARRAYS_N,
+    ApproximationWarning,
     SimulationDiverged,
     SimulationInterrupted,
     SimulationResult,
@@ -350,6 +351,9 @@ def _simulate(config: Config, progress: bool, diagnose: bool) -> SimulationResul
     if diagnose:
         try:
             warn_if_approximate(result)
+        except ApproximationWarning as warning:  # warnings made errors (the caller's filter)
+            warning.result = result  # type: ignore[attr-defined] - the finished run stays reachable
+            raise
         except Exception as error:  # noqa: BLE001 - the diagnosis never loses a finished run
             warnings.warn(
                 "adparm: " + post_run_failure("the diagnosis (adparm.truth.diagnose)", error),
