@@ -66,6 +66,9 @@ class BasisFamily(Protocol):
     #: Whether every function and its d phi / dx are finite at every state (a built-in basis);
     #: else :meth:`nonfinite` finds the first that is not.
     finite_everywhere: bool
+    #: Whether the core runs it on the dynamic-size (n-joint) loop rather than the two-link
+    #: arm's fixed-size one (cpp/include/adparm/any_simulation.hpp, visit_loop).
+    dynamic_sizes: bool
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         """The functions' names, in the order of the weights."""
@@ -102,6 +105,7 @@ class _CoreBasis:
 
     core_kind = "augmented"
     finite_everywhere = True
+    dynamic_sizes = False
     function_names: tuple[str, ...] = BASIS_NAMES
 
     def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
@@ -198,6 +202,7 @@ class UrdfStructuredBasis:
 
     core_kind = "structured"
     finite_everywhere = True
+    dynamic_sizes = True
 
     def names(self, config: ConfigSchema) -> tuple[str, ...]:
         return tuple(config_arm(config, model=True).structured_names())
@@ -244,6 +249,7 @@ class ExpressionFamily:
 
     core_kind = "expression"
     finite_everywhere = False  # sqrt or log of a negative value, 1/0, ...
+    dynamic_sizes = True
 
     def nonfinite(self, config: ConfigSchema, states: Any, qd: Any) -> str | None:
         return config.controller.expression_basis(config.dof).nonfinite(states, qd)

@@ -15,6 +15,7 @@ from tqdm.auto import tqdm
 
 import adparm._core as _core
 
+from .basis_family import basis_for
 from .config import Config
 from .desired import desired_state
 from .divergence import divergence_causes
@@ -157,9 +158,9 @@ def _aligned(size: int) -> int:
 
 
 def _dynamic_sizes(config: Config) -> bool:
-    """Whether ``config`` runs on the core's dynamic-size (n-joint) loop: a URDF arm or an
-    expression basis (cpp/include/adparm/simulation.hpp)."""
-    return config.plant.urdf is not None or config.controller.is_expression
+    """Whether ``config`` runs on the core's dynamic-size (n-joint) loop (its basis family says:
+    adparm.basis_family, the one place that picks it)."""
+    return basis_for(config).dynamic_sizes
 
 
 def _point_bytes(config: Config) -> int:
