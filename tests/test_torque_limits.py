@@ -90,6 +90,31 @@ def test_the_applied_torque_never_exceeds_the_limits_urdf(limits, q0) -> None:
     assert_applied_within(result, np.array(limits))
 
 
+@pytest.mark.parametrize("anti_windup", [True, False])
+@pytest.mark.parametrize("kind", ["adp", "rise", "pd"])
+def test_clip_and_anti_windup_match_numpy(kind, anti_windup) -> None:
+    """The core's right-hand side against tests/numpy_reference.py (np.clip, and dnu set to 0
+    where it pushes a clipped torque further), at random states where some torques are clipped
+    and others are not."""
+    from test_closed_loop import compare_right_hand_sides, random_config, random_state
+
+    rng = np.random.default_rng(24)
+    clipped = free = 0
+    for _ in range(4):
+        config = random_config(rng, kind).updated(
+            {
+                "plant": {"torque_limits": list(rng.uniform(1.0, 40.0, 2))},
+                "control": {"anti_windup": anti_windup},
+            }
+        )
+        compare_right_hand_sides(config, rng, 12)
+        for _ in range(12):
+            outputs = _core.closed_loop_derivative(core_settings(config), 1.0, random_state(rng))[1]
+            clipped += int(np.sum(outputs["tau"] != outputs["tau_commanded"]))
+            free += int(np.sum(outputs["tau"] == outputs["tau_commanded"]))
+    assert clipped > 0 and free > 0  # both branches are compared
+
+
 def test_some_torque_is_clipped_in_the_property_tests_range() -> None:
     """The property tests above can fail: a limit of 0.5 N m is reached on both arms."""
     result = run(two_link(0.5, plant={"torque_limits": 0.5}))

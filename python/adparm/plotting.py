@@ -92,6 +92,12 @@ def _joint_panel(
 ) -> Panel:
     def panel(axes: Axes) -> None:
         if note:  # above the panel, off the data
+            title = axes.get_title()  # the first panel holds the figure's title (draw): above
+            if title:
+                import matplotlib
+
+                axes.figure.suptitle(title, fontsize=matplotlib.rcParams["axes.titlesize"])
+                axes.set_title("")
             axes.set_title(note, fontsize=7.5, loc="left", color="0.25")
         for j in range(values.shape[1]):  # one line per joint
             y = np.maximum(np.abs(values[:, j]), FLOOR) if log else values[:, j]
@@ -115,14 +121,21 @@ LIMIT_SCALE = 2.0
 
 
 def _draw_limits(axes: Axes, values: np.ndarray, limits: np.ndarray) -> None:
-    """Joint j's +-limit as thin dashed lines in the joint's colour (one legend entry per joint),
-    for the limits within LIMIT_SCALE of the largest |value| (torque_note names the others)."""
+    """Each +-limit as thin dashed lines, in its joint's colour (grey when several joints share
+    it; one legend entry per value), for the limits within LIMIT_SCALE of the largest |value|
+    (torque_note names the others)."""
     largest = float(np.max(np.abs(values))) if values.size else 0.0
-    for j, limit in enumerate(limits):
-        if np.isfinite(limit) and limit <= LIMIT_SCALE * largest:
-            color = _joint_style(j)["color"]
-            for sign, name in ((1.0, f"$\\pm$limit$_{j + 1}$"), (-1.0, None)):
-                axes.axhline(sign * limit, color=color, ls=(0, (4, 3)), lw=0.8, label=name)
+    shown = [j for j, v in enumerate(limits) if np.isfinite(v) and v <= LIMIT_SCALE * largest]
+    for limit in dict.fromkeys(float(limits[j]) for j in shown):  # each value once, in order
+        joints = [j for j in shown if limits[j] == limit]
+        color = _joint_style(joints[0])["color"] if len(joints) == 1 else "0.4"
+        name = f"limit$_{{{','.join(str(j + 1) for j in joints)}}}$ $\\pm${limit:.3g}"
+        for sign, label in ((1.0, name), (-1.0, None)):
+            axes.axhline(sign * limit, color=color, ls=(0, (5, 2)), lw=0.9, alpha=0.7, label=label)
+
+
+def _joint_list(joints: list[int]) -> str:
+    return ("joint " if len(joints) == 1 else "joints ") + ", ".join(str(j + 1) for j in joints)
 
 
 def torque_note(result: SimulationResult) -> str | None:
@@ -133,18 +146,14 @@ def torque_note(result: SimulationResult) -> str | None:
     if limits.size == 0:
         return None
     largest = float(np.max(np.abs(result.tau))) if result.tau.size else 0.0
-    seconds = result.saturated_time
-    clipped = [f"{j + 1}: {v:.3g} s" for j, v in enumerate(seconds) if v > 0.0]
-    text = "dashed: torque limits; clipped " + (
-        "on joint " + ", ".join(clipped) if clipped else "never"
+    clipped = [f"{j + 1}: {v:.3g} s" for j, v in enumerate(result.saturated_time) if v > 0.0]
+    text = "dashed: torque limits; " + (
+        "clipped on joint " + ", ".join(clipped) if clipped else "never clipped"
     )
-    far = [
-        f"{j + 1}: {v:.3g}"
-        for j, v in enumerate(limits)
-        if np.isfinite(v) and v > LIMIT_SCALE * largest
-    ]
-    if far:
-        text += "; off the scale, limits (N m) of joint " + ", ".join(far)
+    far = [j for j, v in enumerate(limits) if np.isfinite(v) and v > LIMIT_SCALE * largest]
+    for limit in dict.fromkeys(float(limits[j]) for j in far):
+        same = [j for j in far if limits[j] == limit]
+        text += f"; off the scale: {_joint_list(same)} at $\\pm${limit:.3g} N m"
     return text
 
 
