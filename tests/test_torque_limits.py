@@ -349,3 +349,12 @@ def test_the_torque_panel_draws_the_limits() -> None:
     import matplotlib.pyplot as plt
 
     plt.close(figure)
+
+
+def test_sweep_rows_carry_the_saturated_time() -> None:
+    base = two_link(1.0, sim={"record_every": 10})
+    table = adparm.sweep(base, {"plant.torque_limits": ["none", [60.0, 15.0]]}, threads=1)
+    free, limited = table.rows
+    assert free["saturated_time"] == [0.0, 0.0]
+    assert all(v > 0.0 for v in limited["saturated_time"])
+    assert "clipped" in limited["verdict"] and "clipped" not in free["verdict"]
