@@ -322,7 +322,7 @@ def test_verdict_and_summary_say_when_the_torque_was_clipped() -> None:
     from adparm.summary import summary_markdown
 
     text = summary_markdown(summary)
-    assert "- torque limits [60, 15] N m: saturated joint 1" in text
+    assert "- torque limits 60, 15 N m: saturated joint 1" in text
 
 
 def test_no_clip_no_word() -> None:

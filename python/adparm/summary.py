@@ -435,7 +435,9 @@ def summary_markdown(summary: dict[str, Any]) -> str:
     if limits is not None:
         saturated = summary.get("saturated_time") or []
         lines.append(
-            f"- torque limits {_fmt(limits)} N m: saturated "
+            "- torque limits "
+            + ", ".join("none" if v is None else f"{v:g}" for v in limits)
+            + " N m: saturated "
             + ", ".join(f"joint {i + 1} {_fmt(v)} s" for i, v in enumerate(saturated))
         )
     for problem in summary.get("post_run_errors") or ():
