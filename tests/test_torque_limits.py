@@ -358,3 +358,16 @@ def test_sweep_rows_carry_the_saturated_time() -> None:
     assert free["saturated_time"] == [0.0, 0.0]
     assert all(v > 0.0 for v in limited["saturated_time"])
     assert "clipped" in limited["verdict"] and "clipped" not in free["verdict"]
+
+
+def test_saturated_time_does_not_depend_on_chunks() -> None:
+    settings = core_settings(two_link(1.0, plant={"torque_limits": [60.0, 15.0]}))
+    whole, chunked = _core.Simulation(settings), _core.Simulation(settings)
+    whole.advance(whole.steps)
+    chunk = 7
+    while chunked.status == "running":
+        chunked.advance(chunk)
+        chunk = 20 - chunk
+    assert whole.status == chunked.status == "finished"
+    assert np.all(whole.saturated_time > 0.0)
+    np.testing.assert_array_equal(whole.saturated_time, chunked.saturated_time)
