@@ -12,6 +12,10 @@
 // One machine-readable line per measurement (key=value, space separated):
 //   bench=paper_loop points=N steps=n repeats=3 ns_per_step=x steps_per_second=y
 //     ns_per_point_step=z heap_allocations=a final_critic_error=e status=finished
+//   bench=limited_loop limits=60,15 steps=n repeats=3 ns_per_step=x unlimited_ns_per_step=y
+//     ratio=x/y heap_allocations=0 status=finished
+//     the paper loop with actuator limits (Settings::torque_limits) against it without,
+//     alternating in the same invocation
 //   bench=dynamic_two_link points=N steps=n repeats=3 ns_per_step=x heap_allocations=0 ...
 //     the same runs through the dynamic-size loop (Settings::dynamic_sizes)
 //   bench=expression_quadratic functions=10 points=0 steps=n repeats=3 ns_per_step=x
@@ -452,6 +456,16 @@ void check_runs(double horizon) {
               s.extrapolation.seed = 7;
             }),
             finished);
+  check_run("torque_limits", variant([](Settings& s) {
+              s.torque_limits = adparm::Vec2(60.0, 15.0);
+              s.sim.record_every = 3;
+            }),
+            finished);
+  check_run("torque_limits_dynamic", variant([](Settings& s) {
+              s.torque_limits = adparm::Vec2(60.0, std::numeric_limits<double>::infinity());
+              s.dynamic_sizes = true;
+            }),
+            finished);
   check_run("grid_points", variant([](Settings& s) {
               s.extrapolation.points = 16;
               s.extrapolation.mode = adparm::ExtrapolationMode::grid;
@@ -859,6 +873,34 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
         best.heap_allocations, best.critic_error, status_name(best.status));
     std::fflush(stdout);
     all_finished = all_finished && best.status == adparm::RunStatus::finished;
+  }
+
+  // Actuator limits (Settings::torque_limits, closed_loop.hpp): the paper loop with limits of 60
+  // and 15 N m, which its probe drives both joints into about 40 % of the time, against the same
+  // loop without limits, alternating, best of `repeats` each; no allocation per step.
+  {
+    adparm::Settings limited = adparm::paper_settings();
+    limited.sim.T = horizon;
+    limited.torque_limits = adparm::Vec2(60.0, 15.0);
+    adparm::Settings unlimited = limited;
+    unlimited.torque_limits.resize(0);
+    LoopTiming best_limited, best_unlimited;
+    for (int r = 0; r < repeats; ++r) {
+      const LoopTiming free_run = time_loop(unlimited);
+      const LoopTiming limited_run = time_loop(limited);
+      if (r == 0 || free_run.seconds < best_unlimited.seconds) best_unlimited = free_run;
+      if (r == 0 || limited_run.seconds < best_limited.seconds) best_limited = limited_run;
+    }
+    const double limited_ns = 1e9 * best_limited.seconds / best_limited.steps;
+    const double unlimited_ns = 1e9 * best_unlimited.seconds / best_unlimited.steps;
+    std::printf(
+        "bench=limited_loop limits=60,15 steps=%ld repeats=%d ns_per_step=%.1f "
+        "unlimited_ns_per_step=%.1f ratio=%.3f heap_allocations=%ld status=%s\n",
+        best_limited.steps, repeats, limited_ns, unlimited_ns, limited_ns / unlimited_ns,
+        best_limited.heap_allocations, status_name(best_limited.status));
+    std::fflush(stdout);
+    all_finished = all_finished && best_limited.status == adparm::RunStatus::finished;
+    all_finished = all_finished && best_limited.heap_allocations <= 0;
   }
 
   // The same paper loop through the dynamic-size path (n and K = Eigen::Dynamic, bounded types,

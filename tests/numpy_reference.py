@@ -395,7 +395,17 @@ def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None =
     # torque tau = h + mu - u, h of eq. (5) in full on the believed model
     Mm, Cm, Gm, Fm = arm_terms(model_parameters(config), q, dq)
     h = Mm @ (ddqd + alpha1 @ (dqd - dq)) + Cm @ (dqd + alpha1 @ e1) + Gm + Fm
-    tau = h + mu - u
+    tau_commanded = h + mu - u
+    # the drive's clip to plant.torque_limits, and RISE's conditional integration meanwhile
+    tau = tau_commanded
+    limits = config.plant.limit_vector(2)
+    if limits.size:
+        tau = np.clip(tau_commanded, -limits, limits)
+        if config.control.anti_windup and config.controller.rise:
+            pushing = ((tau_commanded > limits) & (dnu > 0)) | (
+                (tau_commanded < -limits) & (dnu < 0)
+            )
+            dnu = np.where(pushing, 0.0, dnu)
 
     # plant, eq. (1)
     Mp, Cp, Gp, Fp = arm_terms(plant_parameters(config), q, dq)
@@ -410,6 +420,7 @@ def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None =
         "e1": e1,
         "e2": e2,
         "tau": tau,
+        "tau_commanded": tau_commanded,
         "u": u,
         "u_hat": u_hat,
         "mu": mu,

@@ -28,11 +28,13 @@ from ._fields import (
     choice_value,
     friction_value,
     key_text,
+    limit_vector,
     matrix_value,
     read_text_file,
     rows_value,
     scalar_value,
     setting,
+    torque_limits_value,
     value_text,
     vector_value,
 )
@@ -231,6 +233,15 @@ class PlantConfig:
     disturbance: Vector = setting(
         (0.1, 0.1), "tau_d = [d1 sin t, d2 cos t] (N m).", core="disturbance"
     )
+    torque_limits: float | Vector | str | None = setting(
+        None,
+        "Actuator torque limits |tau_i| <= limit_i (N m; not in the paper): one number, one per "
+        'joint (``inf``: none on that joint) or ``"none"``. The drive applies the torque clipped; '
+        "RISE does not wind up (``control.anti_windup``); the result records the saturated time. "
+        "Left out: none on the two-link arm, the URDF's ``<limit effort>`` on a URDF arm (0 or "
+        "none given: no limit there). ``[model]`` has none. See :doc:`/guide/torque-limits`.",
+        via="torque_limits: 'none' empty, one number for every joint (PlantConfig.limit_vector)",
+    )
     urdf: str | None = setting(
         None,
         "A URDF file of any fixed-base serial arm (through Pinocchio) instead of the two-link "
@@ -269,6 +280,8 @@ class PlantConfig:
             object.__setattr__(self, key, friction_value(getattr(self, key), f"plant.{key}"))
         disturbance = vector_value(self.disturbance, "plant.disturbance", None)
         object.__setattr__(self, "disturbance", disturbance)
+        limits = torque_limits_value(self.torque_limits, "plant.torque_limits")
+        object.__setattr__(self, "torque_limits", limits)
         if self.urdf is not None:
             object.__setattr__(self, "urdf", urdf_path(self.urdf, "plant.urdf"))
             urdf_info(self.urdf, "plant.urdf", self.locked_joints)
@@ -276,6 +289,10 @@ class PlantConfig:
             object.__setattr__(self, "gravity", vector_value(self.gravity, "plant.gravity", 3))
         check_urdf_arm(self, "plant")
         check_arm(self.p1, self.p2, self.p3, "plant")
+
+    def limit_vector(self, n: int) -> np.ndarray:
+        """The limits of the n joints (inf: none there); empty without limits (the core's)."""
+        return limit_vector(self.torque_limits, n)
 
     @property
     def resolved_gravity(self) -> Vector:

@@ -294,8 +294,9 @@ class TaskSettings:
         ...
 class ControlSettings:
     """
-    alpha1 (n, n) and the RISE gains.
+    alpha1 (n, n), the RISE gains and anti_windup.
     """
+    anti_windup: bool
     rise: RiseGains
     def __init__(self) -> None:
         ...
@@ -581,7 +582,7 @@ class UrdfArmSettings:
         ...
 class Settings:
     """
-    All settings of one run. Eigen members and the arms (plant, model, plant_urdf, model_urdf) are copied on access: assign them whole. Q (2 n, 2 n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,); n = 2 joints for the two-link arm, K the basis size. dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) loop.
+    All settings of one run. Eigen members and the arms (plant, model, plant_urdf, model_urdf) are copied on access: assign them whole. Q (2 n, 2 n), R (n, n), disturbance (n,), torque_limits (n, or empty: none), critic_weights and actor_weights (K,); n = 2 joints for the two-link arm, K the basis size. dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) loop.
     """
     actor: ActorSettings
     basis: BasisKind
@@ -662,6 +663,12 @@ class Settings:
         """
     @plant_urdf.setter
     def plant_urdf(self, arg1: UrdfArmSettings) -> None:
+        ...
+    @property
+    def torque_limits(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @torque_limits.setter
+    def torque_limits(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
         ...
 class UrdfArm:
     """
@@ -876,6 +883,11 @@ class Simulation:
     def reset_times(self) -> list[float]:
         ...
     @property
+    def saturated_time(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        """
+        Per joint, the time (s) its commanded torque lay beyond its limit (plant.torque_limits), counted per step from the step's start.
+        """
+    @property
     def state(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
         ...
     @property
@@ -960,5 +972,5 @@ def simulate_open_loop(parameters: ArmParameters, disturbance: typing.Annotated[
     """
     RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4).
     """
-RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'))
+RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('tau_commanded', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'))
 STATE_SIZE: int = 87

@@ -348,6 +348,53 @@ def friction_value(value: Any, name: str) -> float | Vector:
     return vector_value(value, name, None)
 
 
+#: plant.torque_limits = "none": the drive applies any torque.
+NO_LIMIT = "none"
+
+
+def torque_limits_value(value: Any, name: str) -> float | Vector | str | None:
+    """Torque limits: None (left out), "none", one number > 0 or a list of numbers > 0 (inf: no
+    limit on that joint; checked against n with the other sizes)."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if value.strip().lower() == NO_LIMIT:
+            return NO_LIMIT
+        raise ValueError(
+            f'{name}: expected a number, a list of numbers (N m) or "none", got {value_text(value)}'
+        )
+    numbers = [value] if is_number(value) else value
+    if isinstance(numbers, Mapping) or np.ndim(numbers) != 1:
+        raise TypeError(
+            f"{name}: expected a number or a list of numbers (N m), got {value_text(value)}"
+        )
+    limits = []
+    for i, item in enumerate(numbers):
+        where = "" if is_number(value) else f" (joint {i + 1})"
+        if not is_number(item):
+            raise TypeError(f"{name}: expected numbers (N m){where}, got {value_text(item)}")
+        try:
+            limit = float(item)
+        except OverflowError:  # an int beyond the float range: no limit in practice
+            limit = math.inf
+        if not limit > 0.0:  # NaN too
+            raise ValueError(
+                f"{name}: a limit must be > 0 N m (inf: no limit){where}, got {value_text(item)}"
+            )
+        limits.append(limit)
+    return limits[0] if is_number(value) else tuple(limits)
+
+
+def limit_vector(limits: float | Vector | str | None, n: int) -> np.ndarray:
+    """Torque limits of n joints as an array (inf: no limit on that joint), or an empty array
+    when there are none (left out or "none": the core's Settings.torque_limits)."""
+    if limits is None or limits == NO_LIMIT:
+        return np.zeros(0)
+    if isinstance(limits, float):
+        return np.full(n, limits)
+    return np.array(limits, dtype=float)
+
+
 #: Limits on what a run may ask for: sinusoids of the probing signal, trajectory samples, and the
 #: size of the files read (a configuration, a samples file).
 MAX_FREQUENCIES = 1_000

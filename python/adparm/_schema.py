@@ -155,6 +155,11 @@ class ConfigSchema:
                 raise TypeError(
                     f"[{section}]: expected a table of keys, got {type(values).__name__}"
                 )
+            if section == "model" and "torque_limits" in values:
+                raise ValueError(
+                    "model.torque_limits: a torque limit belongs to the plant's actuators; set "
+                    "plant.torque_limits (the controller has no limits of its own)"
+                )
             check_keys(values, [f.name for f in dataclasses.fields(SECTIONS[section])], section)
             for key, value in values.items():
                 check_depth(value, f"{section}.{key}")
@@ -316,6 +321,8 @@ def check_shape(value: Any, name: str, shape: tuple[int, ...], n: int) -> None:
 def check_sizes(config: ConfigSchema, n: int) -> None:
     """Every sized setting against the joint count n (ValueError naming the field)."""
     check_shape(config.plant.disturbance, "plant.disturbance", (n,), n)
+    if isinstance(config.plant.torque_limits, tuple):
+        check_shape(config.plant.torque_limits, "plant.torque_limits", (n,), n)
     for section in ("plant", "model"):
         for key in ("coulomb", "viscous"):
             value = getattr(getattr(config, section), key)

@@ -89,6 +89,14 @@ class ControlConfig:
         "RISE gain; condition (29) bounds it from below (0.1 + 0.1/alpha2 = 0.2 < 0.5 here).",
         core="control.rise.beta1",
     )
+    anti_windup: bool = setting(
+        True,
+        "Not in the paper: while a joint's torque is clipped at its limit "
+        "(``plant.torque_limits``), RISE's integral nu stops integrating in the direction that "
+        "pushes the torque further into the limit (conditional integration); false lets it wind "
+        "up. Does nothing without limits. See :doc:`/guide/torque-limits`.",
+        core="control.anti_windup",
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha1", square_matrix(self.alpha1, "control.alpha1"))
@@ -97,6 +105,9 @@ class ControlConfig:
             object.__setattr__(
                 self, key, scalar_value(getattr(self, key), f"control.{key}", minimum=0.0)
             )
+        object.__setattr__(
+            self, "anti_windup", boolean_value(self.anti_windup, "control.anti_windup")
+        )
 
 
 #: The covariance-reset threshold used when critic.epsilon_T is left out (None).

@@ -88,13 +88,22 @@ def _joint_panel(
     log: bool = False,
     annotate_probe: bool = False,
     note: str | None = None,
+    limits: np.ndarray | None = None,
 ) -> Panel:
     def panel(axes: Axes) -> None:
         if note:  # above the panel, off the data
+            title = axes.get_title()  # the first panel holds the figure's title (draw): above
+            if title:
+                import matplotlib
+
+                axes.figure.suptitle(title, fontsize=matplotlib.rcParams["axes.titlesize"])
+                axes.set_title("")
             axes.set_title(note, fontsize=7.5, loc="left", color="0.25")
         for j in range(values.shape[1]):  # one line per joint
             y = np.maximum(np.abs(values[:, j]), FLOOR) if log else values[:, j]
             axes.plot(result.t, y, lw=1.0, label=label.format(j=j + 1), **_joint_style(j))
+        if limits is not None:
+            _draw_limits(axes, values, limits)
         if log:
             axes.set_yscale("log")
         axes.set_ylabel(ylabel)
@@ -104,6 +113,48 @@ def _joint_panel(
         legend_outside(axes)
 
     return panel
+
+
+#: A torque limit is drawn when it lies within this factor of the panel's largest |tau|; one
+#: further out would flatten the torques, and the panel's note gives it instead.
+LIMIT_SCALE = 2.0
+
+
+def _draw_limits(axes: Axes, values: np.ndarray, limits: np.ndarray) -> None:
+    """Each +-limit as thin dashed lines, in its joint's colour (grey when several joints share
+    it; one legend entry per value), for the limits within LIMIT_SCALE of the largest |value|
+    (torque_note names the others)."""
+    largest = float(np.max(np.abs(values))) if values.size else 0.0
+    shown = [j for j, v in enumerate(limits) if np.isfinite(v) and v <= LIMIT_SCALE * largest]
+    for limit in dict.fromkeys(float(limits[j]) for j in shown):  # each value once, in order
+        joints = [j for j in shown if limits[j] == limit]
+        color = _joint_style(joints[0])["color"] if len(joints) == 1 else "0.4"
+        name = f"limit$_{{{','.join(str(j + 1) for j in joints)}}}$ $\\pm${limit:.3g}"
+        for sign, label in ((1.0, name), (-1.0, None)):
+            axes.axhline(sign * limit, color=color, ls=(0, (5, 2)), lw=0.9, alpha=0.7, label=label)
+
+
+def _joint_list(joints: list[int]) -> str:
+    return ("joint " if len(joints) == 1 else "joints ") + ", ".join(str(j + 1) for j in joints)
+
+
+def torque_note(result: SimulationResult) -> str | None:
+    """The note over the torque panel of :func:`plot_torques` when the run has torque limits:
+    the time each joint was clipped, and the limits too far beyond the torques to be drawn."""
+    config = result.config
+    limits = config.plant.limit_vector(config.dof)
+    if limits.size == 0:
+        return None
+    largest = float(np.max(np.abs(result.tau))) if result.tau.size else 0.0
+    clipped = [f"{j + 1}: {v:.3g} s" for j, v in enumerate(result.saturated_time) if v > 0.0]
+    text = "dashed: torque limits; " + (
+        "clipped on joint " + ", ".join(clipped) if clipped else "never clipped"
+    )
+    far = [j for j, v in enumerate(limits) if np.isfinite(v) and v > LIMIT_SCALE * largest]
+    for limit in dict.fromkeys(float(limits[j]) for j in far):
+        same = [j for j in far if limits[j] == limit]
+        text += f"; off the scale: {_joint_list(same)} at $\\pm${limit:.3g} N m"
+    return text
 
 
 def plot_errors(
@@ -145,6 +196,10 @@ def plot_torques(
 ) -> Figure:
     """The applied joint torques tau and the probing signal.
 
+    With torque limits (``plant.torque_limits``) the torque panel draws each joint's +-limit as
+    dashed lines in its colour, and a note over it (:func:`torque_note`) gives the time each joint
+    was clipped (and a limit too far beyond the torques to draw).
+
     The probe's panel is drawn on its own scale: with the paper's probe it is several times
     larger than tau. A note over it (:func:`probe_note`) says why: the probe is part of u and
     tau = h_hat + mu - u, and the feedforward h_hat and RISE's mu follow the motion it causes and
@@ -163,9 +218,17 @@ def plot_torques(
     -------
     matplotlib.figure.Figure
     """
+    config = result.config
+    limits = config.plant.limit_vector(config.dof)
     panels = [
         _joint_panel(
-            result, result.tau, "torque $\\tau$ (N m)", "$\\tau_{j}$", annotate_probe=True
+            result,
+            result.tau,
+            "torque $\\tau$ (N m)",
+            "$\\tau_{j}$",
+            annotate_probe=True,
+            note=torque_note(result),
+            limits=limits if limits.size else None,
         ),
         _joint_panel(
             result, result.probe, "probing signal (N m)", "probe$_{j}$", note=probe_note(result)

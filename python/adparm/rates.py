@@ -105,7 +105,8 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF:
 
     - task: qd = 0 clipped into the joint limits, q0 = qd + 0.1 rad (- 0.1 at an upper limit),
-      dq0 = 0; plant.disturbance 0.1 N m per joint;
+      dq0 = 0; plant.disturbance 0.1 N m per joint; plant.torque_limits the URDF's
+      ``<limit effort>`` (0 or none given: no limit on that joint);
     - control.alpha1 = 2 I; control.ks = max(0, RISE_RATE lambda_min - 1), so that RISE's rate
       (ks + 1) / lambda_min is RISE_RATE = 30/s, or 1 / lambda_min where ks = 0 is still faster;
     - cost (when neither Q nor R is given): R = diag(1 / (POLICY_RATE M_ii(qd))) (the optimal
@@ -157,6 +158,16 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         q0 = np.array(config.task.q0, dtype=float)
     put("task.dq0", (0.0,) * n, "at rest")
     put("plant.disturbance", (0.1,) * n, "0.1 N m per joint, as the paper's")
+    effort = np.asarray(config_arm(config).limits["effort"], dtype=float)
+    effort = np.where(effort > 0.0, effort, np.inf)  # 0 or none given: no limit
+    if np.all(np.isinf(effort)):
+        put("plant.torque_limits", "none", "the URDF gives no <limit effort> (or 0)")
+    else:
+        put(
+            "plant.torque_limits",
+            tuple(float(v) for v in effort),
+            "the URDF's <limit effort> (0 or none given: no limit on that joint)",
+        )
     alpha1 = ALPHA1 * eye if "control.alpha1" not in explicit else np.array(config.control.alpha1)
     put("control.alpha1", tuple(map(tuple, alpha1)), "2 I: e1 decays at 2/s")
     ks = max(0.0, RISE_RATE * smallest - 1.0)

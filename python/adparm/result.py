@@ -89,7 +89,10 @@ class SimulationResult:
     e1, e2 : ndarray, shape (n, 2)
         Tracking error e1 = qd - q (rad) and filtered error e2 = de1 + alpha1 e1 (rad/s).
     tau : ndarray, shape (n, 2)
-        Applied torque tau = h_hat + mu - u (N m).
+        Applied torque (N m): the commanded torque clipped to ``plant.torque_limits``.
+    tau_commanded : ndarray, shape (n, 2)
+        The controller's torque h_hat + mu - u before the clip (N m; equal to ``tau`` without
+        limits).
     u : ndarray, shape (n, 2)
         The controller's input (adp: u_hat + probe).
     u_hat : ndarray, shape (n, 2)
@@ -114,6 +117,9 @@ class SimulationResult:
         ``"finished"``, ``"diverged"``, ``"interrupted"`` or ``"running"``.
     wall_time : float
         Seconds spent in the core.
+    saturated_time : ndarray, shape (joints,)
+        Seconds each joint's commanded torque lay beyond its limit (``plant.torque_limits``),
+        counted per RK4 step by the core (zeros without limits).
     """
 
     t: np.ndarray
@@ -123,6 +129,7 @@ class SimulationResult:
     e1: np.ndarray
     e2: np.ndarray
     tau: np.ndarray
+    tau_commanded: np.ndarray
     u: np.ndarray
     u_hat: np.ndarray
     mu: np.ndarray
@@ -135,6 +142,7 @@ class SimulationResult:
     config: Config
     status: str = "finished"
     wall_time: float = field(default=float("nan"))
+    saturated_time: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
@@ -154,6 +162,15 @@ class SimulationResult:
         resets = np.array(self.covariance_reset_times, dtype=float).reshape(-1)
         resets.flags.writeable = False
         object.__setattr__(self, "covariance_reset_times", resets)
+        saturated = (
+            np.zeros(joints)
+            if self.saturated_time is None
+            else np.array(self.saturated_time, dtype=float).reshape(-1)
+        )
+        if saturated.shape != (joints,):
+            raise ValueError(f"saturated_time: expected shape {(joints,)}, got {saturated.shape}")
+        saturated.flags.writeable = False
+        object.__setattr__(self, "saturated_time", saturated)
         if self.status not in STATUSES:
             raise ValueError(f"status: expected one of {', '.join(STATUSES)}, got {self.status!r}")
 
@@ -172,7 +189,7 @@ class SimulationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The arrays by name (copies), with status and wall_time."""
-        names = (*ARRAYS_1, *ARRAYS_2, *ARRAYS_N, "covariance_reset_times")
+        names = (*ARRAYS_1, *ARRAYS_2, *ARRAYS_N, "covariance_reset_times", "saturated_time")
         out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
         out["status"] = self.status
         out["wall_time"] = self.wall_time
@@ -297,6 +314,7 @@ def make_result(run: _core.Simulation, config: Config, wall_time: float) -> Simu
         config=config,
         status="interrupted" if run.status == "running" else run.status,
         wall_time=wall_time,
+        saturated_time=np.array(run.saturated_time),
     )
 
 

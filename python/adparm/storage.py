@@ -23,7 +23,7 @@ from .simulation import available_memory
 
 __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3  # 3: tau_commanded and saturated_time (torque limits)
 
 # (result attribute, column names) of each recorded series, in the core's order; one column per
 # joint j = 1 ... n ("{j}") and per basis function i = 1 ... K ("{i}", in the order of
@@ -187,6 +187,7 @@ def _metadata(result: SimulationResult) -> dict[str, Any]:
         "status": result.status,
         "wall_time": result.wall_time if np.isfinite(result.wall_time) else None,
         "covariance_reset_times": result.covariance_reset_times.tolist(),
+        "saturated_time": result.saturated_time.tolist(),
         "config": config,
         "urdf": _urdf_copies(config),
     }
@@ -211,7 +212,7 @@ def write_result_csv(result: SimulationResult, path: Path) -> None:
 
 
 def write_result_npz(result: SimulationResult, path: Path) -> None:
-    names = (*ARRAYS_1, *_RESULT_ARRAYS, "covariance_reset_times")
+    names = (*ARRAYS_1, *_RESULT_ARRAYS, "covariance_reset_times", "saturated_time")
     config = result.config.to_dict()
     np.savez_compressed(
         path,
@@ -287,6 +288,8 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         fields[attr] = block[:, 0] if attr in ("t", "hjb_error", "cost") else block
         start += len(names)
     fields["covariance_reset_times"] = np.array(meta.get("covariance_reset_times", []), float)
+    if meta.get("saturated_time") is not None:
+        fields["saturated_time"] = np.array(meta["saturated_time"], float)
     wall = meta.get("wall_time")
     extra = {
         "format_version": meta.get("format_version"),
@@ -322,7 +325,10 @@ def _check_npz_sizes(path: Path, archive: zipfile.ZipFile, config: Config) -> No
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
     n, k = config.dof, config.basis_size
-    expected: dict[str, tuple[int, ...]] = {"covariance_reset_times": (steps + 1,)}
+    expected: dict[str, tuple[int, ...]] = {
+        "covariance_reset_times": (steps + 1,),
+        "saturated_time": (n,),
+    }
     expected.update({name: (rows,) for name in ARRAYS_1})
     expected.update({name: (rows, n) for name in ARRAYS_2})
     expected.update({name: (rows, k) for name in ARRAYS_N})

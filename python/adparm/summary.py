@@ -227,6 +227,14 @@ def accumulated_cost(result: SimulationResult, *, include_probe: bool = True) ->
     return float(np.sum(0.5 * (r[1:] + r[:-1]) * np.diff(result.t)))
 
 
+def _limits(config: Config) -> list[float | None] | None:
+    """plant.torque_limits per joint (None: no limit on that joint), or None without limits."""
+    limits = config.plant.limit_vector(config.dof)
+    if limits.size == 0:
+        return None
+    return [float(v) if np.isfinite(v) else None for v in limits]
+
+
 def summarize(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
     """The metrics of ``summary.json``: final weights beside W*, per-weight and relative errors,
     time to enter and stay within ``tolerance`` of W* (default: the config's
@@ -267,6 +275,8 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
         "accumulated_cost": accumulated_cost(result),
         "accumulated_cost_without_probe": accumulated_cost(result, include_probe=False),
         "covariance_resets": result.covariance_resets,
+        "torque_limits": _limits(result.config),
+        "saturated_time": result.saturated_time.tolist(),
         "wall_time": _number(result.wall_time),
         "tolerance": tolerance,
         "paper_claim_time": PAPER_CLAIM_TIME,
@@ -421,6 +431,15 @@ def summary_markdown(summary: dict[str, Any]) -> str:
         f"probe, {_fmt(summary['accumulated_cost_without_probe'])} with the actor's u_hat alone",
         f"- covariance resets: {summary['covariance_resets']}",
     ]
+    limits = summary.get("torque_limits")
+    if limits is not None:
+        saturated = summary.get("saturated_time") or []
+        lines.append(
+            "- torque limits "
+            + ", ".join("none" if v is None else f"{v:g}" for v in limits)
+            + " N m: saturated "
+            + ", ".join(f"joint {i + 1} {_fmt(v)} s" for i, v in enumerate(saturated))
+        )
     for problem in summary.get("post_run_errors") or ():
         lines.append(f"- not computed: {problem} (the run and its files are complete)")
     lines += _diagnostics_lines(summary.get("diagnostics"))

@@ -57,6 +57,7 @@ SWEEP_METRICS = (
     "final_e1_norm",
     "accumulated_cost",
     "covariance_resets",
+    "saturated_time",
     "e2_block_min_eigenvalue",
     "hjb_residual_explored",
     "wall_time",

@@ -48,6 +48,7 @@ def core_settings(config: Config) -> _core.Settings:
             config.plant.locked_joints,
         )
         settings.model_urdf = urdf_settings(**config.model.resolve_urdf(config.plant))
+    settings.torque_limits = config.plant.limit_vector(config.dof)
     task = settings.task
     task.qd = trajectory_settings(config)
     settings.task = task

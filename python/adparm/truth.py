@@ -247,7 +247,60 @@ def _longer_run_advice(
     )
 
 
+def saturation_text(result: SimulationResult) -> str | None:
+    """What the actuator limits did to a run (None when no joint's torque was clipped): which
+    joints were clipped at ``plant.torque_limits`` and for how long, and that the theory's
+    assumption of unlimited torque was broken while the controller's own input was unbounded (or
+    inside its bound, ``cost.input_bound``): clipping is not a failure of the learning."""
+    config = result.config
+    seconds = np.asarray(result.saturated_time, dtype=float)
+    if config.plant.limit_vector(config.dof).size == 0 or not np.any(seconds > 0.0):
+        return None
+    duration = float(result.t[-1] - result.t[0]) if result.t.size > 1 else config.sim.T
+    duration = max(duration, float(seconds.max()))
+    joints = ", ".join(
+        f"joint {i + 1} for {value:.3g} s ({100.0 * value / duration:.3g} %)"
+        for i, value in enumerate(seconds)
+        if value > 0.0
+    )
+    text = f"the applied torque was clipped at plant.torque_limits: {joints} of {duration:.3g} s"
+    bound = getattr(config.cost, "input_bound", None)
+    if bound is None:
+        return (
+            text + "; the controller's input is unbounded, so the theory's assumption (the "
+            "commanded torque is applied) was broken, not the learning"
+        )
+    try:  # a constrained-input controller: was its input inside its bound while clipped?
+        limit = np.broadcast_to(np.asarray(bound, dtype=float), (config.dof,))
+    except (TypeError, ValueError):
+        return text
+    clipped = result.tau != result.tau_commanded
+    inside = np.any(clipped & (np.abs(result.u) <= limit), axis=1)
+    if not np.any(inside):
+        return text
+    rows = result.t[1] - result.t[0] if result.t.size > 1 else config.sim.dt
+    return (
+        text + f"; for about {np.count_nonzero(inside) * rows:.3g} s of it the controller's input "
+        "was inside its bound (cost.input_bound), so the theory's assumption (the commanded "
+        "torque is applied) was broken, not the learning"
+    )
+
+
 def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
+    """The truth about a run, with what the actuator limits did:
+    ``saturated_time`` (seconds per joint) and ``saturation`` (:func:`saturation_text`, None when
+    no torque was clipped), which the verdict ends with."""
+    out = _diagnose_learning(result, tolerance=tolerance)
+    out["saturated_time"] = [float(v) for v in result.saturated_time]
+    out["saturation"] = saturation_text(result)
+    if out["saturation"] is not None:
+        out["verdict"] += "; " + out["saturation"]
+    return out
+
+
+def _diagnose_learning(
+    result: SimulationResult, *, tolerance: float | None = None
+) -> dict[str, Any]:
     """The truth about a run (plain JSON-ready data; summary.json's ``diagnostics``):
 
     - e2_block_min_eigenvalue (critic, actor): min over q of lambda_min of V's e2 block (for

@@ -137,10 +137,12 @@ void bind_settings(py::module_& m) {
       .def_readwrite("q0", &TaskSettings::q0)
       .def_readwrite("dq0", &TaskSettings::dq0)
       .def_readwrite("qd", &TaskSettings::qd);
-  py::class_<ControlSettings>(m, "ControlSettings", "alpha1 (n, n) and the RISE gains.")
+  py::class_<ControlSettings>(m, "ControlSettings",
+                              "alpha1 (n, n), the RISE gains and anti_windup.")
       .def(py::init<>())
       .def_readwrite("alpha1", &ControlSettings::alpha1)
-      .def_readwrite("rise", &ControlSettings::rise);
+      .def_readwrite("rise", &ControlSettings::rise)
+      .def_readwrite("anti_windup", &ControlSettings::anti_windup);
   py::enum_<ControllerKind>(m, "ControllerKind")
       .value("adp", ControllerKind::adp)
       .value("rise", ControllerKind::rise)
@@ -192,7 +194,8 @@ void bind_settings(py::module_& m) {
   py::class_<Settings>(m, "Settings",
                        "All settings of one run. Eigen members and the arms (plant, model, "
                        "plant_urdf, model_urdf) are copied on access: assign them whole. Q (2 n, "
-                       "2 n), R (n, n), disturbance (n,), critic_weights and actor_weights (K,); n "
+                       "2 n), R (n, n), disturbance (n,), torque_limits (n, or empty: none), "
+                       "critic_weights and actor_weights (K,); n "
                        "= 2 joints for the two-link arm, K the basis size. "
                        "dynamic_sizes runs the two-link arm through the n-joint (dynamic-size) "
                        "loop.")
@@ -215,6 +218,7 @@ void bind_settings(py::module_& m) {
           "is_urdf", [](const Settings& s) { return std::holds_alternative<UrdfArms>(s.arm); },
           "Whether the arm is a URDF arm (plant_urdf) rather than the two-link arm.")
       .def_readwrite("disturbance", &Settings::disturbance)
+      .def_readwrite("torque_limits", &Settings::torque_limits)
       .def_readwrite("task", &Settings::task)
       .def_readwrite("Q", &Settings::Q)
       .def_readwrite("R", &Settings::R)
@@ -607,6 +611,7 @@ void bind_closed_loop(py::module_& m) {
           out["e1"] = outputs.errors.e1;
           out["e2"] = outputs.errors.e2;
           out["tau"] = outputs.tau;
+          out["tau_commanded"] = outputs.tau_commanded;
           out["u"] = outputs.u;
           out["u_hat"] = outputs.u_hat;
           out["mu"] = outputs.mu;
@@ -679,6 +684,9 @@ void bind_simulation(py::module_& m) {
       .def_property_readonly("step", &AnySimulation::step)
       .def_property_readonly("divergence_time", &AnySimulation::divergence_time)
       .def_property_readonly("reset_times", &AnySimulation::reset_times)
+      .def_property_readonly("saturated_time", &AnySimulation::saturated_time,
+                             "Per joint, the time (s) its commanded torque lay beyond its limit "
+                             "(plant.torque_limits), counted per step from the step's start.")
       .def_property_readonly("state", &AnySimulation::state)
       .def(
           "recording",

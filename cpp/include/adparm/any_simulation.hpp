@@ -175,6 +175,9 @@ class AnySimulation {
     return std::visit([](const auto& s) -> const std::vector<double>& { return s.reset_times(); },
                       impl_);
   }
+  Eigen::VectorXd saturated_time() const {
+    return std::visit([](const auto& s) { return s.saturated_time(); }, impl_);
+  }
   Eigen::VectorXd state() const {
     return std::visit([](const auto& s) { return Eigen::VectorXd(s.state()); }, impl_);
   }

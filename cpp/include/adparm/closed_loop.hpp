@@ -11,15 +11,28 @@
 //   mu     = RISE feedback, dnu                                   (eqs. 27-28)
 //   u      = the controller's input (controller.hpp; adp: u_hat + probe(t))
 //   tau    = h_hat + mu - u     (g = [0; M^-1] convention; h_hat of the believed model, eq. 5)
-//   ddq    from the plant (eq. 1) with tau and the disturbance tau_d(t)
+//            the commanded torque; with actuator limits (Settings::torque_limits, not in the
+//            paper) the drive applies it clipped, tau_i <- min(max(tau_i, -limit_i), limit_i)
+//   ddq    from the plant (eq. 1) with the applied tau and the disturbance tau_d(t)
 //   dJ     = x^T Q x + u^T R u  (the accumulated cost of eq. 10, integrated with the state).
-// The basis and the arm model are template parameters: a new one is a new type, not a new loop.
-// Sizes: n = Arm::kDof joints and K = Basis::kSize functions, each fixed (the two-link fast path,
-// n = 2, K = 8) or Eigen::Dynamic; then the loop's per-step vectors are bounded types (types.hpp),
-// the arm's terms live in buffers sized once (Arm::init_terms), and a step allocates nothing.
+// Anti-windup of RISE (not in the paper; ControlSettings::anti_windup, on by default): nu enters
+// tau with gain +1 (eq. 27), and while joint i is clipped the plant does not see tau_i move, so
+// integrating dnu_i towards the limit only stores torque that must be integrated back before the
+// drive leaves the limit (windup: overshoot and a late recovery). Conditional integration
+// (clamping; Astrom & Murray, Feedback Systems, chapter "PID Control", "Integrator windup"): on a
+// joint clipped at +limit_i a positive dnu_i is set to 0, at -limit_i a negative one; the component
+// that moves tau_i back inside the limits is kept, so the joint leaves saturation as soon as eq.
+// (28) asks for it. Where no joint is clipped, eq. (28) is unchanged, and without limits nothing of
+// this runs. The basis and the arm model are template parameters: a new one is a new type, not a
+// new loop. Sizes: n = Arm::kDof joints and K = Basis::kSize functions, each fixed (the two-link
+// fast path, n = 2, K = 8) or Eigen::Dynamic; then the loop's per-step vectors are bounded types
+// (types.hpp), the arm's terms live in buffers sized once (Arm::init_terms), and a step allocates
+// nothing.
 #pragma once
 
 #include <Eigen/Eigenvalues>
+#include <limits>
+#include <string>
 #include <type_traits>
 
 #include "adparm/basis.hpp"
@@ -104,7 +117,8 @@ class ClosedLoop {
   struct Outputs {
     Errors errors;
     Joint qd;                // desired position
-    Joint tau;               // applied joint torque
+    Joint tau;               // applied joint torque (clipped to the limits)
+    Joint tau_commanded;     // the controller's torque h_hat + mu - u, before the clip
     Joint u;                 // applied input of the controller
     Joint u_hat;             // actor's input, eq. (20)
     Joint mu;                // RISE feedback, eq. (27)
@@ -130,6 +144,10 @@ class ClosedLoop {
         trajectory_(settings.task.qd, dof_),
         extrapolation_(settings.extrapolation, trajectory_.is_constant(), model),
         probe_(settings.probe, dof_),
+        torque_limits_(checked_torque_limits(settings.torque_limits, dof_)),
+        limited_(settings.torque_limits.size() > 0 &&
+                 (settings.torque_limits.array() < kInfinity).any()),
+        anti_windup_(settings.control.anti_windup),
         gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
@@ -176,6 +194,8 @@ class ClosedLoop {
     return data;
   }
   const Arm& plant() const { return plant_; }
+  // Whether some joint has a finite torque limit (otherwise the clip is skipped entirely).
+  bool limited() const { return limited_; }
   const Basis& basis() const { return basis_; }
   const ErrorSystem<Arm>& error_system() const { return error_system_; }
   const QuadraticCostT<kDof>& cost() const { return cost_; }
@@ -279,7 +299,20 @@ class ClosedLoop {
     }
     const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(), hjb.u_hat,
                                       signals.probe);
-    const Joint tau = error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
+    const Joint tau_commanded =
+        error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
+    Joint tau = tau_commanded;
+    if (limited_) {  // the drive's clip, and RISE's anti-windup (header comment)
+      tau = tau_commanded.cwiseMax(-torque_limits_).cwiseMin(torque_limits_);
+      if (anti_windup_ && controller_.uses_rise()) {
+        for (Eigen::Index i = 0; i < n; ++i) {
+          double& nu_rate = rate[nu_offset() + i];
+          if ((tau_commanded[i] > torque_limits_[i] && nu_rate > 0.0) ||
+              (tau_commanded[i] < -torque_limits_[i] && nu_rate < 0.0))
+            nu_rate = 0.0;
+        }
+      }
+    }
 
     rate.template segment<kDof>(kQ, n) = dq;
     rate.template segment<kDof>(dq_offset(), n) =
@@ -290,6 +323,7 @@ class ClosedLoop {
       outputs->errors = errors;
       outputs->qd = desired.q;
       outputs->tau = tau;
+      outputs->tau_commanded = tau_commanded;
       outputs->u = u;
       outputs->u_hat = hjb.u_hat;
       outputs->mu = mu;
@@ -324,6 +358,19 @@ class ClosedLoop {
     return n;
   }
 
+  static constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+  // n limits > 0 (+inf: none on that joint), or none (empty: +inf on every joint).
+  static Joint checked_torque_limits(const Eigen::VectorXd& limits, Eigen::Index n) {
+    if (limits.size() == 0) return Joint::Constant(n, kInfinity);
+    check_size(limits, n, 1, "plant.torque_limits");
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!(limits[i] > 0.0))  // NaN fails too
+        throw std::invalid_argument("plant.torque_limits: joint " + std::to_string(i + 1) +
+                                    ": each limit must be > 0 (N m; inf: no limit)");
+    return limits;
+  }
+
   static JointMatrix<kDof> checked_alpha1(const Settings& settings, Eigen::Index n) {
     check_size(settings.control.alpha1, n, n, "control.alpha1");
     check_finite(settings.control.alpha1, "control.alpha1");
@@ -346,6 +393,9 @@ class ClosedLoop {
   RiseT<kDof> rise_;
   SinusoidalDisturbanceT<kDof> disturbance_;
   ProbingSignalT<kDof> probe_;
+  Joint torque_limits_;  // +inf where a joint has no limit
+  bool limited_;
+  bool anti_windup_;
   // Dynamic sizes: the critic gathers the samples of an evaluation (critic.hpp) when there are
   // extrapolation points or more than 24 functions; one small sample goes through add_rates,
   // whose coefficient-wise products beat a call of Eigen's matrix-vector kernel.

@@ -34,6 +34,10 @@ struct TaskSettings {
 struct ControlSettings {
   Eigen::MatrixXd alpha1 = (Mat2() << 15.6, 10.6, 10.6, 10.4).finished();  // n x n
   RiseGains rise{};
+  // While a joint's torque is clipped at its limit, RISE's integral nu stops integrating in the
+  // direction that pushes the torque further into the limit (conditional integration,
+  // closed_loop.hpp). false: nu integrates eq. (28) whatever the drive applies (it winds up).
+  bool anti_windup = true;
 };
 
 struct SimSettings {
@@ -79,6 +83,10 @@ using ArmSettings = std::variant<TwoLinkArms, UrdfArms>;
 struct Settings {
   ArmSettings arm = TwoLinkArms{};               // the arm of the run
   Eigen::VectorXd disturbance = Vec2(0.1, 0.1);  // n amplitudes (arm_model.hpp)
+  // The plant's actuator limits |tau_i| <= torque_limits_i, N m (n values; empty: no limit; an
+  // infinite entry: no limit on that joint). The drive applies the commanded torque clipped to
+  // them.
+  Eigen::VectorXd torque_limits;
   TaskSettings task{};
   Eigen::MatrixXd Q = Mat4::Identity();  // 2n x 2n
   Eigen::MatrixXd R = Mat2::Identity();  // n x n

@@ -31,6 +31,7 @@ struct Recording {
   using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   Rows t;                                            // s
   Rows q, dq, qd, e1, e2, tau, u, u_hat, mu, probe;  // one column per joint
+  Rows tau_commanded;                                // before the actuator limits' clip
   Rows critic_weights, actor_weights;                // one column per basis function
   Rows hjb_error;                                    // eq. (21)
   Rows cost;                                         // accumulated cost of eq. (10) from t = 0
@@ -57,7 +58,7 @@ struct RecordedSeries {
 
 // The one table of the recorded series, in the order Python shows them (adparm._core's
 // RECORDED_SERIES and Simulation.recording() iterate it).
-inline constexpr std::array<RecordedSeries, 15> kRecordedSeries = {{
+inline constexpr std::array<RecordedSeries, 16> kRecordedSeries = {{
     {"t", SeriesWidth::one, &Recording::t},
     {"q", SeriesWidth::joints, &Recording::q},
     {"dq", SeriesWidth::joints, &Recording::dq},
@@ -65,6 +66,7 @@ inline constexpr std::array<RecordedSeries, 15> kRecordedSeries = {{
     {"e1", SeriesWidth::joints, &Recording::e1},
     {"e2", SeriesWidth::joints, &Recording::e2},
     {"tau", SeriesWidth::joints, &Recording::tau},
+    {"tau_commanded", SeriesWidth::joints, &Recording::tau_commanded},
     {"u", SeriesWidth::joints, &Recording::u},
     {"u_hat", SeriesWidth::joints, &Recording::u_hat},
     {"mu", SeriesWidth::joints, &Recording::mu},
@@ -116,6 +118,7 @@ class Simulation {
     states_[0] = system_.initial_state();
     states_[1] = states_[0];  // sizes every state buffer once
     record_rate_ = states_[0];
+    saturated_time_.setZero(system_.dof());
     workspace_.resize(states_[0].size());
     system_.begin_step(0.0, states_[0], data_);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
@@ -139,8 +142,9 @@ class Simulation {
       const State& previous = states_[current_];
       State& state = states_[1 - current_];
       const bool row_due = row_due_;
+      const bool limited = system_.limited();  // the step's start outputs give the clip
       rk4_step(system_, t_begin, t_end, previous, state, workspace_,
-               row_due ? &row_outputs_ : nullptr, data_);
+               row_due || limited ? &row_outputs_ : nullptr, data_);
       row_due_ = false;
       if (row_due && !record(t_begin, previous, row_outputs_)) {
         stop_diverged(t_begin);  // the step is not taken: state() stays at t_begin
@@ -148,6 +152,11 @@ class Simulation {
       }
       ++step_;
       ++taken;
+      if (limited) {  // a joint clipped at the step's start counts the whole step as saturated
+        for (Eigen::Index i = 0; i < saturated_time_.size(); ++i)
+          if (row_outputs_.tau[i] != row_outputs_.tau_commanded[i])
+            saturated_time_[i] += t_end - t_begin;
+      }
       if (diverged(state)) {
         status_ = RunStatus::diverged;
         divergence_time_ = t_end;
@@ -180,6 +189,9 @@ class Simulation {
   long step() const { return step_; }
   double divergence_time() const { return divergence_time_; }
   const std::vector<double>& reset_times() const { return reset_times_; }
+  // Per joint, the time (s) its commanded torque lay beyond its limit: the steps whose start was
+  // clipped, each counted whole (zeros without limits).
+  const Eigen::VectorXd& saturated_time() const { return saturated_time_; }
   const State& state() const { return states_[current_]; }
   const System& system() const { return system_; }
 
@@ -201,8 +213,9 @@ class Simulation {
 
   static bool finite(const typename System::Outputs& o) {
     return o.errors.e1.allFinite() && o.errors.e2.allFinite() && o.qd.allFinite() &&
-           o.tau.allFinite() && o.u.allFinite() && o.u_hat.allFinite() && o.mu.allFinite() &&
-           o.probe.allFinite() && std::isfinite(o.hjb_error);
+           o.tau.allFinite() && o.tau_commanded.allFinite() && o.u.allFinite() &&
+           o.u_hat.allFinite() && o.mu.allFinite() && o.probe.allFinite() &&
+           std::isfinite(o.hjb_error);
   }
 
   bool record(double t, const State& state) {
@@ -225,6 +238,7 @@ class Simulation {
     r.e1.row(i) = outputs.errors.e1.transpose();
     r.e2.row(i) = outputs.errors.e2.transpose();
     r.tau.row(i) = outputs.tau.transpose();
+    r.tau_commanded.row(i) = outputs.tau_commanded.transpose();
     r.u.row(i) = outputs.u.transpose();
     r.u_hat.row(i) = outputs.u_hat.transpose();
     r.mu.row(i) = outputs.mu.transpose();
@@ -253,6 +267,7 @@ class Simulation {
   RunStatus status_ = RunStatus::running;
   double divergence_time_ = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> reset_times_;
+  Eigen::VectorXd saturated_time_;  // s per joint
   Recording recording_;
 };
 
