@@ -588,8 +588,8 @@ void check_runs(double horizon) {
   if (!ok) fail("batch_threads");
   // A streamed batch (window 2, taking each run as it ends) stopped part-way, then resumed run by
   // run: the stopped runs continue to the same numbers, the never-started ones are built by take().
-  adparm::Batch<adparm::AnySimulation> stream(settings);
-  stream.start(2, 2);
+  adparm::Batch<adparm::AnySimulation> stream(settings, 2);
+  stream.start(2);
   std::size_t seen = 0;
   bool stream_ok = true;
   while (seen < 4 && !stream.done()) {

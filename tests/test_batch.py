@@ -151,9 +151,9 @@ def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
     """Workers build at most `window` runs not yet taken; each run handed over equals its
     one-by-one run, and a stopped batch hands over the part-way and the unstarted runs."""
     settings = [adparm.simulation.core_settings(c) for c in configs]
-    batch = adparm._core.Batch(settings)
+    batch = adparm._core.Batch(settings, 1)
     assert batch.total_steps == sum(round(c.sim.T / c.sim.dt) for c in configs)
-    batch.start(2, 1)
+    batch.start(2)
     ended: list[int] = []
     while not batch.done:
         for i in batch.wait(0.05):
@@ -165,8 +165,8 @@ def test_core_batch_streams_runs_through_a_window(configs, one_by_one) -> None:
     assert batch.steps_done == batch.total_steps
     with pytest.raises(RuntimeError, match="already taken"):
         batch.take(0)
-    stopped = adparm._core.Batch(settings)
-    stopped.start(1, 1)
+    stopped = adparm._core.Batch(settings, 1)
+    stopped.start(1)
     stopped.stop()
     runs = dict(adparm.simulation._take_rest(stopped))
     assert sorted(runs) == list(range(len(configs)))
@@ -186,8 +186,8 @@ def test_any_threads_window_and_stop_give_one_by_one_numbers(runs, threads, wind
     base = adparm.paper_config().updated({"sim": {"T": 0.3}})
     configs = [base.updated({"task": {"q0": [0.1 + 0.05 * i, 0.2]}}) for i in range(runs)]
     settings_list = [adparm.simulation.core_settings(c) for c in configs]
-    batch = adparm._core.Batch(settings_list)
-    batch.start(threads, window)
+    batch = adparm._core.Batch(settings_list, window)
+    batch.start(threads)
     taken = {}
     if stop_after is not None:
         time.sleep(stop_after)

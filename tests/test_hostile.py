@@ -458,7 +458,7 @@ def test_threads_that_cannot_start_exit_2(tmp_path, monkeypatch, capsys) -> None
         simulation.run_batch(batch, 3, lambda i, run: None, lambda: None)
     assert batch.stopped
 
-    def refuse(batch, threads, window):
+    def refuse(batch, threads):
         raise ValueError(f"threads: could not start {threads} worker threads (test)")
 
     monkeypatch.setattr(simulation, "_start_batch", refuse)

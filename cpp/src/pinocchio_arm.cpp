@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -268,6 +269,8 @@ LockedJoints resolve_locked(const ::urdf::ModelInterface& tree, const pinocchio:
   return locked;
 }
 
+std::atomic<long> parse_count{0};  // urdf_parse_count()
+
 std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::string& source,
                                           const Eigen::Vector3d& gravity,
                                           const Eigen::VectorXd& coulomb,
@@ -276,6 +279,7 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
   check_finite(gravity, "gravity");
   check_finite(coulomb, "coulomb");
   check_finite(viscous, "viscous");
+  parse_count.fetch_add(1, std::memory_order_relaxed);
   const ::urdf::ModelInterfaceSharedPtr tree = ::urdf::parseURDF(xml);
   if (!tree)
     refuse(source,
@@ -395,7 +399,9 @@ std::string read_file(const std::string& path) {
 
 }  // namespace
 
-PinocchioArm::PinocchioArm(std::unique_ptr<Impl> impl)
+long urdf_parse_count() { return parse_count.load(std::memory_order_relaxed); }
+
+PinocchioArm::PinocchioArm(std::shared_ptr<const Impl> impl)
     : impl_(std::move(impl)), dof_(impl_->model.nv) {}
 
 PinocchioArm::PinocchioArm(const std::string& urdf_path, const Eigen::Vector3d& gravity,
@@ -421,16 +427,27 @@ std::string LockedJointsError::with_section(const std::string& section) const {
   return message;
 }
 
-PinocchioArm::PinocchioArm(const PinocchioArm& other)
-    : impl_(std::make_unique<Impl>(*other.impl_)), dof_(other.dof_) {}
-
-PinocchioArm& PinocchioArm::operator=(const PinocchioArm& other) {
-  if (this != &other) {
-    impl_ = std::make_unique<Impl>(*other.impl_);
-    dof_ = other.dof_;
-  }
-  return *this;
+PinocchioArm PinocchioArm::with_gravity_and_friction(const Eigen::Vector3d& gravity,
+                                                     const Eigen::VectorXd& coulomb,
+                                                     const Eigen::VectorXd& viscous) const {
+  check_finite(gravity, "gravity");
+  check_finite(coulomb, "coulomb");
+  check_finite(viscous, "viscous");
+  Eigen::VectorXd coulomb_per_joint = per_joint(coulomb, dof_, impl_->source, "coulomb");
+  Eigen::VectorXd viscous_per_joint = per_joint(viscous, dof_, impl_->source, "viscous");
+  if (gravity == impl_->gravity && coulomb_per_joint == impl_->coulomb &&
+      viscous_per_joint == impl_->viscous)
+    return *this;
+  auto impl = std::make_shared<Impl>(*impl_);
+  impl->model.gravity.linear(gravity);  // as build() sets it (model_without_gravity: unchanged)
+  impl->gravity = gravity;
+  impl->coulomb = std::move(coulomb_per_joint);
+  impl->viscous = std::move(viscous_per_joint);
+  return PinocchioArm(std::move(impl));
 }
+
+PinocchioArm::PinocchioArm(const PinocchioArm& other) = default;
+PinocchioArm& PinocchioArm::operator=(const PinocchioArm& other) = default;
 
 PinocchioArm::PinocchioArm(PinocchioArm&&) noexcept = default;
 PinocchioArm& PinocchioArm::operator=(PinocchioArm&&) noexcept = default;

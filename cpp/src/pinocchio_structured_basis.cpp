@@ -173,14 +173,14 @@ struct Group {
 
 // The basis, copied as is.
 struct PinocchioStructuredBasis::Impl {
-  PinocchioArm::Impl arm;  // model, set_configuration
+  std::shared_ptr<const PinocchioArm::Impl> arm;  // model, set_configuration: the arm's, shared
   BaseParameters base;
   std::vector<std::string> names;
   std::vector<pinocchio::JointIndex> joint;  // per base parameter: the joint whose body it is
   std::vector<int> local;                    // per base parameter: its index 0..9 in that body
   std::vector<Group> groups;                 // the base parameters body by body
 
-  explicit Impl(const PinocchioArm::Impl& arm_impl) : arm(arm_impl) {}
+  explicit Impl(std::shared_ptr<const PinocchioArm::Impl> arm_impl) : arm(std::move(arm_impl)) {}
 };
 
 // The work space of one evaluation.
@@ -205,11 +205,11 @@ void PinocchioStructuredBasis::WorkspaceDeleter::operator()(WorkspaceData* works
 }
 
 PinocchioStructuredBasis::Workspace PinocchioStructuredBasis::workspace() const {
-  return Workspace(new WorkspaceData(impl_->arm.model, joints_));
+  return Workspace(new WorkspaceData(impl_->arm->model, joints_));
 }
 
 PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
-    : impl_(std::make_unique<Impl>(arm.impl())), joints_(arm.dof()) {
+    : impl_(std::make_unique<Impl>(arm.shared_impl())), joints_(arm.dof()) {
   const int n = joints_;
   if (n > kMaxDof)
     throw std::invalid_argument("controller.basis: the structured basis of " + arm.source() +
@@ -328,7 +328,7 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
   check_size(jacobian, size_, 2 * n, "jacobian");
   check_size(desired_rate, size_, 1, "desired_rate");
   const Impl& s = *impl_;
-  const PinocchioArm::Impl& arm = s.arm;
+  const PinocchioArm::Impl& arm = *s.arm;
   WorkspaceData& w = *workspace;
   pinocchio::Data& data = w.arm.data;
   jacobian.setZero();

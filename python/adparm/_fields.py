@@ -471,8 +471,8 @@ def _toml_value(value: Any, indent: str = "") -> str:
     """A TOML value: a matrix (a list of flat lists) one row per line, a vector on one line or
     wrapped within _TOML_WIDTH, a table inline."""
     if isinstance(value, dict):
-        items = ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items())
-        return "{" + (f" {items} " if items else "") + "}"
+        pairs = ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items())
+        return "{" + (f" {pairs} " if pairs else "") + "}"
     if not isinstance(value, list):
         return _toml_scalar(value)
     inner = indent + "    "
@@ -481,7 +481,8 @@ def _toml_value(value: Any, indent: str = "") -> str:
         line = "[" + ", ".join(items) + "]"
         if len(indent) + len(line) <= _TOML_WIDTH:
             return line
-        lines, current = [], ""
+        lines: list[str] = []
+        current = ""
         for item in items:
             if current and len(inner) + len(current) + len(item) + 2 > _TOML_WIDTH:
                 lines.append(inner + current.rstrip().rstrip(","))
@@ -489,8 +490,8 @@ def _toml_value(value: Any, indent: str = "") -> str:
             current += item + ", "
         lines.append(inner + current.rstrip().rstrip(","))
         return "[\n" + ",\n".join(lines) + ",\n" + indent + "]"
-    rows = [inner + _toml_value(v, inner) for v in value]
-    return "[\n" + ",\n".join(rows) + ",\n" + indent + "]"
+    nested = [inner + _toml_value(v, inner) for v in value]
+    return "[\n" + ",\n".join(nested) + ",\n" + indent + "]"
 
 
 def toml_text(data: Mapping[str, Mapping[str, Any]], notes: Mapping[str, str] = {}) -> str:  # noqa: B006

@@ -139,14 +139,13 @@ class SimConfig:
             "divergence_bound",
             scalar_value(self.divergence_bound, "sim.divergence_bound", minimum=0.0, strict=True),
         )
-        if self.dt == AUTO:
+        dt = self.dt
+        if isinstance(dt, str):  # AUTO: resolved by the Config
             return
-        if self.dt > self.T:
-            raise ValueError(f"sim.dt: must be <= sim.T = {self.T:g}, got {self.dt:g}")
-        if self.T / self.dt > 1e10:
-            raise ValueError(
-                f"sim.dt: sim.T / sim.dt = {self.T / self.dt:.3g} steps is more than 1e10"
-            )
+        if dt > self.T:
+            raise ValueError(f"sim.dt: must be <= sim.T = {self.T:g}, got {dt:g}")
+        if self.T / dt > 1e10:
+            raise ValueError(f"sim.dt: sim.T / sim.dt = {self.T / dt:.3g} steps is more than 1e10")
 
 
 @dataclass(frozen=True)

@@ -76,14 +76,11 @@ def _progress_bar(total: float, unit: str, desc: str, enabled: bool) -> tqdm:
     )
 
 
-def _start_batch(batch: _core.Batch, threads: int, window: int | None) -> None:
+def _start_batch(batch: _core.Batch, threads: int) -> None:
     """batch.start; threads that cannot be created (the core's std::system_error, a
     RuntimeError) are a ValueError that says so and what to do, with no worker left running."""
     try:
-        if window is None:
-            batch.start(threads)
-        else:
-            batch.start(threads, window)
+        batch.start(threads)
     except RuntimeError as error:
         try:
             batch.stop()
@@ -101,13 +98,12 @@ def run_batch(
     threads: int,
     on_end: Callable[[int, _core.Simulation], None],
     on_poll: Callable[[], None],
-    window: int | None = None,
 ) -> None:
     """Starts ``batch`` on ``threads`` worker threads and polls it until every run has ended:
     ``on_end(i, run)`` receives each run as it ends (handed over by the core, which no longer
     holds it), ``on_poll()`` runs after each poll. Any exception (Ctrl-C) stops the workers
     (within one step) before it propagates."""
-    _start_batch(batch, threads, window)
+    _start_batch(batch, threads)
     try:
         while not batch.done:
             for i in batch.wait(POLL_SECONDS):

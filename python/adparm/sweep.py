@@ -339,7 +339,7 @@ def _run_in_process(
     window = workers * _RUNS_PER_THREAD
     check_steps(configs)
     check_memory(configs, at_once=window + workers)
-    batch = _core.Batch([core_settings(config) for config in configs])
+    batch = _core.Batch([core_settings(config) for config in configs], window)
     ended: dict[int, Any] = {}  # runs handed over by the core, not yet summarised
     rows: list[tuple[int, dict[str, Any]]] = []
 
@@ -354,7 +354,7 @@ def _run_in_process(
 
     with tqdm(total=len(configs), disable=not progress, desc="sweep", unit="run") as bar:
         try:
-            run_batch(batch, workers, on_end, lambda: bar.update(len(rows) - bar.n), window=window)
+            run_batch(batch, workers, on_end, lambda: bar.update(len(rows) - bar.n))
             summarise()
         except KeyboardInterrupt:  # keep the rows of the runs that ended
             for i in batch.wait(0.0):  # after the stop: runs that ended before it

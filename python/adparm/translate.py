@@ -39,7 +39,7 @@ def core_settings(config: Config) -> _core.Settings:
             value = values[field.name] if isinstance(values, dict) else getattr(values, field.name)
             _set_attribute(settings, target.split("."), value)
 
-    if not two_link:
+    if config.plant.urdf is not None:  # not two_link
         settings.plant_urdf = urdf_settings(
             config.plant.urdf,
             config.plant.resolved_gravity,

@@ -8,6 +8,7 @@ M(q)^-1 in adparm's C++ core, with the same conventions as the built-in two-link
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 import os
@@ -219,6 +220,7 @@ class UrdfArm:
         if not path.is_file():
             raise ValueError(f"URDF {path}: no such file")
         check_inertial_text(path)
+        _count_parse()
         self._arm = _core.UrdfArm(
             str(path),
             gravity=_vector(gravity, 3, "gravity"),
@@ -230,6 +232,23 @@ class UrdfArm:
 
     def __repr__(self) -> str:
         return f"UrdfArm({str(self.path)!r}, dof={self.dof}, joints={self.joint_names})"
+
+    def with_gravity_and_friction(
+        self,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        coulomb: float | ArrayLike = 0.0,
+        viscous: float | ArrayLike = 0.0,
+    ) -> UrdfArm:
+        """The arm ``UrdfArm(path, gravity, coulomb, viscous, locked_joints)`` would read (the
+        same numbers), without reading the URDF again: it shares this arm's parsed model (and
+        its structured basis, which neither changes)."""
+        arm = copy.copy(self)
+        arm._arm = self._arm.with_gravity_and_friction(
+            gravity=_vector(gravity, 3, "gravity"),
+            coulomb=_as_per_joint(coulomb, "coulomb"),
+            viscous=_as_per_joint(viscous, "viscous"),
+        )
+        return arm
 
     @property
     def dof(self) -> int:
@@ -412,6 +431,31 @@ def _hashable(value: Any) -> Any:
     return tuple(float(v) for v in np.asarray(value, dtype=float).reshape(-1))
 
 
+_parses = 0
+_parses_lock = threading.Lock()
+
+
+def _count_parse() -> None:
+    global _parses  # noqa: PLW0603 - a process-wide counter, as the core's
+    with _parses_lock:
+        _parses += 1
+
+
+def parse_count() -> int:
+    """How many URDF files ``UrdfArm`` has read so far, in every thread (``shared_arm`` reads
+    a file once; ``with_gravity_and_friction`` reads none): what tests check "parsed once" by,
+    beside the core's own count, ``adparm._core.urdf_parse_count()``."""
+    with _parses_lock:
+        return _parses
+
+
+@functools.lru_cache(maxsize=32)
+def _parsed_arm(
+    path: str, mtime_ns: int, size: int, locked: tuple[tuple[str, float], ...], thread: int
+) -> UrdfArm:
+    return UrdfArm(path, locked_joints=dict(locked) or None)
+
+
 @functools.lru_cache(maxsize=32)
 def _shared_arm(
     path: str,
@@ -423,7 +467,10 @@ def _shared_arm(
     locked: tuple[tuple[str, float], ...],
     thread: int,
 ) -> UrdfArm:
-    return UrdfArm(path, gravity, coulomb, viscous, dict(locked) or None)
+    parsed = _parsed_arm(path, mtime_ns, size, locked, thread)
+    if gravity == (0.0, 0.0, -9.81) and coulomb == 0.0 and viscous == 0.0:
+        return parsed
+    return parsed.with_gravity_and_friction(gravity, coulomb, viscous)
 
 
 def shared_arm(
@@ -434,8 +481,9 @@ def shared_arm(
     locked_joints: Mapping[str, float] | None = None,
 ) -> UrdfArm:
     """``UrdfArm(urdf, gravity, coulomb, viscous, locked_joints)``, read once per version of the
-    file (its modification time and size), set of arguments and thread, and shared: a config's
-    checks, defaults, basis and optimum all use the one parse. Read it, do not change it."""
+    file (its modification time and size), locked joints and thread, and shared: a config's
+    checks, defaults, basis and optimum all use the one parse (an arm with other gravity or
+    friction is ``with_gravity_and_friction`` of it). Read it, do not change it."""
     try:
         stat = os.stat(urdf)
         key = (

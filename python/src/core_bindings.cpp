@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <memory>
 #include <optional>
 #include <type_traits>
 #include <variant>
@@ -24,6 +25,14 @@ using namespace adparm;
 namespace {
 
 using RowsXX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The module's URDF arms: every loop the module builds (Simulation, Batch, hjb_residual, ...)
+// reads its URDF through this one cache, so a file is parsed once per version for a simulate,
+// its diagnosis and the batches after it (urdf_loop_arm.hpp).
+const std::shared_ptr<UrdfArmCache>& module_urdfs() {
+  static const std::shared_ptr<UrdfArmCache> urdfs = std::make_shared<UrdfArmCache>();
+  return urdfs;
+}
 
 // Settings::arm (a std::variant of the two-link arm's parameters and a URDF arm's settings) as
 // the four attributes plant, model (two-link) and plant_urdf, model_urdf (URDF). A getter returns a
@@ -275,6 +284,8 @@ Eigen::VectorXd per_joint(const std::variant<double, Eigen::VectorXd>& value) {
 
 void bind_urdf_arm(py::module_& m) {
   using Vector = Eigen::VectorXd;
+  m.def("urdf_parse_count", &urdf_parse_count,
+        "How many URDF texts the core has parsed so far, in every thread.");
   py::class_<PinocchioArm>(m, "UrdfArm",
                            "A fixed-base serial arm from a URDF file, through Pinocchio. "
                            "gravity (3,), coulomb and viscous: one number or one per joint.")
@@ -300,6 +311,17 @@ void bind_urdf_arm(py::module_& m) {
           py::arg("coulomb") = 0.0, py::arg("viscous") = 0.0, py::arg("name") = "<URDF string>",
           py::arg("locked_joints") = LockedJoints(),
           "The same from the URDF's XML text; name stands for the file in error messages.")
+      .def(
+          "with_gravity_and_friction",
+          [](const PinocchioArm& arm, const Eigen::Vector3d& gravity,
+             const std::variant<double, Vector>& coulomb,
+             const std::variant<double, Vector>& viscous) {
+            return arm.with_gravity_and_friction(gravity, per_joint(coulomb), per_joint(viscous));
+          },
+          py::arg("gravity") = Eigen::Vector3d(0.0, 0.0, -9.81), py::arg("coulomb") = 0.0,
+          py::arg("viscous") = 0.0,
+          "The arm the constructor would read with this gravity and friction, without reading "
+          "the URDF again (the parsed model is shared or copied).")
       .def_property_readonly("dof", &PinocchioArm::dof)
       .def_property_readonly("source", &PinocchioArm::source)
       .def_property_readonly("joint_names", &PinocchioArm::joint_names)
@@ -566,7 +588,7 @@ void bind_hjb(py::module_& m) {
         check_finite(t, "t");
         return visit_loop(settings, [&](auto loop_type) {
           using Loop = typename decltype(loop_type)::type;
-          const Loop loop = make_loop<Loop>(settings);
+          const Loop loop = make_loop<Loop>(settings, *module_urdfs());
           check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
           check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
           check_size(states, states.rows(), 2 * loop.dof(), "x");
@@ -597,7 +619,7 @@ void bind_closed_loop(py::module_& m) {
         check_finite(t, "t");
         return visit_loop(settings, [&](auto loop_type) {
           using Loop = typename decltype(loop_type)::type;
-          Loop loop = make_loop<Loop>(settings);
+          Loop loop = make_loop<Loop>(settings, *module_urdfs());
           check_size(state, loop.state_size(), 1, "state");
           typename Loop::TimeSignals signals;
           typename Loop::State x = state, rate = Loop::State::Zero(loop.state_size());
@@ -631,7 +653,7 @@ void bind_closed_loop(py::module_& m) {
       [](const Settings& settings) {
         return visit_loop(settings, [&](auto loop_type) {
           using Loop = typename decltype(loop_type)::type;
-          return Eigen::VectorXd(make_loop<Loop>(settings).initial_state());
+          return Eigen::VectorXd(make_loop<Loop>(settings, *module_urdfs()).initial_state());
         });
       },
       py::arg("settings"), "The closed loop's initial state (S,).");
@@ -640,7 +662,7 @@ void bind_closed_loop(py::module_& m) {
       [](const Settings& settings) {
         return visit_loop(settings, [&](auto loop_type) {
           using Loop = typename decltype(loop_type)::type;
-          const Loop loop = make_loop<Loop>(settings);
+          const Loop loop = make_loop<Loop>(settings, *module_urdfs());
           const auto& points = loop.extrapolation().points();
           RowsXX out(static_cast<Eigen::Index>(points.size()), 2 * loop.dof());
           for (std::size_t i = 0; i < points.size(); ++i) out.row(i) = points[i].transpose();
@@ -665,7 +687,10 @@ void bind_simulation(py::module_& m) {
   py::class_<AnySimulation>(m, "Simulation",
                             "The closed-loop run (basis from settings.basis); advance(n) takes up "
                             "to n RK4 steps.")
-      .def(py::init<const Settings&>(), py::arg("settings"))
+      .def(py::init([](const Settings& settings) {
+             return std::make_unique<AnySimulation>(settings, *module_urdfs());
+           }),
+           py::arg("settings"))
       .def(
           "advance", [](AnySimulation& s, long max_steps) { return s.advance(max_steps); },
           py::arg("max_steps"), py::call_guard<py::gil_scoped_release>())
@@ -716,11 +741,13 @@ void bind_batch(py::module_& m) {
   py::class_<AnyBatch>(m, "Batch",
                        "Independent runs on a pool of C++ threads that take runs from a shared "
                        "queue and run each to the end; the caller polls with wait().")
-      .def(py::init<std::vector<Settings>>(), py::arg("settings"))
+      .def(py::init([](std::vector<Settings> settings, std::size_t window) {
+             return std::make_unique<AnyBatch>(std::move(settings), window, module_urdfs());
+           }),
+           py::arg("settings"), py::arg("window") = std::numeric_limits<std::size_t>::max(),
+           "Builds (checks) every run; at most `window` runs are built and not yet taken.")
       .def("__len__", &AnyBatch::size)
-      .def("start", &AnyBatch::start, py::arg("threads"),
-           py::arg("window") = std::numeric_limits<std::size_t>::max(),
-           "Starts the workers; at most `window` runs are built and not yet taken.")
+      .def("start", &AnyBatch::start, py::arg("threads"), "Starts the workers.")
       .def("wait", &AnyBatch::wait, py::arg("seconds"), py::call_guard<py::gil_scoped_release>(),
            "Waits up to `seconds` for a run to end; returns the indices of the runs that ended "
            "since the last call.")

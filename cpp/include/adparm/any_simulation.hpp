@@ -106,19 +106,20 @@ const Alternative& arm_settings(const Settings& settings) {
 
 // A two-link arm (TwoLinkArm, or DynamicArm of it) from the two-link parameters.
 template <class Arm>
-LoopArms<Arm> loop_arms(const Settings& settings) {
+LoopArms<Arm> loop_arms(const Settings& settings, UrdfArmCache& /*urdfs: unused*/) {
   const TwoLinkArms& arms = arm_settings<TwoLinkArms>(settings);
   return {Arm(arms.plant, "plant"), Arm(arms.model, "model"), arms.plant == arms.model};
 }
 
 // A URDF arm: the plant of its plant settings; the model of its model settings, or the plant when
-// the model's path is empty (or the model is the plant).
+// the model's path is empty (or the model is the plant). Read through `urdfs`: a model of the
+// plant's file shares the plant's parsed model.
 template <>
-inline LoopArms<UrdfLoopArm> loop_arms<UrdfLoopArm>(const Settings& settings) {
+inline LoopArms<UrdfLoopArm> loop_arms<UrdfLoopArm>(const Settings& settings, UrdfArmCache& urdfs) {
   const UrdfArms& arms = arm_settings<UrdfArms>(settings);
-  UrdfLoopArm plant(arms.plant, "plant.urdf");
+  UrdfLoopArm plant = urdfs.arm(arms.plant, "plant.urdf");
   if (arms.model.urdf.empty() || arms.model == arms.plant) return {plant, plant, true};
-  UrdfLoopArm model(arms.model, "model.urdf");
+  UrdfLoopArm model = urdfs.arm(arms.model, "model.urdf");
   if (model.dof() != plant.dof())
     throw std::invalid_argument("model.urdf: the model has " + std::to_string(model.dof()) +
                                 " joints, the plant (plant.urdf) " + std::to_string(plant.dof()));
@@ -143,18 +144,28 @@ Basis loop_basis(const Settings& settings, const Arm& model) {
   }
 }
 
-// The loop of the settings (Loop: one of Loops).
+// The loop of the settings (Loop: one of Loops), its URDF arms read through `urdfs` (a Batch's,
+// shared by its runs).
 template <class Loop>
-Loop make_loop(const Settings& settings) {
-  const LoopArms<typename Loop::ArmType> arms = loop_arms<typename Loop::ArmType>(settings);
+Loop make_loop(const Settings& settings, UrdfArmCache& urdfs) {
+  const LoopArms<typename Loop::ArmType> arms = loop_arms<typename Loop::ArmType>(settings, urdfs);
   return Loop(settings, arms.plant, arms.model, arms.model_is_plant,
               loop_basis<typename Loop::BasisType>(settings, arms.model));
+}
+
+// The same, reading its URDF files for itself (once each).
+template <class Loop>
+Loop make_loop(const Settings& settings) {
+  UrdfArmCache urdfs;
+  return make_loop<Loop>(settings, urdfs);
 }
 
 // A simulation of the loop of the settings, picked at run time.
 class AnySimulation {
  public:
   explicit AnySimulation(const Settings& settings) : impl_(make(settings)) {}
+  // The URDF arms read through `urdfs` (a Batch's, shared by its runs).
+  AnySimulation(const Settings& settings, UrdfArmCache& urdfs) : impl_(make(settings, urdfs)) {}
 
   long advance(long max_steps, const RunControl& control = {}) {
     return std::visit([&](auto& s) { return s.advance(max_steps, control); }, impl_);
@@ -188,10 +199,14 @@ class AnySimulation {
  private:
   using Variant = Loops::Simulations;
   static Variant make(const Settings& settings) {
+    UrdfArmCache urdfs;
+    return make(settings, urdfs);
+  }
+  static Variant make(const Settings& settings, UrdfArmCache& urdfs) {
     return visit_loop(settings, [&](auto loop_type) {
       using Loop = typename decltype(loop_type)::type;
       using Sim = Simulation<typename Loop::ArmType, typename Loop::BasisType>;
-      return Variant(std::in_place_type<Sim>, make_loop<Loop>(settings), settings.sim);
+      return Variant(std::in_place_type<Sim>, make_loop<Loop>(settings, urdfs), settings.sim);
     });
   }
   Variant impl_;

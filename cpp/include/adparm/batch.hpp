@@ -6,7 +6,9 @@
 // wait() returns the runs finished since the last call, steps_done() the progress; stop() makes
 // every worker return within one step (RunControl), and take() hands a run over to the caller,
 // which frees it. A window bounds the runs built but not yet taken, so a stream of many runs holds
-// only a few recordings at a time.
+// only a few recordings at a time. Every run is built once. The runs read their URDF files through
+// one UrdfArmCache: runs sharing a file share its parsed model (const; each run has its own
+// Pinocchio Data).
 #pragma once
 
 #include <algorithm>
@@ -24,22 +26,39 @@
 #include <vector>
 
 #include "adparm/simulation.hpp"
+#include "adparm/urdf_loop_arm.hpp"
 
 namespace adparm {
 
 template <class Run>
 class Batch {
  public:
-  // Checks every run's settings (builds each and frees it), naming the first invalid one.
-  explicit Batch(std::vector<Settings> settings)
+  // Checks every run's settings by building it, naming the first invalid one. The first `window`
+  // runs stay built for the workers (built once); a run beyond the window is built again when a
+  // worker reaches it (its URDF is not read again), so that at most `window` recordings are held.
+  // The runs read their URDFs through `urdfs` (a new cache if none is given).
+  explicit Batch(std::vector<Settings> settings,
+                 std::size_t window = std::numeric_limits<std::size_t>::max(),
+                 std::shared_ptr<UrdfArmCache> urdfs = nullptr)
       : settings_(std::move(settings)),
+        urdfs_(urdfs ? std::move(urdfs) : std::make_shared<UrdfArmCache>()),
         runs_(settings_.size()),
         seconds_(settings_.size(), 0.0),
         steps_(new StepCounter[settings_.size()]),
-        totals_(settings_.size(), 0) {
+        totals_(settings_.size(), 0),
+        window_(window) {
+    if (window < 1) throw std::invalid_argument("window: must be >= 1");
     for (std::size_t i = 0; i < settings_.size(); ++i) {
+      const auto start = std::chrono::steady_clock::now();
       try {
-        totals_[i] = Run(settings_[i]).steps();
+        auto run = std::make_unique<Run>(settings_[i], *urdfs_);
+        totals_[i] = run->steps();
+        if (i < window_) {
+          runs_[i] = std::move(run);
+          ++built_;
+          seconds_[i] =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
       } catch (const std::invalid_argument& error) {
         throw std::invalid_argument("settings[" + std::to_string(i) + "]: " + error.what());
       }
@@ -65,12 +84,10 @@ class Batch {
 
   // Starts `threads` workers (at most one per run). At most `window` runs are built and not yet
   // taken at any time (a worker waits for take() before building more).
-  void start(int threads, std::size_t window = std::numeric_limits<std::size_t>::max()) {
+  void start(int threads) {
     if (threads < 1) throw std::invalid_argument("threads: must be >= 1");
-    if (window < 1) throw std::invalid_argument("window: must be >= 1");
     if (started_) throw std::logic_error("Batch: already started");
     started_ = true;
-    window_ = window;
     const std::size_t workers = std::min<std::size_t>(threads, size());
     workers_ = workers;
     pool_.reserve(workers);
@@ -131,7 +148,7 @@ class Batch {
     if (!run) {
       if (!finished_all_ && claimed_ > i)
         throw std::logic_error("Batch: run " + std::to_string(i) + " is still running");
-      run = std::make_unique<Run>(settings_[i]);
+      run = std::make_unique<Run>(settings_[i], *urdfs_);
     } else {
       --built_;
     }
@@ -159,18 +176,22 @@ class Batch {
     try {
       while (!stop_.load()) {
         std::size_t i;
+        std::unique_ptr<Run> run;  // built by the constructor, or built here
         {
           std::unique_lock<std::mutex> lock(mutex_);
-          room_.wait(lock, [this] { return stop_.load() || built_ < window_; });
+          room_.wait(lock, [this] {
+            return stop_.load() || claimed_ >= size() || runs_[claimed_] || built_ < window_;
+          });
           if (stop_.load() || claimed_ >= size()) break;
           i = claimed_++;
-          ++built_;
+          run = std::move(runs_[i]);
+          if (!run) ++built_;
         }
         const auto start = std::chrono::steady_clock::now();
-        auto run = std::make_unique<Run>(settings_[i]);
+        if (!run) run = std::make_unique<Run>(settings_[i], *urdfs_);
         run->advance(std::numeric_limits<long>::max(), RunControl{&stop_, &steps_[i].value});
         steps_[i].value.store(run->step(), std::memory_order_relaxed);
-        seconds_[i] =
+        seconds_[i] +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const bool ended = run->status() != RunStatus::running;
         std::lock_guard<std::mutex> lock(mutex_);
@@ -192,7 +213,8 @@ class Batch {
   }
 
   std::vector<Settings> settings_;
-  std::vector<std::unique_ptr<Run>> runs_;
+  std::shared_ptr<UrdfArmCache> urdfs_;  // the runs' URDF arms, each file read once (thread-safe)
+  std::vector<std::unique_ptr<Run>> runs_;  // built, not yet started or ended and not yet taken
   std::vector<double> seconds_;
   // One cache line per run's step counter: the workers write theirs at every step, and counters
   // sharing a line would bounce it between the cores.

@@ -25,7 +25,8 @@
 //
 // The arm is immutable once read: compute() works in the caller's buffers (pinocchio::Data, in the
 // Terms of make_terms(), allocated once), so that it never allocates; threads may share an arm,
-// each with its own Terms.
+// each with its own Terms. A copy shares the parsed model (const) with the original: a run's plant,
+// model and structured basis read from one file hold one pinocchio::Model, each with its own Data.
 #pragma once
 
 #include <Eigen/Core>
@@ -50,6 +51,11 @@ class LockedJointsError : public std::invalid_argument {
   // "plant.locked_joints: ...", and "[plant] locked_joints = {...}" where it says what to lock.
   std::string with_section(const std::string& section) const;
 };
+
+// How many URDF texts the core has parsed so far, in every thread (PinocchioArm's constructor and
+// from_xml count one each; a copy or with_gravity_and_friction counts none): what tests check
+// "parsed once" by.
+long urdf_parse_count();
 
 class PinocchioArm {
  public:
@@ -103,6 +109,13 @@ class PinocchioArm {
                                const std::string& name = "<URDF string>",
                                const LockedJoints& locked = LockedJoints());
 
+  // The arm the constructor would read with this gravity and friction (the same numbers), without
+  // reading the URDF again: shared if they are this arm's, else a copy of the parsed model.
+  PinocchioArm with_gravity_and_friction(const Eigen::Vector3d& gravity,
+                                         const Eigen::VectorXd& coulomb,
+                                         const Eigen::VectorXd& viscous) const;
+
+  // Copies share the parsed model.
   PinocchioArm(const PinocchioArm& other);
   PinocchioArm& operator=(const PinocchioArm& other);
   PinocchioArm(PinocchioArm&&) noexcept;
@@ -158,13 +171,15 @@ class PinocchioArm {
                       Workspace& workspace) const;
 
   struct Impl;  // opaque: Pinocchio's model (cpp/src/pinocchio_arm_impl.hpp)
-  // For the other Pinocchio translation units of the core (pinocchio_structured_basis.cpp).
+  // For the other Pinocchio translation units of the core (pinocchio_structured_basis.cpp, which
+  // shares the model).
   const Impl& impl() const { return *impl_; }
+  const std::shared_ptr<const Impl>& shared_impl() const { return impl_; }
 
  private:
-  explicit PinocchioArm(std::unique_ptr<Impl> impl);
+  explicit PinocchioArm(std::shared_ptr<const Impl> impl);
 
-  std::unique_ptr<Impl> impl_;
+  std::shared_ptr<const Impl> impl_;  // never written once built: shared by copies
   int dof_ = 0;
 };
 
