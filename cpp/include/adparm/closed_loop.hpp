@@ -4,6 +4,7 @@
 // At each evaluation, with the desired state (qd, dqd, ddqd) of trajectory.hpp and
 // x = [e1; e2] (error_system.hpp):
 //   u_hat  = -1/2 R^-1 g^T (dphi/dx)^T Wa                         (eq. 20)
+//            (with an input bound: -lambda tanh(D), input_bound.hpp)
 //   eps    = HJB error, omega its regressor                       (eq. 21)
 //   dWc, dGamma                                                   (eqs. 23-24)
 //   dWa                                                           (eq. 26)
@@ -12,7 +13,8 @@
 //   u      = the controller's input (controller.hpp; adp: u_hat + probe(t))
 //   tau    = h_hat + mu - u     (g = [0; M^-1] convention; h_hat of the believed model, eq. 5)
 //   ddq    from the plant (eq. 1) with tau and the disturbance tau_d(t)
-//   dJ     = x^T Q x + u^T R u  (the accumulated cost of eq. 10, integrated with the state).
+//   dJ     = x^T Q x + u^T R u  (the accumulated cost of eq. 10, integrated with the state; with an
+//            input bound U(u) for u^T R u, input_bound.hpp).
 // The basis and the arm model are template parameters: a new one is a new type, not a new loop.
 // Sizes: n = Arm::kDof joints and K = Basis::kSize functions, each fixed (the two-link fast path,
 // n = 2, K = 8) or Eigen::Dynamic; then the loop's per-step vectors are bounded types (types.hpp),
@@ -123,7 +125,7 @@ class ClosedLoop {
         dof_(checked_dof(plant, model, basis)),
         basis_size_(basis.size()),
         error_system_(model, checked_alpha1(settings, dof_)),
-        cost_(settings.Q, settings.R, dof_),
+        cost_(settings.Q, settings.R, dof_, settings.input_bound, settings.e2_cost),
         critic_(settings.critic, basis_size_),
         actor_(settings.actor),
         controller_(settings.controller, dof_),
@@ -253,8 +255,8 @@ class ClosedLoop {
         } else {
           critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         }
-        actor_.add_gradient(p.input_gradient, cost_.R_inverse(), e.omega, e.error, difference,
-                            weight, actor_gradient);  // (26)
+        actor_.add_gradient(p.input_gradient, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega,
+                            e.error, difference, weight, actor_gradient);  // (26)
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
@@ -277,8 +279,8 @@ class ClosedLoop {
       mu = rise_.feedback(errors.e2, nu);                                            // eq. (27)
       rate.template segment<kDof>(nu_offset(), n) = rise_.integral_rate(errors.e2);  // eq. (28)
     }
-    const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(), hjb.u_hat,
-                                      signals.probe);
+    const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(),
+                                      cost_.bound(), hjb.u_hat, signals.probe);
     const Joint tau = error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
 
     rate.template segment<kDof>(kQ, n) = dq;
