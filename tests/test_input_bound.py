@@ -363,3 +363,21 @@ def test_planar_3link_learns_W_star_while_the_policy_saturates() -> None:
     error = np.linalg.norm(result.critic_weights - W, axis=1) / np.linalg.norm(W)
     assert error[0] > 0.05 and error[-1] < 0.01
     assert result.diagnostics["verdict"] == "ok"
+
+
+@pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+@pytest.mark.parametrize("kind", ["adp", "optimal"])
+def test_the_bounded_run_is_the_same_through_dynamic_sizes(kind: str) -> None:
+    """The fixed-size two-link loop and the dynamic-size loop (URDF arms' path) agree with an
+    input bound, the probe pushing the applied input beyond it and 7 extrapolation points."""
+    from test_dynamic_sizes import assert_same_runs
+
+    config = adparm.paper_config().updated(
+        {
+            "cost": {"input_bound": [20.0, 8.0], "e2_cost": "logcosh"},
+            "extrapolation": {"points": 7},
+            "controller": {"kind": kind},
+            "sim": {"T": 2.0},
+        }
+    )
+    assert_same_runs(config, rtol=1e-9)
