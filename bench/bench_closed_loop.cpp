@@ -20,6 +20,8 @@
 //     the same runs through the dynamic-size loop (Settings::dynamic_sizes)
 //   bench=expression_quadratic functions=10 points=0 steps=n repeats=3 ns_per_step=x
 //     heap_allocations=0 ... the paper run with the quadratic expression basis (dynamic sizes)
+//   bench=bounded_loop sizes=S points=0 steps=n repeats=3 ns_per_step=x unbounded_ns_per_step=y
+//     ratio=r heap_allocations=0 ... the paper run with an input bound (input_bound.hpp)
 //   bench=batch runs=16 steps=n threads=t seconds=s ns_per_step=x speedup=r identical=1
 //   bench=pinocchio_arm arm=NAME dof=n computes=c ns_per_compute=x heap_allocations=a
 //     PinocchioArm::compute (M, C, G, M^-1, F through Pinocchio) on examples/arms/planar_3link.urdf
@@ -901,6 +903,35 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
     std::fflush(stdout);
     all_finished = all_finished && best_limited.status == adparm::RunStatus::finished;
     all_finished = all_finished && best_limited.heap_allocations <= 0;
+  }
+
+  // The constrained-input loop (input_bound.hpp): the paper's run with lambda = 20 N m per joint
+  // and the ln cosh e2 cost (the paper's Q22 is diagonal), fixed sizes and dynamic sizes, each
+  // timed alternately with the same unbounded run; ratio = bounded / unbounded ns per step.
+  for (const bool dynamic : {false, true}) {
+    adparm::Settings unbounded = adparm::paper_settings();
+    unbounded.sim.T = horizon;
+    unbounded.dynamic_sizes = dynamic;
+    adparm::Settings bounded = unbounded;
+    bounded.input_bound = Eigen::VectorXd::Constant(2, 20.0);
+    bounded.e2_cost = adparm::E2Cost::logcosh;
+    LoopTiming best_unbounded, best_bounded;
+    for (int r = 0; r < repeats; ++r) {
+      const LoopTiming a = time_loop(unbounded);
+      const LoopTiming b = time_loop(bounded);
+      if (r == 0 || a.seconds < best_unbounded.seconds) best_unbounded = a;
+      if (r == 0 || b.seconds < best_bounded.seconds) best_bounded = b;
+    }
+    const double ns_unbounded = 1e9 * best_unbounded.seconds / best_unbounded.steps;
+    const double ns_bounded = 1e9 * best_bounded.seconds / best_bounded.steps;
+    std::printf(
+        "bench=bounded_loop sizes=%s points=0 steps=%ld repeats=%d ns_per_step=%.1f "
+        "unbounded_ns_per_step=%.1f ratio=%.3f heap_allocations=%ld status=%s\n",
+        dynamic ? "dynamic" : "fixed", best_bounded.steps, repeats, ns_bounded, ns_unbounded,
+        ns_bounded / ns_unbounded, best_bounded.heap_allocations, status_name(best_bounded.status));
+    std::fflush(stdout);
+    all_finished = all_finished && best_bounded.status == adparm::RunStatus::finished;
+    all_finished = all_finished && best_bounded.heap_allocations <= 0;
   }
 
   // The same paper loop through the dynamic-size path (n and K = Eigen::Dynamic, bounded types,

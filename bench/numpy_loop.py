@@ -98,6 +98,11 @@ class NumpyPaperLoop:
             raise ValueError(
                 f"task.qd: NumpyPaperLoop covers a constant set-point only, got {config.task.qd!r}"
             )
+        if config.cost.input_bound is not None:
+            raise ValueError(
+                "cost.input_bound: NumpyPaperLoop covers the quadratic input cost only "
+                "(tests/numpy_reference.py covers the bound)"
+            )
         self.config = config
         self.dt = config.sim.dt
         self.record_every = config.sim.record_every

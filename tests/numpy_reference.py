@@ -174,17 +174,80 @@ def error_model(config: Config, x, qd, dqd):
     return f, g
 
 
+def input_bound(config: Config) -> np.ndarray | None:
+    """lambda per joint, or None without an input bound."""
+    bound = config.cost.input_bound
+    if bound is None:
+        return None
+    return np.broadcast_to(np.asarray(bound, dtype=float), (len(config.cost.R),)).copy()
+
+
+def bounded_input_cost(u, R_diagonal, bound) -> float:
+    """U(u) = sum_i R_i [2 lambda_i u_i atanh(u_i / lambda_i) + lambda_i^2 ln(1 - u_i^2 /
+    lambda_i^2)] (Abu-Khalaf & Lewis 2005) = sum_i R_i lambda_i^2 [(1 + s) ln(1 + s) + (1 - s)
+    ln(1 - s)], s = u_i / lambda_i, for |u_i| < lambda_i (test_input_bound checks the two forms
+    agree); beyond the bound,
+    U at the bound (R_i lambda_i^2 2 ln 2) plus R_i (|u_i| - lambda_i)^2."""
+    u = np.asarray(u, dtype=float)
+    total = 0.0
+    for ui, r, lam in zip(u, R_diagonal, bound, strict=True):
+        if abs(ui) < lam:  # the printed formula rewritten: it loses digits near the bound
+            s = ui / lam
+            total += r * lam**2 * ((1 + s) * np.log(1 + s) + (1 - s) * np.log(1 - s))
+        else:
+            total += r * lam**2 * 2 * np.log(2) + r * (abs(ui) - lam) ** 2
+    return float(total)
+
+
+def log_cosh(z):
+    """ln cosh z = ln(e^z + e^-z) - ln 2 (NumPy's logaddexp: no overflow)."""
+    return np.logaddexp(z, -z) - np.log(2.0)
+
+
+def policy_input_cost(D, R_diagonal, bound) -> float:
+    """U(u) at u = -lambda tanh(D): sum_i R_i lambda_i^2 [2 D_i tanh D_i - 2 ln cosh D_i] (the
+    printed formula loses digits there as tanh D_i -> +-1; test_input_bound checks the two
+    agree where both are accurate)."""
+    D = np.asarray(D, dtype=float)
+    return float(np.sum(R_diagonal * bound**2 * (2 * D * np.tanh(D) - 2 * log_cosh(D))))
+
+
+def state_cost(config: Config, x) -> float:
+    """x^T Q x, or with e2_cost = logcosh: e1^T Q11 e1 + 2 e1^T Q12 e2 + sum_i 2 lambda_i^2 R_i
+    ln cosh(s_i e2_i / (R_i lambda_i)), s_i = sqrt(Q22_ii R_i)."""
+    Q = np.array(config.cost.Q)
+    x = np.asarray(x, dtype=float)
+    if config.cost.e2_cost != "logcosh":
+        return float(x @ Q @ x)
+    n = len(x) // 2
+    e1, e2 = x[:n], x[n:]
+    r = np.diag(np.array(config.cost.R))
+    lam = input_bound(config)
+    s = np.sqrt(np.diag(Q[n:, n:]) * r)
+    z = s * e2 / (r * lam)
+    return float(
+        e1 @ Q[:n, :n] @ e1 + 2 * e1 @ Q[:n, n:] @ e2 + np.sum(2 * lam**2 * r * log_cosh(z))
+    )
+
+
 def hjb(config: Config, x, qd, dqd, Wc, Wa) -> dict:
     """At state x: u_hat = -1/2 R^-1 g^T J^T Wa, omega = J (f + g u_hat) + desired_rate,
-    eps = x^T Q x + u_hat^T R u_hat + Wc . omega and B = J g (8, 2)."""
-    Q = np.array(config.cost.Q)
+    eps = x^T Q x + u_hat^T R u_hat + Wc . omega and B = J g (8, 2). With an input bound:
+    u_hat = -lambda tanh(D), D = (2 lambda)^-1 R^-1 B^T Wa, and U(u_hat) for u_hat^T R u_hat."""
     R = np.array(config.cost.R)
     x = np.asarray(x, dtype=float)
     f, g = error_model(config, x, qd, dqd)
     _, J, rate = basis(config.controller.basis, x, qd, dqd)
-    u_hat = -0.5 * np.linalg.solve(R, g.T @ J.T @ Wa)
+    bound = input_bound(config)
+    if bound is None:
+        u_hat = -0.5 * np.linalg.solve(R, g.T @ J.T @ Wa)
+        input_cost = u_hat @ R @ u_hat
+    else:
+        D = np.linalg.solve(R, g.T @ J.T @ Wa) / (2 * bound)
+        u_hat = -bound * np.tanh(D)
+        input_cost = policy_input_cost(D, np.diag(R), bound)
     omega = J @ (f + g @ u_hat) + rate
-    eps = x @ Q @ x + u_hat @ R @ u_hat + Wc @ omega
+    eps = state_cost(config, x) + input_cost + Wc @ omega
     return {"eps": eps, "omega": omega, "u_hat": u_hat, "B": J @ g}
 
 
@@ -357,7 +420,20 @@ def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None =
             rho = 1.0 + c.nu * omega @ Gamma @ omega
             dWc += -w * c.eta_c * Gamma @ omega * eps / rho
             dGamma += -w * c.eta_c * Gamma @ np.outer(omega, omega) @ Gamma / rho
-            grad += -w * a.eta_a1 * eps / np.sqrt(1 + omega @ omega) * B @ Rinv @ B.T @ (Wa - Wc)
+            # d eps / d Wa: with an input bound B R^-1 diag(1 - tanh^2 D) B^T (Wa - Wc)
+            bound = input_bound(config)
+            slope = np.eye(2) if bound is None else np.diag(1 - (s["u_hat"] / bound) ** 2)
+            grad += (
+                -w
+                * a.eta_a1
+                * eps
+                / np.sqrt(1 + omega @ omega)
+                * B
+                @ Rinv
+                @ slope
+                @ B.T
+                @ (Wa - Wc)
+            )
         if a.positive_e2:
             dWc = keep_e2_block_positive(Wc, dWc, a.e2_margin, Gamma)
         dWa = grad - a.eta_a2 * (Wa - Wc)
@@ -377,6 +453,8 @@ def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None =
         u = -(config.controller.gain_matrix("kp") @ e1 + config.controller.gain_matrix("kd") @ de1)
     elif kind == "optimal":
         u = -Rinv @ e2
+        if input_bound(config) is not None:
+            u = -input_bound(config) * np.tanh(Rinv @ e2 / input_bound(config))
     else:
         raise ValueError(kind)
 
@@ -413,7 +491,10 @@ def rhs(config: Config, t: float, state: np.ndarray, points: np.ndarray | None =
     tau_d = np.array([d1 * np.sin(t), d2 * np.cos(t)])
     ddq = np.linalg.solve(Mp, tau - Cp @ dq - Gp - Fp - tau_d)
 
-    dJ = x @ Q @ x + u @ R @ u
+    if input_bound(config) is None:
+        dJ = x @ Q @ x + u @ R @ u
+    else:
+        dJ = state_cost(config, x) + bounded_input_cost(u, np.diag(R), input_bound(config))
     rate = np.concatenate([dq, ddq, dWc, dWa, dGamma.reshape(-1, order="F"), dnu, [dJ]])
     outputs = {
         "qd": qd,

@@ -68,6 +68,7 @@ def test_covariance_reset_happens_within_the_compared_steps() -> None:
         ({"controller": {"kind": "pd"}}, "controller.kind"),
         ({"extrapolation": {"points": 4}}, "extrapolation.points"),
         ({"task": {"qd": {"kind": "sinusoid"}}}, "task.qd"),
+        ({"cost": {"input_bound": 5.0}}, "cost.input_bound"),
     ],
 )
 def test_out_of_scope_config_is_refused(changes: dict, field: str) -> None:

@@ -37,6 +37,7 @@ from .optimal import (
     initial_error_state,
     optimal_value,
     optimal_weights,
+    saturated_cost,
     solvable_cost,
     value_scale,
 )
@@ -111,6 +112,7 @@ __all__ = [
     "paper_config",
     "simulate",
     "simulate_batch",
+    "saturated_cost",
     "solvable_cost",
     "sweep",
     "two_link_parameters",

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'simulate_open_loop', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
+__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'simulate_open_loop', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
 class ArmParameters:
     """
     Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.
@@ -377,6 +377,51 @@ class ControllerSettings:
     @kp.setter
     def kp(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
         ...
+class E2Cost:
+    """
+    Members:
+    
+      quadratic
+    
+      logcosh
+    """
+    __members__: typing.ClassVar[dict[str, E2Cost]]
+    logcosh: typing.ClassVar[E2Cost]
+    quadratic: typing.ClassVar[E2Cost]
+    @typing.overload
+    def __eq__(self, other: E2Cost) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: E2Cost) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class BasisKind:
     """
     Members:
@@ -591,6 +636,7 @@ class Settings:
     controller: ControllerSettings
     critic: CriticSettings
     dynamic_sizes: bool
+    e2_cost: E2Cost
     extrapolation: ExtrapolationSettings
     probe: ProbeSettings
     sim: SimSettings
@@ -626,6 +672,12 @@ class Settings:
         ...
     @disturbance.setter
     def disturbance(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def input_bound(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @input_bound.setter
+    def input_bound(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
         ...
     @property
     def is_urdf(self) -> bool:

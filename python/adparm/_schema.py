@@ -342,6 +342,8 @@ def check_sizes(config: ConfigSchema, n: int) -> None:
         check_shape(qd, "task.qd", (n,), n)
     check_shape(config.cost.Q, "cost.Q", (2 * n, 2 * n), n)
     check_shape(config.cost.R, "cost.R", (n, n), n)
+    if isinstance(config.cost.input_bound, tuple):
+        check_shape(config.cost.input_bound, "cost.input_bound", (n,), n)
     check_shape(config.control.alpha1, "control.alpha1", (n, n), n)
     k = len(config.probe.frequencies)
     amplitude = config.probe.amplitude

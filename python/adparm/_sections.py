@@ -43,7 +43,11 @@ PAPER_Q: Matrix = (
 
 @dataclass(frozen=True)
 class CostConfig:
-    """r(x, u) = x^T Q x + u^T R u (eqs. 10-11); Q (4x4) and R (2x2) symmetric positive definite."""
+    """r(x, u) = x^T Q x + u^T R u (eqs. 10-11); Q (4x4) and R (2x2) symmetric positive definite.
+
+    With ``input_bound`` (not in the paper) u^T R u becomes the constrained-input cost U(u) and,
+    with ``e2_cost = "logcosh"``, the e2 block of x^T Q x its ln cosh form
+    (:doc:`/guide/constrained-input`)."""
 
     Q: Matrix = setting(
         PAPER_Q,
@@ -52,8 +56,26 @@ class CostConfig:
     )
     R: Matrix = setting(
         ((0.25, 0.0), (0.0, 0.25)),
-        "2 x 2 input weight, symmetric positive definite.",
+        "2 x 2 input weight, symmetric positive definite (diagonal with ``input_bound``).",
         core="R",
+    )
+    input_bound: float | Vector | None = setting(
+        None,
+        "Bound lambda on the ADP input, ``|u_i| <= lambda_i`` (one number or one per joint, > 0; "
+        "not in the paper): the input cost becomes U(u) = sum_i R_i [2 lambda_i u_i "
+        "atanh(u_i / lambda_i) + lambda_i^2 ln(1 - u_i^2 / lambda_i^2)] and the policy "
+        "u = -lambda tanh(D) (Abu-Khalaf & Lewis 2005; :doc:`/guide/constrained-input`). "
+        "Needs a diagonal R. Left out: the quadratic u^T R u.",
+        via="input_bound, one per joint (CostConfig.bound_vector)",
+    )
+    e2_cost: str = setting(
+        "quadratic",
+        "``quadratic`` (e2^T Q22 e2) or ``logcosh``: sum_i 2 lambda_i^2 R_i "
+        "ln cosh(s_i e2_i / (R_i lambda_i)), s_i = sqrt(Q22_ii R_i), equal to e2^T Q22 e2 for "
+        "small e2 and, with Q22 = s^2 R^-1, the cost for which V* = e1^T K e1 + s e2^T M(q) e2 "
+        "solves the constrained HJB exactly (adparm.saturated_cost). ``logcosh`` needs "
+        "``input_bound`` and a diagonal Q22.",
+        via="e2_cost, an enum (E2Cost)",
     )
 
     def __post_init__(self) -> None:
@@ -61,6 +83,42 @@ class CostConfig:
         object.__setattr__(self, "R", square_matrix(self.R, "cost.R"))
         object.__setattr__(self, "Q", symmetric_positive_definite(self.Q, "cost.Q"))
         object.__setattr__(self, "R", symmetric_positive_definite(self.R, "cost.R"))
+        object.__setattr__(
+            self, "e2_cost", choice_value(self.e2_cost, "cost.e2_cost", ("quadratic", "logcosh"))
+        )
+        if self.input_bound is None:
+            if self.e2_cost == "logcosh":
+                raise ValueError('cost.e2_cost: "logcosh" needs cost.input_bound')
+            return
+        if is_number(self.input_bound):
+            bound: float | Vector = scalar_value(
+                self.input_bound, "cost.input_bound", minimum=0.0, strict=True
+            )
+        else:
+            bound = vector_value(self.input_bound, "cost.input_bound", None)
+            if min(bound) <= 0.0:
+                raise ValueError(f"cost.input_bound: every bound must be > 0, got {list(bound)}")
+        object.__setattr__(self, "input_bound", bound)
+        R = np.array(self.R)
+        if np.any(R != np.diag(np.diag(R))):
+            raise ValueError(
+                f"cost.R: must be diagonal with cost.input_bound (the bounded input cost is a sum "
+                f"over the joints), got {R.tolist()}"
+            )
+        if self.e2_cost == "logcosh":
+            n = len(self.R)
+            Q22 = np.array(self.Q)[n:, n:]
+            if np.any(Q22 != np.diag(np.diag(Q22))):
+                raise ValueError(
+                    'cost.Q: its e2 block Q22 must be diagonal with cost.e2_cost = "logcosh" '
+                    f"(the ln cosh cost is a sum over the joints), got {Q22.tolist()}"
+                )
+
+    def bound_vector(self, joints: int = 2) -> np.ndarray:
+        """lambda, one per joint; empty without an input bound."""
+        if self.input_bound is None:
+            return np.zeros(0)
+        return np.broadcast_to(np.array(self.input_bound, dtype=float), (joints,)).copy()
 
 
 @dataclass(frozen=True)

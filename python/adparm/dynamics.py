@@ -26,6 +26,7 @@ __all__ = [
     "initial_error_state",
     "linearisation",
     "lqr_value",
+    "saturated_cost",
     "solvable_cost",
     "value_scale",
     "weight_vector",
@@ -163,6 +164,54 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
     return Q
 
 
+def saturated_cost(K: Any, alpha1: Any, R: Any, input_bound: Any) -> dict[str, Any]:
+    """The ``[cost]`` section of the exact constrained-input family: with it, V* = e1^T K e1 +
+    e2^T M(q) e2 solves the HJB equation of the bounded input |u_i| <= lambda_i exactly, and
+    u* = -lambda tanh(R^-1 e2 / lambda) (docs: constrained-input).
+
+    Parameters
+    ----------
+    K : array_like, shape (n, n)
+        Symmetric positive definite: the e1 block of V*.
+    alpha1 : array_like, shape (n, n)
+        The gain in e2 = de1 + alpha1 e1.
+    R : array_like, shape (n, n)
+        The input weight, diagonal with positive entries.
+    input_bound : float or array_like, shape (n,)
+        lambda, > 0: one number for every joint or one per joint.
+
+    Returns
+    -------
+    dict
+        ``{"Q": ..., "R": ..., "input_bound": ..., "e2_cost": "logcosh"}`` (nested lists), for
+        ``Config.from_dict({"cost": ...})`` or ``config.updated(cost=...)``; Q is
+        :func:`solvable_cost` (K, alpha1, R), so W* is that of the unbounded exact family.
+
+    Raises
+    ------
+    ValueError
+        As :func:`solvable_cost`, or if R is not diagonal or a bound is not a finite number > 0.
+    """
+    Q = solvable_cost(K, alpha1, R)
+    n = Q.shape[0] // 2
+    R = real_array(R, "R")
+    if np.any(R != np.diag(np.diag(R))):
+        raise ValueError(f"R: must be diagonal (the bounded input cost), got {R.tolist()}")
+    bound = real_array(input_bound, "input_bound")
+    if bound.ndim == 0:
+        bound = np.full(n, float(bound))
+    if bound.shape != (n,) or not np.all(np.isfinite(bound)) or np.any(bound <= 0.0):
+        raise ValueError(
+            f"input_bound: expected one finite number > 0 or {n} of them, got {bound.tolist()}"
+        )
+    return {
+        "Q": Q.tolist(),
+        "R": R.tolist(),
+        "input_bound": bound.tolist(),
+        "e2_cost": "logcosh",
+    }
+
+
 def weight_vector(value: Any, name: str, size: int = 8) -> np.ndarray:
     check_real(np.asarray(value), name)
     try:
@@ -229,6 +278,11 @@ def exact_family(config: ConfigSchema, rtol: float = 1e-9) -> tuple[np.ndarray, 
     """K = -Q12 and s of the exact family V* = e1^T K e1 + s e2^T M(q) e2 (optimal_weights): a
     ValueError names the condition on Q that fails."""
     n = config.dof
+    if config.cost.input_bound is not None and config.cost.e2_cost != "logcosh":
+        raise ValueError(
+            'cost.e2_cost: with cost.input_bound the exact family needs e2_cost = "logcosh" '
+            "(adparm.saturated_cost); with the quadratic e2 cost V* is not known"
+        )
     Q = np.array(config.cost.Q)
     R = np.array(config.cost.R)
     alpha1 = np.array(config.control.alpha1)

@@ -22,6 +22,7 @@ from .dynamics import (
     initial_error_state,
     linearisation,
     lqr_value,
+    saturated_cost,
     solvable_cost,
     value_scale,
 )
@@ -39,6 +40,7 @@ __all__ = [
     "optimal_value",
     "optimal_weights",
     "policy",
+    "saturated_cost",
     "solvable_cost",
     "value_scale",
 ]
@@ -68,7 +70,8 @@ def policy(config: ConfigSchema, x: Any, t: Any, weights: Any) -> np.ndarray:
     """The actor's input u = -1/2 R^-1 g(x)^T (d phi / dx)^T W (eq. 20) at error states x (m, 2n)
     and times t (m,) (qd(t) enters the basis and q = qd - e1 the inertia of g = [0; M^-1]), with
     weights W (K,) or one row per state (m, K); the believed model's M. With W = W* it is the
-    optimal input u* = -R^-1 e2 of the exact family. Returns (m, n)."""
+    optimal input u* = -R^-1 e2 of the exact family. With cost.input_bound the bounded policy
+    u = lambda tanh(v / lambda) of that v (docs: constrained-input). Returns (m, n)."""
     check_config(config)
     n = config.dof
     states = np.atleast_2d(error_states(x, 2 * n))
@@ -79,9 +82,13 @@ def policy(config: ConfigSchema, x: Any, t: Any, weights: Any) -> np.ndarray:
     gradient_e2 = np.einsum("mkx,mk->mx", jacobian, W)[:, n:]
     masses = inertia_matrices(config, desired - states[:, :n], model=True)
     R_inverse = np.linalg.inv(np.array(config.cost.R))
-    return -0.5 * np.einsum(
+    unbounded = -0.5 * np.einsum(
         "ij,mj->mi", R_inverse, np.linalg.solve(masses, gradient_e2[..., None])[..., 0]
     )
+    if config.cost.input_bound is None:
+        return unbounded
+    bound = config.cost.bound_vector(n)  # u = -lambda tanh(D), D = -unbounded / lambda
+    return bound * np.tanh(unbounded / bound)
 
 
 def optimal_weights(config: ConfigSchema, *, rtol: float = 1e-9) -> np.ndarray:

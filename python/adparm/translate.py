@@ -75,6 +75,8 @@ def core_settings(config: Config) -> _core.Settings:
     program = family.core_program(config)
     if program is not None:
         settings.basis_program = program
+    settings.input_bound = config.cost.bound_vector(config.dof)
+    settings.e2_cost = getattr(_core.E2Cost, config.cost.e2_cost)
     extrapolation = settings.extrapolation
     extrapolation.box = config.extrapolation.box_vector(config.dof)
     extrapolation.mode = getattr(_core.ExtrapolationMode, config.extrapolation.mode)

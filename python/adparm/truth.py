@@ -466,9 +466,14 @@ def _diagnose_learning(
                 "use a basis that can represent V* (controller.basis; a richer polynomial), "
                 "and compare the learned V with adparm.lqr_value near the set-point"
                 if config.plant.urdf is not None
-                else "use a cost of the exact family (adparm.solvable_cost; then W* is known), "
-                "or a basis that can represent V* (controller.basis), and compare with "
-                "adparm.lqr_value / adparm.optimal_cost"
+                else "use a cost of the exact family ("
+                + (
+                    "adparm.saturated_cost"
+                    if config.cost.input_bound is not None
+                    else "adparm.solvable_cost"
+                )
+                + "; then W* is known), or a basis that can represent V* (controller.basis), "
+                "and compare with adparm.lqr_value / adparm.optimal_cost"
             )
         else:
             out["approximation"] = "not converged"

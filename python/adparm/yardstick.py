@@ -165,7 +165,7 @@ def optimal_cost(
     Raises
     ------
     ValueError
-        For a URDF arm, a moving qd, or a bad argument.
+        For a URDF arm, a moving qd, an input bound (cost.input_bound), or a bad argument.
     RuntimeError
         If IPOPT does not converge.
     KeyboardInterrupt
@@ -178,6 +178,11 @@ def optimal_cost(
         )
     if not config.task.is_set_point:
         raise ValueError("task.qd: optimal_cost needs a set-point (a constant qd)")
+    if config.cost.input_bound is not None:
+        raise ValueError(
+            "cost.input_bound: optimal_cost transcribes the quadratic cost only, not the bounded "
+            "input cost (use adparm.optimal_value on the exact family, adparm.saturated_cost)"
+        )
     intervals = _count(intervals, "intervals")
     max_intervals = _count(max_intervals, "max_intervals")
     if max_intervals < intervals:

@@ -163,6 +163,9 @@ void bind_settings(py::module_& m) {
       .def_readwrite("rise", &ControllerSettings::rise)
       .def_readwrite("kp", &ControllerSettings::kp)
       .def_readwrite("kd", &ControllerSettings::kd);
+  py::enum_<E2Cost>(m, "E2Cost")
+      .value("quadratic", E2Cost::quadratic)
+      .value("logcosh", E2Cost::logcosh);
   py::enum_<BasisKind>(m, "BasisKind")
       .value("paper", BasisKind::paper)
       .value("augmented", BasisKind::augmented)
@@ -231,6 +234,8 @@ void bind_settings(py::module_& m) {
       .def_readwrite("task", &Settings::task)
       .def_readwrite("Q", &Settings::Q)
       .def_readwrite("R", &Settings::R)
+      .def_readwrite("input_bound", &Settings::input_bound)
+      .def_readwrite("e2_cost", &Settings::e2_cost)
       .def_readwrite("control", &Settings::control)
       .def_readwrite("critic", &Settings::critic)
       .def_readwrite("actor", &Settings::actor)

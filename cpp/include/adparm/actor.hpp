@@ -1,4 +1,6 @@
-// Actor: the policy of eq. (20) and its gradient update law with projection (eq. 26).
+// Actor: the policy of eq. (20) and its gradient update law with projection (eq. 26); with an input
+// bound the tanh policy and its law (input_bound.hpp, hjb.hpp; Modares, Lewis & Naghibi-Sistani,
+// IEEE TNNLS 2013; Vamvoudakis, Miranda & Hespanha, IEEE TNNLS 2016).
 //   u_hat = -1/2 R^-1 g^T (dphi/dx)^T Wa = -1/2 R^-1 B^T Wa,   B = (dphi/dx) g   (N x m)
 //   dWa = proj{ -eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps_hjb - eta_a2 (Wa - Wc) }
 // B R^-1 B^T is the ERRATA's grad(phi) G grad(phi)^T with G = g R^-1 g^T. The law is the gradient
@@ -51,10 +53,16 @@ class Actor {
   // Adds one sample's share of the gradient term of eq. (26) to `gradient`:
   //   gradient -= w eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps_hjb
   // (w = 1 for the trajectory, 1/N for each of N extrapolation points).
-  void add_gradient(const InputGradient& B, const InputWeight& R_inverse, const Vector& omega,
-                    double hjb_error, const Vector& difference, double weight,
-                    Vector& gradient) const {
-    const Input projected = R_inverse * (B.transpose() * difference);
+  // With an input bound (input_bound.hpp; u_hat the bounded policy) the term is
+  //   B R^-1 diag(sech^2 D) B^T (Wa - Wc) eps_hjb,
+  // the gradient of eps_hjb for u_hat = -lambda tanh(D): d eps/du_hat = -B^T (Wa - Wc) (since
+  // dU/du = -B^T Wa at u_hat) and du_hat/dWa = -1/2 diag(sech^2 D) R^-1 B^T (R diagonal).
+  template <class Bound>
+  void add_gradient(const InputGradient& B, const InputWeight& R_inverse, const Bound& bound,
+                    const Input& u_hat, const Vector& omega, double hjb_error,
+                    const Vector& difference, double weight, Vector& gradient) const {
+    Input projected = R_inverse * (B.transpose() * difference);
+    if (bound.bounded()) bound.scale_by_slope(u_hat, projected);
     gradient.noalias() -=
         (weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
         (B * projected);

@@ -4,6 +4,7 @@
 // At each evaluation, with the desired state (qd, dqd, ddqd) of trajectory.hpp and
 // x = [e1; e2] (error_system.hpp):
 //   u_hat  = -1/2 R^-1 g^T (dphi/dx)^T Wa                         (eq. 20)
+//            (with an input bound: -lambda tanh(D), input_bound.hpp)
 //   eps    = HJB error, omega its regressor                       (eq. 21)
 //   dWc, dGamma                                                   (eqs. 23-24)
 //   dWa                                                           (eq. 26)
@@ -14,7 +15,8 @@
 //            the commanded torque; with actuator limits (Settings::torque_limits, not in the
 //            paper) the drive applies it clipped, tau_i <- min(max(tau_i, -limit_i), limit_i)
 //   ddq    from the plant (eq. 1) with the applied tau and the disturbance tau_d(t)
-//   dJ     = x^T Q x + u^T R u  (the accumulated cost of eq. 10, integrated with the state).
+//   dJ     = x^T Q x + u^T R u  (the accumulated cost of eq. 10, integrated with the state; with an
+//            input bound U(u) for u^T R u, input_bound.hpp).
 // Anti-windup of RISE (not in the paper; ControlSettings::anti_windup, on by default): nu enters
 // tau with gain +1 (eq. 27), and while joint i is clipped the plant does not see tau_i move, so
 // integrating dnu_i towards the limit only stores torque that must be integrated back before the
@@ -137,7 +139,7 @@ class ClosedLoop {
         dof_(checked_dof(plant, model, basis)),
         basis_size_(basis.size()),
         error_system_(model, checked_alpha1(settings, dof_)),
-        cost_(settings.Q, settings.R, dof_),
+        cost_(settings.Q, settings.R, dof_, settings.input_bound, settings.e2_cost),
         critic_(settings.critic, basis_size_),
         actor_(settings.actor),
         controller_(settings.controller, dof_),
@@ -273,8 +275,8 @@ class ClosedLoop {
         } else {
           critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         }
-        actor_.add_gradient(p.input_gradient, cost_.R_inverse(), e.omega, e.error, difference,
-                            weight, actor_gradient);  // (26)
+        actor_.add_gradient(p.input_gradient, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega,
+                            e.error, difference, weight, actor_gradient);  // (26)
       };
       learn(point, hjb, 1.0);
       extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
@@ -297,8 +299,8 @@ class ClosedLoop {
       mu = rise_.feedback(errors.e2, nu);                                            // eq. (27)
       rate.template segment<kDof>(nu_offset(), n) = rise_.integral_rate(errors.e2);  // eq. (28)
     }
-    const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(), hjb.u_hat,
-                                      signals.probe);
+    const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(),
+                                      cost_.bound(), hjb.u_hat, signals.probe);
     const Joint tau_commanded =
         error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
     Joint tau = tau_commanded;

@@ -45,8 +45,10 @@ class ControllerT {
   bool uses_rise() const { return rise_; }
 
   // The input u for the current errors; u_hat is the actor's eq. (20), probe the probing signal.
+  // With an input bound (input_bound.hpp) optimal is u* = -lambda tanh(R^-1 e2 / lambda).
+  template <class Bound>
   Joint input(const TrackingErrorsT<N>& errors, const Matrix& alpha1, const Matrix& R_inverse,
-              const Joint& u_hat, const Joint& probe) const {
+              const Bound& bound, const Joint& u_hat, const Joint& probe) const {
     switch (kind_) {
       case ControllerKind::adp:
         return u_hat + probe;
@@ -57,6 +59,7 @@ class ControllerT {
         return -(kp_ * errors.e1 + kd_ * de1);
       }
       case ControllerKind::optimal:
+        if (bound.bounded()) return bound.saturate(-(R_inverse * errors.e2));
         return -(R_inverse * errors.e2);
     }
     return Joint::Zero(errors.e1.size());

@@ -1,9 +1,12 @@
-// Quadratic cost of eqs. (10)-(11): r(x, u) = x^T Q x + u^T R u, with Q > 0 and R > 0 symmetric.
+// Quadratic cost of eqs. (10)-(11): r(x, u) = x^T Q x + u^T R u, with Q > 0 and R > 0 symmetric;
+// with an input bound (cost.input_bound), u^T R u becomes the constrained-input cost U(u) and, with
+// e2_cost = logcosh, the e2 block of x^T Q x its ln cosh form (input_bound.hpp).
 #pragma once
 
 #include <Eigen/Cholesky>
 #include <string>
 
+#include "adparm/input_bound.hpp"
 #include "adparm/types.hpp"
 
 namespace adparm {
@@ -29,7 +32,10 @@ class QuadraticCostT {
   using StateWeight = ErrorMatrix<N>;
   using InputWeight = JointMatrix<N>;
   QuadraticCostT() = default;
-  QuadraticCostT(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R, Eigen::Index n) {
+  // `input_bound`: lambda (n entries, or empty: no bound); `e2_cost`: logcosh needs a bound.
+  QuadraticCostT(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R, Eigen::Index n,
+                 const Eigen::VectorXd& input_bound = Eigen::VectorXd(),
+                 E2Cost e2_cost = E2Cost::quadratic) {
     check_size(Q, 2 * n, 2 * n, "cost.Q");
     check_size(R, n, n, "cost.R");
     check_finite(Q, "cost.Q");
@@ -39,14 +45,30 @@ class QuadraticCostT {
     check_symmetric_positive_definite(Q_, "cost.Q");
     check_symmetric_positive_definite(R_, "cost.R");
     R_inverse_ = Eigen::LLT<InputWeight>(R_).solve(InputWeight::Identity(n, n));
+    bound_ = InputBoundT<N>(input_bound, e2_cost, Q, R, n);
   }
 
   const StateWeight& Q() const { return Q_; }
   const InputWeight& R() const { return R_; }
   const InputWeight& R_inverse() const { return R_inverse_; }
+  const InputBoundT<N>& bound() const { return bound_; }
+  bool bounded() const { return bound_.bounded(); }
 
-  double state_cost(const ErrorVector<N>& x) const { return x.dot(Q_ * x); }
-  double input_cost(const JointVector<N>& u) const { return u.dot(R_ * u); }
+  double state_cost(const ErrorVector<N>& x) const {
+    if (!bound_.logcosh()) return x.dot(Q_ * x);
+    // e1^T Q11 e1 + 2 e1^T Q12 e2 + the ln cosh e2 term (input_bound.hpp)
+    const Eigen::Index n = x.size() / 2;
+    double sum = 0.0;
+    for (Eigen::Index j = 0; j < 2 * n; ++j)
+      for (Eigen::Index i = 0; i < std::min(n, j + 1); ++i)
+        sum += (i == j ? 1.0 : 2.0) * Q_(i, j) * x[i] * x[j];
+    return sum + bound_.e2_cost(x.tail(n));
+  }
+  // u^T R u, or U(u) with an input bound
+  double input_cost(const JointVector<N>& u) const {
+    if (bound_.bounded()) return bound_.input_cost(u);
+    return u.dot(R_ * u);
+  }
   double operator()(const ErrorVector<N>& x, const JointVector<N>& u) const {
     return state_cost(x) + input_cost(u);
   }
@@ -55,6 +77,7 @@ class QuadraticCostT {
   StateWeight Q_ = StateWeight::Identity(size_of(twice(N), 4), size_of(twice(N), 4));
   InputWeight R_ = InputWeight::Identity(size_of(N, 2), size_of(N, 2));
   InputWeight R_inverse_ = InputWeight::Identity(size_of(N, 2), size_of(N, 2));
+  InputBoundT<N> bound_{};
 };
 using QuadraticCost = QuadraticCostT<2>;
 

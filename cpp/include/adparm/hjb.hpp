@@ -3,6 +3,9 @@
 //   omega   = (dphi/dx) (f(x) + g(x) u_hat) + (dphi/dqd) dqd   (the regressor of eqs. 23-26)
 // The last term is d phi / dt from the desired position moving (zero for the paper's set-point).
 // With Wc = Wa = W* (basis.hpp) and the ERRATA conditions on Q and R, eps_hjb = 0 at every x.
+// With an input bound (input_bound.hpp): u_hat = -lambda tanh(D), D = (2 lambda)^-1 R^-1 B^T Wa,
+// and u_hat^T R u_hat becomes U(u_hat) (Abu-Khalaf & Lewis 2005); with e2_cost = logcosh and the
+// exact family's Q, eps_hjb = 0 at W* again.
 //
 // The evaluation is split in two: an HjbPoint holds what does not depend on the weights (the
 // drift part of omega, B = (dphi/dx) g and x^T Q x), so that fixed extrapolation points compute it
@@ -59,9 +62,16 @@ void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& 
                   const typename Basis::Vector& critic_weights,
                   const typename Basis::Vector& actor_weights, HjbEvaluation<Basis, Dof>& out) {
   out.u_hat = Actor<Basis, Dof>::policy(point.input_gradient, cost.R_inverse(), actor_weights);
+  double input_cost;
+  if (cost.bounded()) {  // u_hat = -lambda tanh(D) and U(u_hat) (input_bound.hpp)
+    input_cost = cost.bound().policy_cost(out.u_hat);
+    out.u_hat = cost.bound().saturate(out.u_hat);
+  } else {
+    input_cost = cost.input_cost(out.u_hat);
+  }
   out.omega = point.drift_rate;
   out.omega.noalias() += point.input_gradient * out.u_hat;
-  out.error = point.state_cost + cost.input_cost(out.u_hat) + critic_weights.dot(out.omega);
+  out.error = point.state_cost + input_cost + critic_weights.dot(out.omega);
 }
 
 // The weight-free part at an error state x with the desired state `desired` (q, dq recovered from

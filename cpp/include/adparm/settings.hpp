@@ -19,6 +19,7 @@
 #include "adparm/critic.hpp"
 #include "adparm/expression_basis.hpp"
 #include "adparm/extrapolation.hpp"
+#include "adparm/input_bound.hpp"
 #include "adparm/probing.hpp"
 #include "adparm/rise.hpp"
 #include "adparm/trajectory.hpp"
@@ -90,6 +91,8 @@ struct Settings {
   TaskSettings task{};
   Eigen::MatrixXd Q = Mat4::Identity();  // 2n x 2n
   Eigen::MatrixXd R = Mat2::Identity();  // n x n
+  Eigen::VectorXd input_bound;           // lambda, n entries > 0; empty: no bound (input_bound.hpp)
+  E2Cost e2_cost = E2Cost::quadratic;    // logcosh: the e2 block of the state cost (needs a bound)
   ControlSettings control{};
   CriticSettings critic{};
   ActorSettings actor{};
