@@ -284,9 +284,10 @@ class Comparison:
     - cost_vs_optimal_cost: J / J* - 1 with J* (``optimal_cost``, an
       :class:`adparm.truth.OptimalCost`) the least cost any input reaches over the same time
       from the same x(0) on the plant's error system (adparm.optimal_cost with model=False;
-      over sim.T without a terminal cost when sim.T is shorter than its default horizon). It is
-      a lower bound of every row's J: a row is below 0 by at most J*'s stated error (None for
-      a moving qd, a URDF arm or when IPOPT fails);
+      over sim.T without a terminal cost when sim.T is shorter than its default horizon; with
+      the plant's torque limits, which the applied torque obeys). It is a lower bound of every
+      row's J: a row is below 0 by at most J*'s stated error (None for a moving qd or when J*
+      fails, e.g. IPOPT, or a URDF arm with locked joints);
     - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
     - final_e1: ``|e1|`` at the last row, rad;
     - peak_torque: max ``|tau|`` over both joints and all rows, N m;
@@ -479,19 +480,20 @@ def compare(
 
 
 def _optimal_cost_json(best: float) -> dict[str, Any]:
-    keys = ("error", "rtol", "converged", "intervals", "horizon", "terminal")
+    keys = ("error", "rtol", "converged", "intervals", "horizon", "terminal", "active_until")
     return {"value": float(best), **{key: getattr(best, key, None) for key in keys}}
 
 
 def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
     """J* on the same footing as the rows' J: adparm.optimal_cost on the plant's error system
     (model=False), over sim.T without a terminal cost when sim.T is shorter than its default
-    horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*); or None where
-    it does not apply (moving qd, a URDF arm) or fails; and the failure (one line) or None."""
+    horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*), with the
+    config's torque limits and input cost; or None where it does not apply (moving qd) or fails
+    (e.g. a URDF arm with locked joints); and the failure (one line) or None."""
     from .truth import optimal_cost  # the module's attribute: tests replace it
     from .yardstick import default_horizon, plant_config
 
-    if not config.task.is_set_point or config.plant.urdf is not None:  # two-link arm only
+    if not config.task.is_set_point:
         return None, None
     try:
         if config.sim.T < default_horizon(plant_config(config)):
