@@ -182,3 +182,16 @@ def test_locked_joints_are_refused() -> None:
     )
     with pytest.raises(ValueError, match=r"plant\.locked_joints: optimal_cost does not"):
         adparm.optimal_cost(config)
+
+
+def test_the_default_horizon_is_lengthened_past_the_active_limits() -> None:
+    # the terminal cost x^T P x is the small-signal cost-to-go: the horizon leaves 12 LQR time
+    # constants (default_horizon) after the last node where a limit is active
+    config = adparm.paper_config()
+    tail = adparm.truth.default_horizon(config)
+    coarse = {"intervals": 100, "max_intervals": 100}
+    best = adparm.optimal_cost(config, torque_limits=[25.0, 12.0], **coarse)
+    assert best.active_until > 0.1
+    assert best.horizon == pytest.approx(best.active_until + tail, rel=1e-6)
+    assert best.terminal_share < 1e-9
+    assert adparm.optimal_cost(config, **coarse).horizon == tail  # no limit: as before
