@@ -195,3 +195,18 @@ def test_the_default_horizon_is_lengthened_past_the_active_limits() -> None:
     assert best.horizon == pytest.approx(best.active_until + tail, rel=1e-6)
     assert best.terminal_share < 1e-9
     assert adparm.optimal_cost(config, **coarse).horizon == tail  # no limit: as before
+
+
+def test_compare_widens_the_plant_limits_by_the_disturbance(monkeypatch) -> None:
+    # plant.torque_limits comes with issue 24's plant limits; the comparison takes it where the
+    # config has it, widened by |d|, so that J* bounds every row's J (u = h + tau_d - tau)
+    from adparm import comparison, truth
+
+    config = adparm.paper_config()
+    calls = []
+    monkeypatch.setattr(truth, "optimal_cost", lambda config, **kwargs: calls.append(kwargs))
+    comparison._optimal_cost(config)
+    assert "torque_limits" not in calls[-1] and calls[-1]["model"] is False
+    object.__setattr__(config.plant, "torque_limits", (25.0, 12.0))
+    comparison._optimal_cost(config)
+    np.testing.assert_allclose(calls[-1]["torque_limits"], [25.1, 12.1])

@@ -285,7 +285,8 @@ class Comparison:
       :class:`adparm.truth.OptimalCost`) the least cost any input reaches over the same time
       from the same x(0) on the plant's error system (adparm.optimal_cost with model=False;
       over sim.T without a terminal cost when sim.T is shorter than its default horizon; with
-      the plant's torque limits, which the applied torque obeys). It is a lower bound of every
+      the plant's torque limits, which the applied torque obeys, widened by the disturbance's
+      amplitude, which J's input u = h + tau_d - tau holds). It is a lower bound of every
       row's J: a row is below 0 by at most J*'s stated error (None for a moving qd or when J*
       fails, e.g. IPOPT, or a URDF arm with locked joints);
     - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
@@ -495,10 +496,17 @@ def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
 
     if not config.task.is_set_point:
         return None, None
+    limits = getattr(config.plant, "torque_limits", None)  # MERGE: the real field
+    options: dict[str, Any] = {"model": False}
+    if limits is not None:
+        # a run's applied input u = h + tau_d - tau keeps |h - u| <= limit + |d| (tau_d_i is
+        # d_i sin t or d_i cos t): J* over these relaxed limits bounds every row's J
+        disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
+        options["torque_limits"] = np.asarray(limits, dtype=float) + disturbance
     try:
         if config.sim.T < default_horizon(plant_config(config)):
-            return optimal_cost(config, model=False, horizon=config.sim.T, terminal=False), None
-        return optimal_cost(config, model=False), None
+            return optimal_cost(config, horizon=config.sim.T, terminal=False, **options), None
+        return optimal_cost(config, **options), None
     except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
         return None, post_run_failure("J* (adparm.optimal_cost)", error)
 
