@@ -33,6 +33,7 @@ LAYERS = {
     # 2 model: the arm, the basis, the exact optimum and the defaults derived from them
     "desired": 2,
     "dynamics": 2,
+    "symbolic_arm": 2,
     "basis_family": 2,
     "optimal": 2,
     "rates": 2,

@@ -284,9 +284,11 @@ class Comparison:
     - cost_vs_optimal_cost: J / J* - 1 with J* (``optimal_cost``, an
       :class:`adparm.truth.OptimalCost`) the least cost any input reaches over the same time
       from the same x(0) on the plant's error system (adparm.optimal_cost with model=False;
-      over sim.T without a terminal cost when sim.T is shorter than its default horizon). It is
-      a lower bound of every row's J: a row is below 0 by at most J*'s stated error (None for
-      a moving qd, a URDF arm or when IPOPT fails);
+      over sim.T without a terminal cost when sim.T is shorter than its default horizon; with
+      the plant's torque limits, which the applied torque obeys, widened by the disturbance's
+      amplitude, which J's input u = h + tau_d - tau holds). It is a lower bound of every
+      row's J: a row is below 0 by at most J*'s stated error (None for a moving qd or when J*
+      fails, e.g. IPOPT, or a URDF arm with locked joints);
     - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
     - final_e1: ``|e1|`` at the last row, rad;
     - peak_torque: max ``|tau|`` over both joints and all rows, N m;
@@ -479,24 +481,32 @@ def compare(
 
 
 def _optimal_cost_json(best: float) -> dict[str, Any]:
-    keys = ("error", "rtol", "converged", "intervals", "horizon", "terminal")
+    keys = ("error", "rtol", "converged", "intervals", "horizon", "terminal", "active_until")
     return {"value": float(best), **{key: getattr(best, key, None) for key in keys}}
 
 
 def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
     """J* on the same footing as the rows' J: adparm.optimal_cost on the plant's error system
     (model=False), over sim.T without a terminal cost when sim.T is shorter than its default
-    horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*); or None where
-    it does not apply (moving qd, a URDF arm) or fails; and the failure (one line) or None."""
+    horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*), with the
+    config's torque limits and input cost; or None where it does not apply (moving qd) or fails
+    (e.g. a URDF arm with locked joints); and the failure (one line) or None."""
     from .truth import optimal_cost  # the module's attribute: tests replace it
     from .yardstick import default_horizon, plant_config
 
-    if not config.task.is_set_point or config.plant.urdf is not None:  # two-link arm only
+    if not config.task.is_set_point:
         return None, None
+    limits = config.plant.limit_vector(config.dof)
+    options: dict[str, Any] = {"model": False}
+    if limits.size:
+        # a run's applied input u = h + tau_d - tau keeps |h - u| <= limit + |d| (tau_d_i is
+        # d_i sin t or d_i cos t): J* over these relaxed limits bounds every row's J
+        disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
+        options["torque_limits"] = np.asarray(limits, dtype=float) + disturbance
     try:
         if config.sim.T < default_horizon(plant_config(config)):
-            return optimal_cost(config, model=False, horizon=config.sim.T, terminal=False), None
-        return optimal_cost(config, model=False), None
+            return optimal_cost(config, horizon=config.sim.T, terminal=False, **options), None
+        return optimal_cost(config, **options), None
     except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
         return None, post_run_failure("J* (adparm.optimal_cost)", error)
 

@@ -45,7 +45,18 @@ class OptimalCost(float):
     terminal : bool
         Whether the cost-to-go after the horizon is charged (x^T P x of lqr_value).
     history : tuple of (int, float)
-        (N, J(N)) of each solve, the coarsest first.
+        (N, J(N)) of each solve at the final horizon, the coarsest first.
+    torque_limits : tuple of float or None
+        The bounds |tau_i| <= limit_i on the applied torque (None: no limits).
+    input_bound : tuple of float or None
+        lambda of the bounded input cost U(u) (None: the quadratic u^T R u).
+    e2_cost : str
+        "quadratic" or "logcosh" (the state cost's e2 block).
+    active_until : float
+        The last node time (s) at which a torque limit is active (0 when none is).
+    terminal_share : float
+        x(T)^T P x(T) / J: the share of the terminal cost, which is the cost-to-go of the
+        small-signal problem and so trusted only where it is small and no limit is active.
     """
 
     error: float
@@ -55,6 +66,11 @@ class OptimalCost(float):
     horizon: float
     terminal: bool
     history: tuple[tuple[int, float], ...]
+    torque_limits: tuple[float, ...] | None = None
+    input_bound: tuple[float, ...] | None = None
+    e2_cost: str = "quadratic"
+    active_until: float = 0.0
+    terminal_share: float = 0.0
 
     def __new__(cls, value: float, **attributes: Any) -> OptimalCost:
         self = super().__new__(cls, value)
@@ -72,16 +88,21 @@ class OptimalCost(float):
     def note(self) -> str:
         """One line: the tolerance met (or not) and the estimate, e.g. ``relative error <= 1e-04
         (estimated 1.3e-05, 800 intervals)``."""
+        limits = (
+            f"; torque limits active until t = {self.active_until:.3g} s"
+            if self.active_until > 0.0
+            else ""
+        )
         if math.isnan(self.error):
-            return f"no error estimate (one solve, {self.intervals} intervals)"
+            return f"no error estimate (one solve, {self.intervals} intervals){limits}"
         if self.converged:
             return (
                 f"relative error <= {self.rtol:.0e} (estimated {self.error:.1e}, "
-                f"{self.intervals} intervals)"
+                f"{self.intervals} intervals){limits}"
             )
         return (
             f"not converged to {self.rtol:.0e}: relative change {self.error:.1e} at "
-            f"{self.intervals} intervals"
+            f"{self.intervals} intervals{limits}"
         )
 
 
@@ -112,6 +133,29 @@ def _count(value: Any, name: str) -> int:
     return int(value)
 
 
+def _per_joint(value: Any, n: int, name: str, *, infinite: bool) -> tuple[float, ...] | None:
+    """None, or n numbers > 0 from one number or n of them (inf allowed when ``infinite``)."""
+    if value is None:
+        return None
+    kind = "numbers > 0" + (" (inf: no limit)" if infinite else ", finite")
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected one number or {n} {kind}, got {value!r}") from None
+    if array.shape not in ((), (n,)):
+        raise ValueError(f"{name}: expected one number or {n} {kind}, got {value!r}")
+    array = np.broadcast_to(array, (n,)).copy()
+    if np.isnan(array).any() or (array <= 0.0).any() or (not infinite and np.isinf(array).any()):
+        raise ValueError(f"{name}: expected one number or {n} {kind}, got {value!r}")
+    return tuple(float(v) for v in array)
+
+
+def _diagonal(matrix: np.ndarray, name: str, why: str) -> np.ndarray:
+    if np.abs(matrix - np.diag(np.diag(matrix))).max() > 0.0:
+        raise ValueError(f"{name}: {why} needs it diagonal, got {matrix.tolist()}")
+    return np.diag(matrix).copy()
+
+
 def optimal_cost(
     config: Config,
     x0: Any = None,
@@ -122,27 +166,46 @@ def optimal_cost(
     max_intervals: int = 3200,
     terminal: bool = True,
     model: bool = True,
+    torque_limits: Any = None,
+    input_bound: Any = None,
+    e2_cost: str | None = None,
 ) -> OptimalCost:
-    """The optimal cost int_0^inf x^T Q x + u^T R u dt from x0 (default: the initial error state
-    of ``config``) for the error system without disturbance, de1 = -alpha1 e1 + e2,
+    """The optimal cost int_0^inf Q(x) + U(u) dt from x0 (default: the initial error state of
+    ``config``) for the error system without disturbance, de1 = -alpha1 e1 + e2,
     M(q) de2 = -C(q, dq) e2 + u, q = qd - e1, dq = alpha1 e1 - e2 (a set-point qd), by direct
-    multiple shooting (CasADi, IPOPT). Any cost Q, R. On the exact instances (optimal_weights)
-    it equals V*(x0) = e1^T K e1 + s e2^T M e2.
+    multiple shooting (CasADi, IPOPT), on the two-link arm or a URDF arm. Any cost Q, R;
+    optionally with the applied torque tau = h(q, dq) - u bounded (``torque_limits``), the
+    bounded input cost (``input_bound``) and the logcosh state cost (``e2_cost``). On the exact
+    instances (optimal_weights) it equals V*(x0) = e1^T K e1 + s e2^T M e2.
 
     The transcription has N RK4 intervals over the horizon with u linear within each, plus the
     terminal cost x(T)^T P x(T) of :func:`lqr_value`. It starts at N = ``intervals`` and doubles
     N, each solve starting from the last, until the relative change is at most ``rtol`` or N
     would pass ``max_intervals``; the result says which (``converged``) and the estimate.
 
+    Limits. With ``torque_limits``, |tau_i| <= limit_i holds at every node (both ends of each
+    interval, u being linear in it), tau = h - u with h the feedforward of eq. (5) at the
+    set-point (M alpha1 de1 + C alpha1 e1 + G + F, friction included). With ``input_bound``
+    (lambda), the input cost is U(u) = sum_i R_i [2 lambda_i u_i atanh(u_i / lambda_i) +
+    lambda_i^2 ln(1 - u_i^2 / lambda_i^2)] (R diagonal) with |u_i| <= lambda_i (1 - 1e-6);
+    ``e2_cost = "logcosh"`` replaces the state cost's e2 block by sum_i 2 lambda_i^2 R_i^2
+    q22_i ln cosh(e2_i / (R_i lambda_i)) (q22 the diagonal of Q's e2 block). Near x = 0 both
+    costs are the quadratic ones and no torque limit is active (the gravity torque at the
+    set-point must be inside them), so the terminal cost x^T P x is the cost-to-go of that
+    small-signal problem: with the default horizon and any of these options, the horizon is
+    lengthened (up to 4 times) until it leaves 12 LQR time constants after the last active torque
+    limit and x(T)^T P x(T) is below 1e-9 of J (``active_until``, ``terminal_share``).
+
     Parameters
     ----------
     config : Config
-        Cost, alpha1, set-point and the arm (the two-link arm only).
-    x0 : array_like, shape (4,), optional
+        Cost, alpha1, set-point and the arm (the two-link arm, or a URDF arm whose M, C, G are
+        built by adam-robotics; locked joints are refused).
+    x0 : array_like, shape (2n,), optional
         The initial error state.
     horizon : float, optional
         Transcribed time (s); default :func:`default_horizon`, 12 time constants of the slowest
-        LQR closed-loop mode.
+        LQR closed-loop mode (lengthened with limits, see above).
     intervals : int, optional
         N of the first solve (>= 10).
     rtol : float, optional
@@ -155,34 +218,36 @@ def optimal_cost(
     model : bool, optional
         The arm the controller believes (default); False: the plant, whose error system a run's
         e obeys, so that J* bounds every run's cost on its applied input (adparm.compare).
+    torque_limits : float or array_like, optional
+        |tau_i| <= limit_i (N m; one number or one per joint, inf: none). Default: the config's
+        ``plant.torque_limits`` where it has one, else none.
+    input_bound : float or array_like, optional
+        lambda_i > 0 of the bounded input cost U(u). Default: the config's ``cost.input_bound``
+        where it has one, else the quadratic u^T R u.
+    e2_cost : {"quadratic", "logcosh"}, optional
+        Default: the config's ``cost.e2_cost`` where it has one, else "quadratic". "logcosh"
+        needs ``input_bound`` and a diagonal e2 block of Q.
 
     Returns
     -------
     OptimalCost
         A float with ``error``, ``rtol``, ``converged``, ``intervals``, ``horizon``,
-        ``terminal``, ``history`` and a one-line ``note``.
+        ``terminal``, ``history``, ``torque_limits``, ``input_bound``, ``e2_cost``,
+        ``active_until``, ``terminal_share`` and a one-line ``note``.
 
     Raises
     ------
     ValueError
-        For a URDF arm, a moving qd, an input bound (cost.input_bound), or a bad argument.
+        For a moving qd, a URDF arm with locked joints or without adam-robotics, limits that
+        cannot hold the set-point, or a bad argument.
     RuntimeError
         If IPOPT does not converge.
     KeyboardInterrupt
         On Ctrl-C (or SIGTERM, where its handler raises it) during a solve.
     """
     check_config(config)
-    if config.plant.urdf is not None:
-        raise ValueError(
-            "plant.urdf: optimal_cost transcribes the built-in two-link arm only, not a URDF arm"
-        )
     if not config.task.is_set_point:
         raise ValueError("task.qd: optimal_cost needs a set-point (a constant qd)")
-    if config.cost.input_bound is not None:
-        raise ValueError(
-            "cost.input_bound: optimal_cost transcribes the quadratic cost only, not the bounded "
-            "input cost (use adparm.optimal_value on the exact family, adparm.saturated_cost)"
-        )
     intervals = _count(intervals, "intervals")
     max_intervals = _count(max_intervals, "max_intervals")
     if max_intervals < intervals:
@@ -193,20 +258,48 @@ def optimal_cost(
         raise TypeError(f"rtol: expected a number in (0, 1), got {rtol!r}")
     if not 0.0 < rtol < 1.0:
         raise ValueError(f"rtol: expected a number in (0, 1), got {rtol!r}")
+    n = config.dof
+    names = ("torque_limits", "input_bound", "e2_cost")
+    if torque_limits is None:
+        names = ("plant.torque_limits", *names[1:])
+        torque_limits = config.plant.limit_vector(n)
+        if torque_limits.size == 0:
+            torque_limits = None
+    if input_bound is None:
+        names = (names[0], "cost.input_bound", names[2])
+        input_bound = config.cost.input_bound
+    if e2_cost is None:
+        names = (*names[:2], "cost.e2_cost")
+        e2_cost = config.cost.e2_cost
+    limits = _per_joint(torque_limits, n, names[0], infinite=True)
+    bound = _per_joint(input_bound, n, names[1], infinite=False)
+    if e2_cost not in ("quadratic", "logcosh"):
+        raise ValueError(f"{names[2]}: expected 'quadratic' or 'logcosh', got {e2_cost!r}")
+    if e2_cost == "logcosh" and bound is None:
+        raise ValueError(f"{names[2]}: 'logcosh' needs an input bound ({names[1]})")
     if not model:
         config = plant_config(config)
     x0 = initial_error_state(config) if x0 is None else np.asarray(x0, dtype=float)
-    if x0.shape != (4,) or not np.all(np.isfinite(x0)):
-        raise ValueError(f"x0: expected 4 finite numbers, got {x0!r}")
-    if horizon is None:
-        horizon = default_horizon(config)
+    if x0.shape != (2 * n,) or not np.all(np.isfinite(x0)):
+        raise ValueError(f"x0: expected {2 * n} finite numbers, got {x0!r}")
+    lengthen = horizon is None and terminal and (limits, bound) != (None, None)
+    tail = default_horizon(config) if horizon is None else horizon
+    horizon = tail
     if not (math.isfinite(horizon) and horizon > 0.0):
         raise ValueError(f"horizon: expected a finite number > 0, got {horizon!r}")
-    transcription = _Transcription(config, x0, float(horizon), bool(terminal))
+    options = {"limits": limits, "bound": bound, "e2_cost": e2_cost, "limits_name": names[0]}
+    transcription = _Transcription(config, x0, float(horizon), bool(terminal), **options)
     history: list[tuple[int, float]] = []
-    change, guess, count = math.nan, None, intervals
+    change, guess, count, lengthened = math.nan, None, intervals, 0
     while True:
         value, guess = transcription.solve(count, guess)
+        active, share = transcription.active_until(guess), transcription.terminal_share(guess)
+        if lengthen and not history and lengthened < 4:
+            wanted = max(active + tail, 2.0 * horizon if share > 1e-9 else 0.0)
+            if wanted > horizon * (1.0 + 1e-9):  # too short: start again over a longer one
+                horizon, lengthened = wanted, lengthened + 1
+                transcription = _Transcription(config, x0, horizon, bool(terminal), **options)
+                continue
         if history:
             previous = history[-1][1]
             scale = max(abs(value), abs(previous))
@@ -224,66 +317,133 @@ def optimal_cost(
         horizon=float(horizon),
         terminal=bool(terminal),
         history=tuple(history),
+        torque_limits=limits,
+        input_bound=bound,
+        e2_cost=e2_cost,
+        active_until=active,
+        terminal_share=share,
+    )
+
+
+def _log_cosh(y: Any) -> Any:
+    """ln cosh y without overflow (its asymptote |y| - ln 2 + ln(1 + e^-2|y|) past |y| = 20)."""
+    import casadi
+
+    a = casadi.fabs(y)
+    return casadi.if_else(
+        a < 20.0, casadi.log(casadi.cosh(y)), a - math.log(2.0) + casadi.log1p(casadi.exp(-2 * a))
     )
 
 
 class _Transcription:
-    """Direct multiple shooting of the error system of ``config``'s believed two-link arm from
-    x0 over the horizon: one CasADi RK4 step, mapped over the N intervals of each solve."""
+    """Direct multiple shooting of the error system of ``config``'s believed arm from x0 over
+    the horizon: one CasADi RK4 step, mapped over the N intervals of each solve, and the
+    applied torque at the nodes where it is bounded."""
 
-    def __init__(self, config: Config, x0: np.ndarray, horizon: float, terminal: bool) -> None:
+    #: |u_i| <= lambda_i (1 - BOUND_MARGIN): U(u) is finite at lambda, its slope is not.
+    BOUND_MARGIN = 1e-6
+
+    def __init__(
+        self,
+        config: Config,
+        x0: np.ndarray,
+        horizon: float,
+        terminal: bool,
+        *,
+        limits: tuple[float, ...] | None = None,
+        bound: tuple[float, ...] | None = None,
+        e2_cost: str = "quadratic",
+        limits_name: str = "torque_limits",
+    ) -> None:
         import casadi
 
-        self.x0, self.horizon = x0, horizon
-        self.P = lqr_value(config) if terminal else np.zeros((4, 4))
+        from .symbolic_arm import arm_expressions, set_point_feedforward
+
+        n = config.dof
+        self.n, self.x0, self.horizon = n, x0, horizon
+        self.P = lqr_value(config) if terminal else np.zeros((2 * n, 2 * n))
         Q, R = np.array(config.cost.Q), np.array(config.cost.R)
         alpha1 = np.array(config.control.alpha1)
-        p = config.model.resolve(config.plant)
         qd = desired_state(config, 0.0)[0]
 
-        x = casadi.SX.sym("x", 4)
-        u = casadi.SX.sym("u", 2)
-        e1, e2 = x[:2], x[2:]
-        q2 = qd[1] - x[1]
+        x = casadi.SX.sym("x", 2 * n)
+        u = casadi.SX.sym("u", n)
+        e1, e2 = x[:n], x[n:]
+        q = casadi.DM(qd) - e1
         dq = casadi.mtimes(casadi.DM(alpha1), e1) - e2
-        c2, s2 = casadi.cos(q2), casadi.sin(q2)
-        m12 = p["p2"] + p["p3"] * c2
-        M = casadi.vertcat(
-            casadi.horzcat(p["p1"] + 2 * p["p3"] * c2, m12), casadi.horzcat(m12, p["p2"])
-        )
-        h = p["p3"] * s2
-        C = casadi.vertcat(
-            casadi.horzcat(-h * dq[1], -h * (dq[0] + dq[1])), casadi.horzcat(h * dq[0], 0)
-        )
+        terms = arm_expressions(config, q, dq)
         de1 = -casadi.mtimes(casadi.DM(alpha1), e1) + e2
-        de2 = casadi.solve(M, -casadi.mtimes(C, e2) + u)
-        rate = casadi.vertcat(
-            de1, de2, casadi.bilin(casadi.DM(Q), x, x) + casadi.bilin(casadi.DM(R), u, u)
-        )
-        self.f = casadi.Function("f", [x, u], [rate])
+        de2 = casadi.solve(terms["M"], -casadi.mtimes(terms["C"], e2) + u)
+        if e2_cost == "logcosh":
+            q22 = _diagonal(Q[n:, n:], "cost.Q", "e2_cost = 'logcosh' (its e2 block)")
+            r = _diagonal(R, "cost.R", "an input bound")
+            scale = np.asarray(bound) * r
+            Q0 = Q.copy()
+            Q0[n:, n:] = 0.0
+            state = casadi.bilin(casadi.DM(Q0), x, x) + casadi.sum1(
+                casadi.DM(2.0 * scale**2 * q22) * _log_cosh(e2 / casadi.DM(scale))
+            )
+        else:
+            state = casadi.bilin(casadi.DM(Q), x, x)
+        if bound is not None:
+            r = _diagonal(R, "cost.R", "an input bound")
+            lam = casadi.DM(bound)
+            z = u / lam
+            effort = casadi.sum1(
+                casadi.DM(r) * (2 * lam * u * casadi.atanh(z) + lam**2 * casadi.log1p(-(z**2)))
+            )
+        else:
+            effort = casadi.bilin(casadi.DM(R), u, u)
+        self.f = casadi.Function("f", [x, u], [casadi.vertcat(de1, de2, state + effort)])
+        self.bound = None if bound is None else np.asarray(bound) * (1.0 - self.BOUND_MARGIN)
+        self.limits = None if limits is None else np.asarray(limits)
+        self.tau = None
+        if limits is not None:
+            # Coulomb friction's jump at dq = 0 would make the constraint discontinuous: it is
+            # relaxed, |h - u - coulomb sign(dq)| <= limit implying |h - u| <= limit + |coulomb|
+            # (h with viscous friction alone), so J* stays a lower bound of the true optimum
+            smooth = dict(terms, F=casadi.DM(terms["viscous"]) * dq)
+            h = set_point_feedforward(smooth, alpha1, e1, e2)
+            self.tau = casadi.Function("tau", [x, u], [h - u])
+            gravity = np.array(self.tau(np.zeros(2 * n), np.zeros(n))).ravel()  # h(0) = G(qd)
+            self.limits = self.limits + np.abs(terms["coulomb"])
+            if np.any(np.abs(gravity) >= np.asarray(limits)):
+                raise ValueError(
+                    f"{limits_name}: {list(limits)} cannot hold the set-point, whose gravity "
+                    f"torque is G(qd) = {gravity.tolist()} N m"
+                )
 
     def solve(self, intervals: int, guess: Any) -> tuple[float, Any]:
         """J of N = ``intervals``, and (t, X, U) of the solution, the next solve's start
         (``guess``: the last one's, interpolated; None: the LQR-like decay of x0)."""
         import casadi
 
-        f, step = self.f, self.horizon / intervals
-        xa = casadi.SX.sym("xa", 4)
-        ua, ub = casadi.SX.sym("ua", 2), casadi.SX.sym("ub", 2)
+        f, step, n = self.f, self.horizon / intervals, self.n
+        xa = casadi.SX.sym("xa", 2 * n)
+        ua, ub = casadi.SX.sym("ua", n), casadi.SX.sym("ub", n)
         k1 = f(xa, ua)
-        k2 = f(xa + step / 2 * k1[:4], (ua + ub) / 2)
-        k3 = f(xa + step / 2 * k2[:4], (ua + ub) / 2)
-        k4 = f(xa + step * k3[:4], ub)
+        k2 = f(xa + step / 2 * k1[: 2 * n], (ua + ub) / 2)
+        k3 = f(xa + step / 2 * k2[: 2 * n], (ua + ub) / 2)
+        k4 = f(xa + step * k3[: 2 * n], ub)
         end = casadi.vertcat(xa, 0) + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         rk4 = casadi.Function("rk4", [xa, ua, ub], [end]).map(intervals)
 
         opti = casadi.Opti()
-        X = opti.variable(4, intervals + 1)
-        U = opti.variable(2, intervals + 1)
+        X = opti.variable(2 * n, intervals + 1)
+        U = opti.variable(n, intervals + 1)
         ends = rk4(X[:, :-1], U[:, :-1], U[:, 1:])  # every interval at once
         opti.subject_to(X[:, 0] == self.x0)
-        opti.subject_to(X[:, 1:] == ends[:4, :])
-        total = casadi.sum2(ends[4, :]) + casadi.bilin(casadi.DM(self.P), X[:, -1], X[:, -1])
+        opti.subject_to(X[:, 1:] == ends[: 2 * n, :])
+        if self.bound is not None:
+            limit = np.repeat(self.bound[:, None], intervals + 1, axis=1)
+            opti.subject_to(opti.bounded(-limit, U, limit))
+        if self.tau is not None:
+            finite = np.isfinite(self.limits)
+            torque = self.tau.map(intervals + 1)(X, U)
+            limit = np.repeat(self.limits[finite][:, None], intervals + 1, axis=1)
+            rows = [i for i in range(n) if finite[i]]
+            opti.subject_to(opti.bounded(-limit, torque[rows, :], limit))
+        total = casadi.sum2(ends[2 * n, :]) + casadi.bilin(casadi.DM(self.P), X[:, -1], X[:, -1])
         opti.minimize(total)
         t = np.linspace(0.0, self.horizon, intervals + 1)
         if guess is None:  # the LQR policy's decay as the initial guess
@@ -292,7 +452,11 @@ class _Transcription:
             t_old, X_old, U_old = guess
             opti.set_initial(X, np.array([np.interp(t, t_old, row) for row in X_old]))
             opti.set_initial(U, np.array([np.interp(t, t_old, row) for row in U_old]))
-        opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
+        opti.solver(
+            "ipopt",
+            {"print_time": False, "detect_simple_bounds": True},
+            {"print_level": 0, "sb": "yes", "tol": 1e-10},
+        )
         with _interrupts() as interrupted:
             try:
                 solution = opti.solve()
@@ -304,7 +468,22 @@ class _Transcription:
                 ) from error
         states = np.atleast_2d(solution.value(X))
         inputs = np.atleast_2d(solution.value(U))
-        return float(solution.value(total)), (t, states, inputs)
+        self.value = float(solution.value(total))
+        return self.value, (t, states, inputs)
+
+    def active_until(self, solution: Any) -> float:
+        """The last node time at which a torque limit is active (to 1e-6 relative), else 0."""
+        if self.tau is None:
+            return 0.0
+        t, X, U = solution
+        torque = np.array(self.tau.map(len(t))(X, U))
+        active = np.any(np.abs(torque) >= self.limits[:, None] * (1.0 - 1e-6), axis=0)
+        return float(t[np.nonzero(active)[0][-1]]) if active.any() else 0.0
+
+    def terminal_share(self, solution: Any) -> float:
+        """x(T)^T P x(T) / J of the last solve."""
+        end = solution[1][:, -1]
+        return float(end @ self.P @ end / self.value) if self.value > 0.0 else 0.0
 
 
 @contextmanager
