@@ -442,7 +442,9 @@ def simulate_batch(
     check_steps(configs)
     settings = [core_settings(config) for config in configs]
     check_memory(configs, threads=workers)
-    batch = _core.Batch(settings)
+    # the core holds at most `workers` runs built and not yet handed over (memory_needed); a run
+    # beyond them is built once to check it, and again when its turn comes
+    batch = _core.Batch(settings, workers)
     done_runs: dict[int, SimulationResult] = {}
     divergence: dict[int, tuple[str, float]] = {}
     pending: dict[int, _core.Simulation] = {}  # handed over, not yet converted

@@ -81,8 +81,9 @@ class PinocchioStructuredBasis {
   using Jacobian = BasisMatrix<Dynamic, Dynamic>;
 
   // The basis of `arm`, whose inertial parameters give beta (the believed model's arm, in a
-  // run). Throws std::invalid_argument (naming controller.basis) when the arm has more than
-  // kMaxDof joints or the basis more than kMaxBasisSize functions.
+  // run); it shares the arm's parsed model (const), with a pinocchio::Data of its own. Throws
+  // std::invalid_argument (naming controller.basis) when the arm has more than kMaxDof joints or
+  // the basis more than kMaxBasisSize functions.
   explicit PinocchioStructuredBasis(const PinocchioArm& arm);
 
   PinocchioStructuredBasis(const PinocchioStructuredBasis& other);
