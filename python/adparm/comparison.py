@@ -94,6 +94,11 @@ _MARKDOWN = {
 }
 
 
+#: compare computes J* on URDF arms up to this many joints: the CasADi transcription of a 6-joint
+#: arm (the UR5) takes minutes per solve (adparm.optimal_cost computes it when asked).
+COMPARE_URDF_MAX_DOF = 3
+
+
 def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
     if isinstance(kinds, str):
         kinds = (kinds,)
@@ -328,7 +333,10 @@ class Comparison:
         )
         best = self.optimal_cost
         if best is None:
-            text += "J* = - (not computed: a moving qd, a URDF arm or a failed solve). "
+            text += (
+                "J* = - (not computed: a moving qd, a URDF arm of more than "
+                f"{COMPARE_URDF_MAX_DOF} joints or a failed solve). "
+            )
         else:
             note = getattr(best, "note", "")
             horizon = (
@@ -489,13 +497,21 @@ def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
     """J* on the same footing as the rows' J: adparm.optimal_cost on the plant's error system
     (model=False), over sim.T without a terminal cost when sim.T is shorter than its default
     horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*), with the
-    config's torque limits and input cost; or None where it does not apply (moving qd) or fails
-    (e.g. a URDF arm with locked joints); and the failure (one line) or None."""
+    config's torque limits and the quadratic cost the rows' J charge (a controller's bounded
+    input cost is not charged); or None where it does not apply (a moving qd, a URDF arm of
+    more than COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes: call
+    adparm.optimal_cost(config, model=False) for it) or fails (e.g. a URDF arm with locked
+    joints); and the failure (one line) or None."""
     from .truth import optimal_cost  # the module's attribute: tests replace it
     from .yardstick import default_horizon, plant_config
 
-    if not config.task.is_set_point:
+    if not config.task.is_set_point or (
+        config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF
+    ):
         return None, None
+    # J charges x^T Q x + u^T R u (applied_cost), so J* does too, whatever the controller's cost
+    quadratic = dataclasses.replace(config.cost, input_bound=None, e2_cost="quadratic")
+    config = dataclasses.replace(config, cost=quadratic)
     limits = config.plant.limit_vector(config.dof)
     options: dict[str, Any] = {"model": False}
     if limits.size:
