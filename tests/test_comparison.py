@@ -342,3 +342,36 @@ def test_cli_compare_exit_codes(tmp_path, capsys) -> None:
     assert "diverged: adp, adp (learned)" in captured.err and "| pd |" in captured.out
     rows = json.loads((out / "compare.json").read_text())["rows"]
     assert [row["status"] for row in rows] == ["diverged", "diverged", "finished"]
+
+
+def test_optimal_cost_charges_the_quadratic_cost_the_rows_charge(monkeypatch) -> None:
+    """A controller learning with a bounded input cost: J* is still the quadratic cost's optimum,
+    as J of every row (applied_cost) is."""
+    from adparm import comparison, truth
+
+    seen = []
+    monkeypatch.setattr(truth, "optimal_cost", lambda config, **options: seen.append(config))
+    config = adparm.paper_config().updated(
+        {
+            "cost": adparm.saturated_cost(
+                np.eye(2), [[15.6, 10.6], [10.6, 10.4]], 0.25 * np.eye(2), 20.0
+            )
+        }
+    )
+    assert config.cost.input_bound is not None
+    comparison._optimal_cost(config)
+    assert seen[0].cost.input_bound is None and seen[0].cost.e2_cost == "quadratic"
+
+
+def test_optimal_cost_is_left_out_on_a_six_joint_urdf_arm(monkeypatch) -> None:
+    """The UR5's transcription takes minutes per solve: compare leaves J* out (J* = -), says why
+    in the note and never starts the solve."""
+    from adparm import comparison, truth
+
+    monkeypatch.setattr(truth, "optimal_cost", lambda *a, **k: pytest.fail("solve started"))
+    config = adparm.Config.from_dict(
+        {"plant": {"urdf": "example-robot-data:ur5"}, "sim": {"T": 0.01}}
+    )
+    assert comparison._optimal_cost(config) == (None, None)
+    note = adparm.Comparison(results={}, rows=[]).cost_note()
+    assert f"more than {comparison.COMPARE_URDF_MAX_DOF} joints" in note
