@@ -264,16 +264,13 @@ def saturation_text(result: SimulationResult) -> str | None:
         if value > 0.0
     )
     text = f"the applied torque was clipped at plant.torque_limits: {joints} of {duration:.3g} s"
-    bound = getattr(config.cost, "input_bound", None)
-    if bound is None:
+    limit = config.cost.bound_vector(config.dof)
+    if limit.size == 0:
         return (
             text + "; the controller's input is unbounded, so the theory's assumption (the "
             "commanded torque is applied) was broken, not the learning"
         )
-    try:  # a constrained-input controller: was its input inside its bound while clipped?
-        limit = np.broadcast_to(np.asarray(bound, dtype=float), (config.dof,))
-    except (TypeError, ValueError):
-        return text
+    # a constrained-input controller: was its input inside its bound while clipped?
     clipped = result.tau != result.tau_commanded
     inside = np.any(clipped & (np.abs(result.u) <= limit), axis=1)
     if not np.any(inside):
