@@ -395,3 +395,13 @@ def test_a_six_joint_arm_runs_and_plots_one_line_per_joint() -> None:
     assert [t.get_text() for t in errors.get_legend().get_texts()][:6] == [
         f"$q_{j}$" for j in range(1, 7)
     ]
+
+
+@pytest.mark.parametrize("kind", ["rise", "pd", "optimal"])
+def test_every_controller_kind_runs_a_urdf_arm_with_the_structured_basis(kind: str) -> None:
+    """The core builds the structured basis (with its e2 check positions) for every controller,
+    not only the learning one."""
+    config = _planar({"controller": {"kind": kind}}, T=0.2)
+    assert config.controller.basis == "structured"
+    result = adparm.simulate(config, diagnose=False)
+    assert result.status == "finished"

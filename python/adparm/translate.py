@@ -56,11 +56,9 @@ def core_settings(config: Config) -> _core.Settings:
     critic = settings.critic
     critic.epsilon_T = config.resolved_epsilon_T
     settings.critic = critic
-    if (
-        config.actor.positive_e2
-        and isinstance(basis_for(config), UrdfStructuredBasis)
-        and config.controller.kind == "adp"
-    ):  # where the structured basis keeps its e2 block positive (not in the paper)
+    if config.actor.positive_e2 and isinstance(basis_for(config), UrdfStructuredBasis):
+        # where the structured basis keeps its e2 block positive (not in the paper); the core
+        # builds the basis (and asks for them) whatever the controller's kind
         actor = settings.actor
         actor.e2_check_positions = np.asfortranarray(check_positions(config).T)
         settings.actor = actor
