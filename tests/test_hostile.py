@@ -326,6 +326,12 @@ def test_complex_input_is_refused_not_truncated(values, where) -> None:
         call()
 
 
+def _hostile_basis(text: str) -> str:
+    """The stored config with its basis "quadratic" (the last "quadratic": cost.e2_cost, before
+    it, says "quadratic" too) replaced by a hostile expression."""
+    return '"9**9**9*x1"'.join(text.rsplit('"quadratic"', 1))
+
+
 def test_a_result_file_with_a_hostile_basis_is_refused_quickly(tmp_path) -> None:
     result = adparm.simulate(
         adparm.paper_config().updated({"controller": {"basis": "quadratic"}, "sim": {"T": 0.01}})
@@ -334,12 +340,12 @@ def test_a_result_file_with_a_hostile_basis_is_refused_quickly(tmp_path) -> None
         path = tmp_path / f"run{suffix}"
         result.save(path)
         if suffix == ".csv":
-            text = path.read_text().replace('"quadratic"', '"9**9**9*x1"', 1)
+            text = _hostile_basis(path.read_text())
             path.write_text(text)
         else:
             with np.load(path, allow_pickle=False) as stored:
                 fields = {name: stored[name] for name in stored.files}
-            text = str(fields["config_json"]).replace('"quadratic"', '"9**9**9*x1"', 1)
+            text = _hostile_basis(str(fields["config_json"]))
             fields["config_json"] = np.array(text)
             np.savez(path, **fields)
         start = time.perf_counter()

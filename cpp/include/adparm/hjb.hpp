@@ -64,8 +64,7 @@ void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& 
   out.u_hat = Actor<Basis, Dof>::policy(point.input_gradient, cost.R_inverse(), actor_weights);
   double input_cost;
   if (cost.bounded()) {  // u_hat = -lambda tanh(D) and U(u_hat) (input_bound.hpp)
-    input_cost = cost.bound().policy_cost(out.u_hat);
-    out.u_hat = cost.bound().saturate(out.u_hat);
+    input_cost = cost.bound().bound_policy(out.u_hat);
   } else {
     input_cost = cost.input_cost(out.u_hat);
   }

@@ -27,6 +27,8 @@ namespace adparm {
 
 enum class E2Cost { quadratic, logcosh };
 
+constexpr double kLn2 = 0.69314718055994530942;
+
 // ln cosh z without overflow or cancellation: |z| + log1p(exp(-2 |z|)) - ln 2 for |z| >= 1,
 // log1p(2 sinh^2(z / 2)) below (accurate to round-off near z = 0, where ln cosh z ~ z^2 / 2).
 inline double log_cosh(double z) {
@@ -35,7 +37,7 @@ inline double log_cosh(double z) {
     const double h = std::sinh(0.5 * a);
     return std::log1p(2.0 * h * h);
   }
-  return a + std::log1p(std::exp(-2.0 * a)) - 0.69314718055994530942;
+  return a + std::log1p(std::exp(-2.0 * a)) - kLn2;
 }
 
 // (1 + s) ln(1 + s) + (1 - s) ln(1 - s) for |s| <= 1 (0 ln 0 = 0); below |s| = 1e-3 its series
@@ -96,12 +98,21 @@ class InputBoundT {
     return u;
   }
 
-  // U(u) at the policy u = lambda tanh(v / lambda), from D = -v / lambda (exact when saturated).
-  double policy_cost(const Joint& unbounded) const {
+  // The policy and its cost in one pass: `u` holds the unbounded policy v on entry and
+  // u = lambda tanh(v / lambda) = -lambda tanh(D) on return (D = -v / lambda); returns
+  // U(u) = sum_i R_i lambda_i^2 [2 D_i tanh D_i - 2 ln cosh D_i], with ln cosh D_i from
+  // t = tanh D_i: -1/2 ln(1 - t^2) for |D_i| < 1, else |D_i| + ln(1 + (1 - |t|) / (1 + |t|)) - ln 2
+  // (exp(-2|D|) = (1 - |t|) / (1 + |t|); accurate to round-off, also when t rounds to +-1).
+  double bound_policy(Joint& u) const {
     double sum = 0.0;
-    for (Eigen::Index i = 0; i < unbounded.size(); ++i) {
-      const double D = -unbounded[i] / bound_[i];
-      sum += input_weight_[i] * bound_[i] * bound_[i] * 2.0 * (D * std::tanh(D) - log_cosh(D));
+    for (Eigen::Index i = 0; i < u.size(); ++i) {
+      const double D = -u[i] / bound_[i];
+      const double t = std::tanh(D);
+      const double a = std::abs(D), b = std::abs(t);
+      const double log_cosh_D =
+          a < 1.0 ? -0.5 * std::log1p(-t * t) : a + std::log1p((1.0 - b) / (1.0 + b)) - kLn2;
+      sum += input_weight_[i] * bound_[i] * bound_[i] * 2.0 * (D * t - log_cosh_D);
+      u[i] = -bound_[i] * t;
     }
     return sum;
   }
