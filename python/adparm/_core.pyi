@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'simulate_open_loop', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
+__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'simulate_open_loop', 'urdf_parse_count', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
 class ArmParameters:
     """
     Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.
@@ -745,6 +745,10 @@ class UrdfArm:
         """
         Model terms at q (n,), dq (n,): dict of M, M_inv, C (n, n) and G, F (n,).
         """
+    def with_gravity_and_friction(self, gravity: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"] = ..., coulomb: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0, viscous: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0) -> UrdfArm:
+        """
+        The arm the constructor would read with this gravity and friction, without reading the URDF again (the parsed model is shared or copied).
+        """
     @property
     def coulomb(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
         ...
@@ -955,17 +959,19 @@ class Batch:
     """
     Independent runs on a pool of C++ threads that take runs from a shared queue and run each to the end; the caller polls with wait().
     """
-    def __init__(self, settings: collections.abc.Sequence[Settings]) -> None:
-        ...
+    def __init__(self, settings: collections.abc.Sequence[Settings], window: typing.SupportsInt | typing.SupportsIndex = 18446744073709551615) -> None:
+        """
+        Builds (checks) every run; at most `window` runs are built and not yet taken.
+        """
     def __len__(self) -> int:
         ...
     def seconds(self, index: typing.SupportsInt | typing.SupportsIndex) -> float:
         """
         Wall time spent building and advancing run `index`, s.
         """
-    def start(self, threads: typing.SupportsInt | typing.SupportsIndex, window: typing.SupportsInt | typing.SupportsIndex = 18446744073709551615) -> None:
+    def start(self, threads: typing.SupportsInt | typing.SupportsIndex) -> None:
         """
-        Starts the workers; at most `window` runs are built and not yet taken.
+        Starts the workers.
         """
     def stop(self) -> None:
         """
@@ -1023,6 +1029,10 @@ def paper_settings() -> Settings:
 def simulate_open_loop(parameters: ArmParameters, disturbance: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], initial_state: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 1]"], dt: typing.SupportsFloat | typing.SupportsIndex, steps: typing.SupportsInt | typing.SupportsIndex, compensate_gravity: bool) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 4]"]:
     """
     RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4).
+    """
+def urdf_parse_count() -> int:
+    """
+    How many URDF texts the core has parsed so far, in every thread.
     """
 RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('tau_commanded', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'))
 STATE_SIZE: int = 87
