@@ -155,3 +155,27 @@ def test_a_limit_below_the_feedforward_is_refused_naming_the_joint() -> None:
 def test_an_unresolved_auto_section_says_so() -> None:
     with pytest.raises(ValueError, match=r"cost\.input_bound: \"auto\" is resolved"):
         adparm.CostConfig(input_bound="auto").bound_vector(2)
+
+
+def test_a_sweep_over_the_bound_on_the_ur5_carries_the_saturated_time() -> None:
+    # the exact saturated family on the UR5 with its derived cost (building it used to fail: the
+    # n-joint Q was checked against the old R), its URDF's torque limits and the structured basis
+    base = adparm.Config.from_dict(
+        {
+            "plant": {"urdf": "example-robot-data:ur5"},
+            "cost": {"input_bound": "auto", "e2_cost": "logcosh"},
+            "sim": {"T": 0.3},
+        }
+    )
+    assert base.controller.basis == "structured"
+    assert base.plant.torque_limits == (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)
+    table = adparm.sweep(base, {"cost.input_bound": [0.5, "auto"]})
+    assert [row["cost.input_bound"] for row in table] == [0.5, "auto"]
+    for row in table:
+        assert row["status"] == "finished"
+        assert len(row["saturated_time"]) == 6  # seconds the drive clipped, per joint
+        assert all(0.0 <= s <= 0.3 for s in row["saturated_time"])
+        assert row["critic_relative_error"] is not None  # the family's W* is known
+    # the rows carry no J / J* - 1: the numerical optimum on the UR5 takes minutes
+    # (adparm.optimal_cost; adparm compare leaves it out on arms of more than 3 joints)
+    assert not any("optimal" in key or "J*" in key for key in table.rows[0])

@@ -233,15 +233,16 @@ class ConfigSchema:
         n = self.dof
         if self.plant.urdf is not None:
             # the sizes first (the derivation evaluates the arm at q0 and qd)
-            for (section, key), value in joint_defaults(n).items():
-                if f"{section}.{key}" not in self._explicit:
-                    current = getattr(self, section)
-                    object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+            self._replace_fields(
+                {
+                    name: value
+                    for name, value in joint_defaults(n).items()
+                    if ".".join(name) not in self._explicit
+                }
+            )
             check_sizes(self, n)
             values, reasons = self._arm_defaults()
-            for (section, key), value in values.items():
-                current = getattr(self, section)
-                object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+            self._replace_fields(values)
             self._derived.update(reasons)
         elif n != 2:  # an n-joint stand-in without a URDF (tests): the n-joint defaults
             for (section, key), value in joint_defaults(n).items():
@@ -249,6 +250,17 @@ class ConfigSchema:
                 if getattr(current, key) == getattr(SECTIONS[section](), key):
                     object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
         check_sizes(self, n)
+
+    def _replace_fields(self, values: Mapping[tuple[str, str], Any]) -> None:
+        """Sets {(section, key): value}, each section's keys at once: its checks between keys
+        (e.g. cost.Q's e2 block against cost.R with e2_cost = "logcosh") see the new values
+        together, not a new Q beside the old R."""
+        sections: dict[str, dict[str, Any]] = {}
+        for (section, key), value in values.items():
+            sections.setdefault(section, {})[key] = value
+        for section, changes in sections.items():
+            current = getattr(self, section)
+            object.__setattr__(self, section, dataclasses.replace(current, **changes))
 
     @property
     def dof(self) -> int:
