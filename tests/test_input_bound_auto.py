@@ -179,3 +179,8 @@ def test_a_sweep_over_the_bound_on_the_ur5_carries_the_saturated_time() -> None:
     # the rows carry no J / J* - 1: the numerical optimum on the UR5 takes minutes
     # (adparm.optimal_cost; adparm compare leaves it out on arms of more than 3 joints)
     assert not any("optimal" in key or "J*" in key for key in table.rows[0])
+
+
+def test_another_word_is_refused() -> None:
+    with pytest.raises(ValueError, match=r'cost\.input_bound: expected .* or "auto", got \'Auto\''):
+        adparm.paper_config().updated({"cost": {"input_bound": "Auto"}})

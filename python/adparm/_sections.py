@@ -94,7 +94,12 @@ class CostConfig:
             if self.e2_cost == "logcosh":
                 raise ValueError('cost.e2_cost: "logcosh" needs cost.input_bound')
             return
-        if isinstance(self.input_bound, str) and self.input_bound.strip().lower() == AUTO:
+        if isinstance(self.input_bound, str):
+            if self.input_bound != AUTO:
+                raise ValueError(
+                    f'cost.input_bound: expected a number > 0, one per joint, or "auto", got '
+                    f"{self.input_bound!r}"
+                )
             bound: float | Vector | str = AUTO  # adparm.Config resolves it
         elif is_number(self.input_bound):
             bound = scalar_value(self.input_bound, "cost.input_bound", minimum=0.0, strict=True)
