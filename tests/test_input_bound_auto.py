@@ -42,11 +42,12 @@ def paper_h(config: adparm.Config, t: np.ndarray) -> np.ndarray:
 
 
 def test_set_point_of_the_paper_arm_leaves_half_the_headroom_over_gravity() -> None:
-    # qd = 0 at rest: h = G(0) = [g1 + g2, g2] = [21.56, 9.8] N m, no friction
+    # qd = 0 at rest: h = G(0) = [g1 + g2, g2] = [21.56, 9.8] N m, no friction; the disturbance
+    # [0.1 sin t, 0.1 cos t] N m, which RISE cancels
     config = adparm.paper_config().updated(
         {"plant": {"torque_limits": [100.0, 40.0]}, "probe": NO_PROBE, "cost": AUTO}
     )
-    expected = [(100.0 - 9.8 * 2.2) / 2.0, (40.0 - 9.8) / 2.0]
+    expected = [(100.0 - 9.8 * 2.2 - 0.1) / 2.0, (40.0 - 9.8 - 0.1) / 2.0]
     np.testing.assert_allclose(config.cost.input_bound, expected, rtol=1e-12)
     assert "cost.input_bound" in config.derived
     assert "half the headroom" in config.derived["cost.input_bound"]
@@ -61,7 +62,7 @@ def test_the_probe_takes_its_summed_amplitude_off_the_headroom() -> None:
             "cost": AUTO,
         }
     )
-    expected = [(100.0 - 9.8 * 2.2 - 20.0) / 2.0, (40.0 - 9.8 - 8.0) / 2.0]
+    expected = [(100.0 - 9.8 * 2.2 - 0.1 - 20.0) / 2.0, (40.0 - 9.8 - 0.1 - 8.0) / 2.0]
     np.testing.assert_allclose(config.cost.input_bound, expected, rtol=1e-12)
     assert "probe" in config.derived["cost.input_bound"]
 
@@ -70,7 +71,12 @@ def test_a_moving_target_takes_the_largest_feedforward_over_the_horizon() -> Non
     qd = {"kind": "sinusoid", "amplitude": [0.5, 0.3], "frequency": [3.0, 4.0], "phase": [0, 0]}
     config = adparm.paper_config().updated(
         {
-            "plant": {"torque_limits": [150.0, 60.0], "coulomb": -0.1, "viscous": 0.5},
+            "plant": {
+                "torque_limits": [150.0, 60.0],
+                "coulomb": -0.1,
+                "viscous": 0.5,
+                "disturbance": [1.0, 2.0],
+            },
             "task": {"qd": qd},
             "probe": NO_PROBE,
             "sim": {"T": 4.0},
@@ -78,7 +84,7 @@ def test_a_moving_target_takes_the_largest_feedforward_over_the_horizon() -> Non
         }
     )
     h = np.abs(paper_h(config, np.linspace(0.0, 4.0, 200))).max(axis=0)
-    np.testing.assert_allclose(config.cost.input_bound, (np.array([150.0, 60.0]) - h) / 2, 1e-9)
+    np.testing.assert_allclose(config.cost.input_bound, (np.array([149.0, 58.0]) - h) / 2, 1e-9)
     # more than at the set-point qd(0): the trajectory's acceleration and velocity count
     at_start = np.abs(paper_h(config, np.zeros(1)))[0]
     assert np.all(h > at_start + 5.0)
@@ -93,7 +99,8 @@ def test_the_ur5_takes_its_urdf_efforts_less_its_gravity_torque() -> None:
     data = model.createData()
     qd = np.array(config.task.qd, dtype=float)
     gravity = pin.rnea(model, data, qd, np.zeros(6), np.zeros(6))
-    np.testing.assert_allclose(config.cost.input_bound, (effort - np.abs(gravity)) / 2, 1e-9)
+    expected = (effort - np.abs(gravity) - 0.1) / 2  # the derived disturbance: 0.1 N m per joint
+    np.testing.assert_allclose(config.cost.input_bound, expected, 1e-9)
 
 
 def test_auto_runs_exactly_as_its_numbers() -> None:
@@ -120,7 +127,7 @@ def test_auto_is_derived_again_when_the_config_changes() -> None:
         {"plant": {"torque_limits": [100.0, 40.0]}, "probe": NO_PROBE, "cost": AUTO}
     )
     lowered = config.updated({"plant": {"torque_limits": [60.0, 40.0]}})
-    np.testing.assert_allclose(lowered.cost.input_bound, [(60.0 - 21.56) / 2, 15.1], 1e-12)
+    np.testing.assert_allclose(lowered.cost.input_bound, [(60.0 - 21.66) / 2, 15.05], 1e-12)
     fixed = config.updated({"cost": {"input_bound": 3.0}}).updated({"sim": {"T": 1.0}})
     assert fixed.cost.input_bound == 3.0
     assert "cost.input_bound" not in fixed.derived
@@ -130,7 +137,7 @@ def test_a_joint_without_a_limit_is_left_practically_unbounded() -> None:
     config = adparm.paper_config().updated(
         {"plant": {"torque_limits": [100.0, float("inf")]}, "probe": NO_PROBE, "cost": AUTO}
     )
-    np.testing.assert_allclose(config.cost.input_bound, [39.22, adparm.rates.UNLIMITED_BOUND])
+    np.testing.assert_allclose(config.cost.input_bound, [39.17, adparm.rates.UNLIMITED_BOUND])
 
 
 @pytest.mark.parametrize("limits", [None, "none", float("inf")])

@@ -263,12 +263,14 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
     commanded torque inside the limit while |h_hat_i| + |mu_i| + |probe_i| + lambda_i <= tau_bar_i.
     With
 
-        headroom_i = tau_bar_i - max_t |h_i(qd, dqd, ddqd)| - sum_k |amplitude_ik|,
+        headroom_i = tau_bar_i - max_t |h_i(qd, dqd, ddqd)| - d_i - sum_k |amplitude_ik|,
 
     h = M ddqd + C dqd + G + F of the believed model along the desired trajectory (200 samples
-    over [0, sim.T]; a set-point: one) and the probe's largest value on joint i (while it
-    probes: probe.until > 0), "auto" takes lambda_i = headroom_i / 2: the other half is left to
-    RISE's mu and to h away from the desired trajectory, which are not bounded a priori. A
+    over [0, sim.T]; a set-point: one), d_i the amplitude of the disturbance (plant.disturbance:
+    RISE's mu cancels it, so the commanded torque carries it) and the probe's largest value on
+    joint i (while it probes: probe.until > 0), "auto" takes lambda_i = headroom_i / 2: the other
+    half is left to the rest of RISE's mu (its transient, model error) and to h away from the
+    desired trajectory, which are not bounded a priori. A
     heuristic margin, conservative while |mu_i| stays below headroom_i / 2; the torque panel and
     result.saturated_time show whether the drive clipped. A joint without a limit (inf) gets
     UNLIMITED_BOUND (unbounded in practice). Refused, naming the fields, when no joint is limited
@@ -292,20 +294,23 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
         terms = arm_terms(config, qd, dqd, model=True)
         h = terms["M"] @ ddqd + terms["C"] @ dqd + terms["G"] + terms["F"]
         feedforward = np.maximum(feedforward, np.abs(h))
+    disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
     probing = config.probe.until > 0.0
     probe = np.abs(config.probe.amplitude_matrix(n)).sum(axis=1) if probing else np.zeros(n)
-    headroom = limits - feedforward - probe
+    headroom = limits - feedforward - disturbance - probe
     for i in np.flatnonzero(np.isfinite(limits) & (headroom <= 0.0)):
         raise ValueError(
             f'cost.input_bound: "auto": on joint {i + 1} the torque limit does not hold the '
             f"task's feedforward and the probe: plant.torque_limits = {limits[i]:.4g} N m, "
-            f"max |h| over the desired trajectory = {feedforward[i]:.4g} N m"
+            f"max |h| over the desired trajectory = {feedforward[i]:.4g} N m, "
+            f"plant.disturbance = {disturbance[i]:.4g} N m"
             + (f", probe.amplitude summed = {probe[i]:.4g} N m" if probing else "")
             + "; give cost.input_bound numbers, raise the limit or change the task"
         )
     bound = np.where(np.isfinite(limits), headroom / 2.0, UNLIMITED_BOUND)
     reason = (
         "auto: (plant.torque_limits - max |h| of the believed model over the desired trajectory"
+        " - |plant.disturbance|"
         + (" - the probe's amplitude" if probing else "")
         + ") / 2, half the headroom left to RISE"
         + (f"; {UNLIMITED_BOUND:g} on the joints without a limit" if np.isinf(limits).any() else "")
