@@ -270,9 +270,9 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
     RISE's mu cancels it, so the commanded torque carries it) and the probe's largest value on
     joint i (while it probes: probe.until > 0), "auto" takes lambda_i = headroom_i / 2: the other
     half is left to the rest of RISE's mu (its transient, model error) and to h away from the
-    desired trajectory, which are not bounded a priori. A
-    heuristic margin, conservative while |mu_i| stays below headroom_i / 2; the torque panel and
-    result.saturated_time show whether the drive clipped. A joint without a limit (inf) gets
+    desired trajectory, which are not bounded a priori. A heuristic margin, conservative while
+    that rest of |mu_i| stays below headroom_i / 2; the torque panel and result.saturated_time
+    show whether the drive clipped. A joint without a limit (inf) gets
     UNLIMITED_BOUND (unbounded in practice). Refused, naming the fields, when no joint is limited
     or a limit does not hold the task's feedforward and the probe."""
     from .desired import desired_state
@@ -298,7 +298,9 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
     probing = config.probe.until > 0.0
     probe = np.abs(config.probe.amplitude_matrix(n)).sum(axis=1) if probing else np.zeros(n)
     headroom = limits - feedforward - disturbance - probe
-    for i in np.flatnonzero(np.isfinite(limits) & (headroom <= 0.0)):
+    short = np.flatnonzero(np.isfinite(limits) & (headroom <= 0.0))
+    if short.size:
+        i = int(short[0])
         raise ValueError(
             f'cost.input_bound: "auto": on joint {i + 1} the torque limit does not hold the '
             f"task's feedforward and the probe: plant.torque_limits = {limits[i]:.4g} N m, "
