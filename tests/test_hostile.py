@@ -334,12 +334,14 @@ def test_a_result_file_with_a_hostile_basis_is_refused_quickly(tmp_path) -> None
         path = tmp_path / f"run{suffix}"
         result.save(path)
         if suffix == ".csv":
-            text = path.read_text().replace('"quadratic"', '"9**9**9*x1"', 1)
+            text = path.read_text().replace('"basis": "quadratic"', '"basis": "9**9**9*x1"', 1)
             path.write_text(text)
         else:
             with np.load(path, allow_pickle=False) as stored:
                 fields = {name: stored[name] for name in stored.files}
-            text = str(fields["config_json"]).replace('"quadratic"', '"9**9**9*x1"', 1)
+            text = str(fields["config_json"]).replace(
+                '"basis": "quadratic"', '"basis": "9**9**9*x1"', 1
+            )
             fields["config_json"] = np.array(text)
             np.savez(path, **fields)
         start = time.perf_counter()
