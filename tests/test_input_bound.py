@@ -330,12 +330,6 @@ def test_the_core_checks_its_settings_naming_the_field() -> None:
         _core.closed_loop_derivative(settings, 0.0, np.zeros(_core.STATE_SIZE))
 
 
-def test_optimal_cost_refuses_a_bound() -> None:
-    config = adparm.paper_config().updated({"cost": {"input_bound": 5.0}})
-    with pytest.raises(ValueError, match=r"cost\.input_bound"):
-        adparm.optimal_cost(config)
-
-
 def test_planar_3link_learns_W_star_while_the_policy_saturates() -> None:
     """The exact saturated family on the planar 3-link URDF arm (structured basis, 50 fixed
     extrapolation points, no probe), lambda 0.3 of the largest unbounded |u*(0)|: saturated for

@@ -4,8 +4,9 @@ adparm._sections, adparm._arm_sections and adparm._fields).
 
 ConfigSchema stands at the bottom of the package and imports nothing that knows the arm's
 dynamics. :class:`adparm.Config` (adparm.config, the model layer) subclasses it and fills in its
-hooks (``_arm_defaults``, ``_check_basis``, ``_resolve_step``) with what the arm and the basis
-derive: a URDF arm's defaults, the basis' size and initial weights, sim.dt = "auto". The
+hooks (``_arm_defaults``, ``_check_basis``, ``_resolve_input_bound``, ``_resolve_step``) with
+what the arm and the basis derive: a URDF arm's defaults, the basis' size and initial weights,
+cost.input_bound = "auto", sim.dt = "auto". The
 functions of the model layer (adparm.optimal, adparm.rates, adparm.urdf) take a config as a
 ConfigSchema and read the fields and properties it has."""
 
@@ -82,6 +83,9 @@ class ConfigSchema:
     #: "section.key" of every setting given explicitly through from_dict/updated/load_config (a
     #: value "auto" is not explicit): a URDF arm derives the others (rates.urdf_defaults).
     _explicit: frozenset[str] = field(default=frozenset(), repr=False, compare=False)
+    #: "section.key" of every setting given as "auto" whose value adparm.Config resolves and
+    #: resolves again when the config is updated (cost.input_bound).
+    _auto: frozenset[str] = field(default=frozenset(), repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name, cls in SECTIONS.items():
@@ -110,6 +114,7 @@ class ConfigSchema:
             raise ValueError(
                 f"task.qd: the samples end at t = {qd.t[-1]:g} s, before sim.T = {self.sim.T:g} s"
             )
+        self._resolve_input_bound()
         self._resolve_step()
 
     def _check_basis(self) -> None:
@@ -118,6 +123,9 @@ class ConfigSchema:
     def _arm_defaults(self) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
         """The settings a URDF arm derives, with their reasons (adparm.Config)."""
         return {}, {}
+
+    def _resolve_input_bound(self) -> None:
+        """cost.input_bound = "auto" (adparm.Config)."""
 
     def _resolve_step(self) -> None:
         """sim.dt = "auto" (adparm.Config)."""
@@ -143,6 +151,7 @@ class ConfigSchema:
         base = cls() if base is None else base
         sections = {}
         explicit = set(base._explicit)
+        auto = set(base._auto)
         for section, values in data.items():
             check_known(
                 section,
@@ -166,11 +175,15 @@ class ConfigSchema:
                 name = f"{section}.{key}"
                 if isinstance(value, str) and value == AUTO:
                     explicit.discard(name)
+                    auto.add(name)
                 else:
                     explicit.add(name)
+                    auto.discard(name)
             sections[section] = dataclasses.replace(getattr(base, section), **values)
         check_urdf_keys(data, sections.get("plant", base.plant))
-        return dataclasses.replace(base, **sections, _explicit=frozenset(explicit))
+        return dataclasses.replace(
+            base, **sections, _explicit=frozenset(explicit), _auto=frozenset(auto)
+        )
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """Nested plain dict (lists for arrays, model keys left at the plant's value omitted)."""
@@ -220,15 +233,16 @@ class ConfigSchema:
         n = self.dof
         if self.plant.urdf is not None:
             # the sizes first (the derivation evaluates the arm at q0 and qd)
-            for (section, key), value in joint_defaults(n).items():
-                if f"{section}.{key}" not in self._explicit:
-                    current = getattr(self, section)
-                    object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+            self._replace_fields(
+                {
+                    name: value
+                    for name, value in joint_defaults(n).items()
+                    if ".".join(name) not in self._explicit
+                }
+            )
             check_sizes(self, n)
             values, reasons = self._arm_defaults()
-            for (section, key), value in values.items():
-                current = getattr(self, section)
-                object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+            self._replace_fields(values)
             self._derived.update(reasons)
         elif n != 2:  # an n-joint stand-in without a URDF (tests): the n-joint defaults
             for (section, key), value in joint_defaults(n).items():
@@ -236,6 +250,17 @@ class ConfigSchema:
                 if getattr(current, key) == getattr(SECTIONS[section](), key):
                     object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
         check_sizes(self, n)
+
+    def _replace_fields(self, values: Mapping[tuple[str, str], Any]) -> None:
+        """Sets {(section, key): value}, each section's keys at once: its checks between keys
+        (e.g. cost.Q's e2 block against cost.R with e2_cost = "logcosh") see the new values
+        together, not a new Q beside the old R."""
+        sections: dict[str, dict[str, Any]] = {}
+        for (section, key), value in values.items():
+            sections.setdefault(section, {})[key] = value
+        for section, changes in sections.items():
+            current = getattr(self, section)
+            object.__setattr__(self, section, dataclasses.replace(current, **changes))
 
     @property
     def dof(self) -> int:

@@ -13,6 +13,7 @@ import numpy as np
 
 from ._arm_sections import ModelConfig, PlantConfig, TaskConfig, plain_value
 from ._fields import (
+    AUTO,
     MAX_FREQUENCIES,
     Matrix,
     Vector,
@@ -59,13 +60,16 @@ class CostConfig:
         "2 x 2 input weight, symmetric positive definite (diagonal with ``input_bound``).",
         core="R",
     )
-    input_bound: float | Vector | None = setting(
+    input_bound: float | Vector | str | None = setting(
         None,
         "Bound lambda on the ADP input, ``|u_i| <= lambda_i`` (one number or one per joint, > 0; "
         "not in the paper): the input cost becomes U(u) = sum_i R_i [2 lambda_i u_i "
         "atanh(u_i / lambda_i) + lambda_i^2 ln(1 - u_i^2 / lambda_i^2)] and the policy "
         "u = -lambda tanh(D) (Abu-Khalaf & Lewis 2005; :doc:`/guide/constrained-input`). "
-        "Needs a diagonal R. Left out: the quadratic u^T R u.",
+        'Needs a diagonal R. ``"auto"``: derived from ``plant.torque_limits``, lambda_i = '
+        "(limit_i - max |h_i| over the desired trajectory - the probe's amplitude) / 2, a "
+        "conservative heuristic (:doc:`/guide/constrained-input`). Left out: the quadratic "
+        "u^T R u.",
         via="input_bound, one per joint (CostConfig.bound_vector)",
     )
     e2_cost: str = setting(
@@ -90,10 +94,15 @@ class CostConfig:
             if self.e2_cost == "logcosh":
                 raise ValueError('cost.e2_cost: "logcosh" needs cost.input_bound')
             return
-        if is_number(self.input_bound):
-            bound: float | Vector = scalar_value(
-                self.input_bound, "cost.input_bound", minimum=0.0, strict=True
-            )
+        if isinstance(self.input_bound, str):
+            if self.input_bound != AUTO:
+                raise ValueError(
+                    f'cost.input_bound: expected a number > 0, one per joint, or "auto", got '
+                    f"{self.input_bound!r}"
+                )
+            bound: float | Vector | str = AUTO  # adparm.Config resolves it
+        elif is_number(self.input_bound):
+            bound = scalar_value(self.input_bound, "cost.input_bound", minimum=0.0, strict=True)
         else:
             bound = vector_value(self.input_bound, "cost.input_bound", None)
             if min(bound) <= 0.0:
@@ -118,6 +127,11 @@ class CostConfig:
         """lambda, one per joint; empty without an input bound."""
         if self.input_bound is None:
             return np.zeros(0)
+        if self.input_bound == AUTO:
+            raise ValueError(
+                'cost.input_bound: "auto" is resolved by adparm.Config (from plant.torque_limits); '
+                "this section was not"
+            )
         return np.broadcast_to(np.array(self.input_bound, dtype=float), (joints,)).copy()
 
 

@@ -4,7 +4,8 @@ The schema (the sections, their fields, defaults, bounds and checks, and the che
 that need only values) is adparm._schema.ConfigSchema with the sections of adparm._sections and
 adparm._arm_sections; it sits at the bottom of the package. Config subclasses it in the model
 layer, where it can call down into the arm and the basis: a URDF arm's derived defaults
-(adparm.rates.urdf_defaults), the basis' size and default initial weights, and sim.dt = "auto".
+(adparm.rates.urdf_defaults), the basis' size and default initial weights, cost.input_bound =
+"auto" (adparm.rates.auto_input_bound) and sim.dt = "auto".
 Everything that builds a config (``Config()``, :meth:`Config.from_dict`, :meth:`Config.updated`,
 :func:`load_config`, :func:`paper_config`) therefore returns a resolved one, and nothing below
 imports this module: the model's functions take a config by its schema (docs/design.md).
@@ -76,7 +77,7 @@ from ._sections import (
 from .basis_family import BasisFamily, basis_for
 from .desired import desired_state
 from .optimal import initial_error_state
-from .rates import auto_step, closed_loop_rates, urdf_defaults
+from .rates import auto_input_bound, auto_step, closed_loop_rates, urdf_defaults
 
 __all__ = [
     "ActorConfig",
@@ -183,6 +184,16 @@ class Config(ConfigSchema):
             raise ValueError(
                 f"controller.basis: at the initial state (task.q0, task.qd), {problem}"
             )
+
+    def _resolve_input_bound(self) -> None:
+        """cost.input_bound = "auto" (given so, now or in the config this one was updated from):
+        lambda from plant.torque_limits, the feedforward over the task and the probe
+        (rates.auto_input_bound)."""
+        if self.cost.input_bound != AUTO and "cost.input_bound" not in self._auto:
+            return
+        bound, reason = auto_input_bound(self)
+        object.__setattr__(self, "cost", dataclasses.replace(self.cost, input_bound=bound))
+        self._derived["cost.input_bound"] = reason
 
     def _resolve_step(self) -> None:
         """sim.dt = "auto" (a URDF arm's default, or given so): the largest 1, 2 or 5 x 10^k s

@@ -35,6 +35,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "AUTO_MARGIN",
     "RK4_STABILITY_LIMIT",
+    "UNLIMITED_BOUND",
+    "auto_input_bound",
     "auto_step",
     "check_step",
     "closed_loop_rates",
@@ -241,6 +243,81 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     put("extrapolation.box", (b1,) * n + (b2,) * n, "2 |e1(0)| on e1, alpha1 times that on e2")
     put("sim.T", 10.0, "learning from extrapolation reaches W* within seconds")
     return values, reasons
+
+
+# --- cost.input_bound = "auto" ------------------------------------------------------------
+
+#: cost.input_bound = "auto" on a joint without a torque limit (N m): so large that the bounded
+#: input cost and policy equal the unbounded ones there (lambda = 1e6 reproduces the unbounded
+#: run to 1e-9, tests/test_input_bound.py).
+UNLIMITED_BOUND = 1e6
+#: Samples of the desired trajectory over [0, sim.T] (a set-point: one).
+_TASK_SAMPLES = 200
+
+
+def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
+    """lambda of cost.input_bound = "auto", one per joint, and the reason (for config.derived).
+
+    The controller commands tau = h_hat + mu - (u_hat + probe) and the drive clips it at the
+    limit tau_bar_i (plant.torque_limits). The ADP input |u_hat_i| <= lambda_i then leaves the
+    commanded torque inside the limit while |h_hat_i| + |mu_i| + |probe_i| + lambda_i <= tau_bar_i.
+    With
+
+        headroom_i = tau_bar_i - max_t |h_i(qd, dqd, ddqd)| - d_i - sum_k |amplitude_ik|,
+
+    h = M ddqd + C dqd + G + F of the believed model along the desired trajectory (200 samples
+    over [0, sim.T]; a set-point: one), d_i the amplitude of the disturbance (plant.disturbance:
+    RISE's mu cancels it, so the commanded torque carries it) and the probe's largest value on
+    joint i (while it probes: probe.until > 0), "auto" takes lambda_i = headroom_i / 2: the other
+    half is left to the rest of RISE's mu (its transient, model error) and to h away from the
+    desired trajectory, which are not bounded a priori. A heuristic margin, conservative while
+    that rest of |mu_i| stays below headroom_i / 2; the torque panel and result.saturated_time
+    show whether the drive clipped. A joint without a limit (inf) gets
+    UNLIMITED_BOUND (unbounded in practice). Refused, naming the fields, when no joint is limited
+    or a limit does not hold the task's feedforward and the probe."""
+    from .desired import desired_state
+    from .dynamics import arm_terms
+
+    n = config.dof
+    limits = config.plant.limit_vector(n)
+    if limits.size == 0 or np.all(np.isinf(limits)):
+        raise ValueError(
+            'cost.input_bound: "auto" derives lambda from plant.torque_limits, and no joint is '
+            'limited (plant.torque_limits is left out, "none" or inf); give cost.input_bound '
+            "numbers, or set plant.torque_limits"
+        )
+    samples = 1 if config.task.is_set_point else _TASK_SAMPLES
+    times = np.linspace(0.0, config.sim.T, samples)
+    states = np.unique(desired_state(config, times), axis=0)
+    feedforward = np.zeros(n)
+    for qd, dqd, ddqd in states:
+        terms = arm_terms(config, qd, dqd, model=True)
+        h = terms["M"] @ ddqd + terms["C"] @ dqd + terms["G"] + terms["F"]
+        feedforward = np.maximum(feedforward, np.abs(h))
+    disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
+    probing = config.probe.until > 0.0
+    probe = np.abs(config.probe.amplitude_matrix(n)).sum(axis=1) if probing else np.zeros(n)
+    headroom = limits - feedforward - disturbance - probe
+    short = np.flatnonzero(np.isfinite(limits) & (headroom <= 0.0))
+    if short.size:
+        i = int(short[0])
+        raise ValueError(
+            f'cost.input_bound: "auto": on joint {i + 1} the torque limit does not hold the '
+            f"task's feedforward and the probe: plant.torque_limits = {limits[i]:.4g} N m, "
+            f"max |h| over the desired trajectory = {feedforward[i]:.4g} N m, "
+            f"plant.disturbance = {disturbance[i]:.4g} N m"
+            + (f", probe.amplitude summed = {probe[i]:.4g} N m" if probing else "")
+            + "; give cost.input_bound numbers, raise the limit or change the task"
+        )
+    bound = np.where(np.isfinite(limits), headroom / 2.0, UNLIMITED_BOUND)
+    reason = (
+        "auto: (plant.torque_limits - max |h| of the believed model over the desired trajectory"
+        " - |plant.disturbance|"
+        + (" - the probe's amplitude" if probing else "")
+        + ") / 2, half the headroom left to RISE"
+        + (f"; {UNLIMITED_BOUND:g} on the joints without a limit" if np.isinf(limits).any() else "")
+    )
+    return tuple(float(v) for v in bound), reason
 
 
 # --- rates ----------------------------------------------------------------------------------
