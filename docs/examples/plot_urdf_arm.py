@@ -4,11 +4,11 @@ A 3-link arm from a URDF: the critic learns the arm's inertia
 
 ``planar_3link.toml``, one of the example files installed with adparm
 (:func:`adparm.example_path`; the repository's ``examples/``), reads a 3-link planar arm from a
-URDF (Pinocchio computes M, C, G). With a cost of the exact family, V* = e1^T K e1 + e2^T M(q) e2, and the default basis of a
-URDF arm, the structured one, represents it exactly: W* = [K entries; the arm's 7 base inertial
-parameters]. Starting from K = I (the cost's K is diag(2, 1, 0.5)), the critic learns K from
-Bellman-error extrapolation at 50 fixed points, without probing, and keeps the inertia it
-started from.
+URDF (Pinocchio computes M, C, G). With a cost of the exact family, V* = e1^T K e1 + e2^T M(q) e2,
+and the default basis of a URDF arm, the structured one, represents it exactly: W* = [K entries;
+the arm's 7 base inertial parameters]. Starting from K = I (the cost's K is diag(2, 1, 0.5)), the
+critic learns K from Bellman-error extrapolation at 50 fixed points, without probing, and keeps
+the inertia it started from.
 """
 
 import matplotlib.pyplot as plt
