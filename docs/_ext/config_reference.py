@@ -23,6 +23,9 @@ RESOLVED_DEFAULTS = {
     ("plant", "urdf"): "none (the built-in two-link arm)",
     ("plant", "gravity"): "[0, 0, -9.81] (with ``urdf``)",
     ("plant", "locked_joints"): "none (every joint free)",
+    ("plant", "torque_limits"): "none on the two-link arm; the URDF's ``<limit effort>`` on a "
+    "URDF arm",
+    ("cost", "input_bound"): "none (the quadratic input cost u^T R u of eq. 10)",
     ("critic", "epsilon_T"): "1e-6; 1e-3 with extrapolation points",
     ("probe", "phases"): "k rad for sinusoid k, both joints",
     ("task.qd sinusoid", "phase"): "zeros",

@@ -235,9 +235,10 @@ class PlantConfig:
     )
     torque_limits: float | Vector | str | None = setting(
         None,
-        "Actuator torque limits |tau_i| <= limit_i (N m; not in the paper): one number, one per "
-        'joint (``inf``: none on that joint) or ``"none"``. The drive applies the torque clipped; '
-        "RISE does not wind up (``control.anti_windup``); the result records the saturated time. "
+        "Actuator torque limits ``|tau_i| <= limit_i`` (N m; not in the paper): one number, one "
+        'per joint (``inf``: none on that joint) or ``"none"``. The drive applies the torque '
+        "clipped; RISE does not wind up (``control.anti_windup``); the result records the "
+        "saturated time. "
         "Left out: none on the two-link arm, the URDF's ``<limit effort>`` on a URDF arm (0 or "
         "none given: no limit there). ``[model]`` has none. See :doc:`/guide/torque-limits`.",
         via="torque_limits: 'none' empty, one number for every joint (PlantConfig.limit_vector)",

@@ -67,7 +67,8 @@ class CostConfig:
         "atanh(u_i / lambda_i) + lambda_i^2 ln(1 - u_i^2 / lambda_i^2)] and the policy "
         "u = -lambda tanh(D) (Abu-Khalaf & Lewis 2005; :doc:`/guide/constrained-input`). "
         'Needs a diagonal R. ``"auto"``: derived from ``plant.torque_limits``, lambda_i = '
-        "(limit_i - max |h_i| over the desired trajectory - the probe's amplitude) / 2, a "
+        "(limit_i - max ``|h_i|`` over the desired trajectory - the disturbance's and the probe's "
+        "amplitudes) / 2, a "
         "conservative heuristic (:doc:`/guide/constrained-input`). Left out: the quadratic "
         "u^T R u.",
         via="input_bound, one per joint (CostConfig.bound_vector)",

@@ -166,7 +166,7 @@ def solvable_cost(K: Any, alpha1: Any, R: Any, s: float = 1.0) -> np.ndarray:
 
 def saturated_cost(K: Any, alpha1: Any, R: Any, input_bound: Any) -> dict[str, Any]:
     """The ``[cost]`` section of the exact constrained-input family: with it, V* = e1^T K e1 +
-    e2^T M(q) e2 solves the HJB equation of the bounded input |u_i| <= lambda_i exactly, and
+    e2^T M(q) e2 solves the HJB equation of the bounded input ``|u_i| <= lambda_i`` exactly, and
     u* = -lambda tanh(R^-1 e2 / lambda) (docs: constrained-input).
 
     Parameters

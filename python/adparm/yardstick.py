@@ -47,7 +47,7 @@ class OptimalCost(float):
     history : tuple of (int, float)
         (N, J(N)) of each solve at the final horizon, the coarsest first.
     torque_limits : tuple of float or None
-        The bounds |tau_i| <= limit_i on the applied torque (None: no limits).
+        The bounds ``|tau_i| <= limit_i`` on the applied torque (None: no limits).
     input_bound : tuple of float or None
         lambda of the bounded input cost U(u) (None: the quadratic u^T R u).
     e2_cost : str
@@ -183,11 +183,11 @@ def optimal_cost(
     N, each solve starting from the last, until the relative change is at most ``rtol`` or N
     would pass ``max_intervals``; the result says which (``converged``) and the estimate.
 
-    Limits. With ``torque_limits``, |tau_i| <= limit_i holds at every node (both ends of each
+    Limits. With ``torque_limits``, ``|tau_i| <= limit_i`` holds at every node (both ends of each
     interval, u being linear in it), tau = h - u with h the feedforward of eq. (5) at the
     set-point (M alpha1 de1 + C alpha1 e1 + G + F, friction included). With ``input_bound``
     (lambda), the input cost is U(u) = sum_i R_i [2 lambda_i u_i atanh(u_i / lambda_i) +
-    lambda_i^2 ln(1 - u_i^2 / lambda_i^2)] (R diagonal) with |u_i| <= lambda_i (1 - 1e-6);
+    lambda_i^2 ln(1 - u_i^2 / lambda_i^2)] (R diagonal) with ``|u_i| <= lambda_i (1 - 1e-6)``;
     ``e2_cost = "logcosh"`` replaces the state cost's e2 block by sum_i 2 lambda_i^2 R_i^2
     q22_i ln cosh(e2_i / (R_i lambda_i)) (q22 the diagonal of Q's e2 block). Near x = 0 both
     costs are the quadratic ones and no torque limit is active (the gravity torque at the
@@ -219,7 +219,7 @@ def optimal_cost(
         The arm the controller believes (default); False: the plant, whose error system a run's
         e obeys, so that J* bounds every run's cost on its applied input (adparm.compare).
     torque_limits : float or array_like, optional
-        |tau_i| <= limit_i (N m; one number or one per joint, inf: none). Default: the config's
+        ``|tau_i| <= limit_i`` (N m; one number or one per joint, inf: none). Default: the config's
         ``plant.torque_limits`` where it has one, else none.
     input_bound : float or array_like, optional
         lambda_i > 0 of the bounded input cost U(u). Default: the config's ``cost.input_bound``
