@@ -546,3 +546,31 @@ def simulate(config: Config, steps: int, *, redraw: bool = True):
             points = local.draw(tracking_error(config, (k + 1) * dt, state))
         states.append(state.copy())
     return np.array(states), np.array(resets)
+
+
+def pinocchio_terms(path, gravity, q: np.ndarray, dq: np.ndarray) -> dict:
+    # Pinocchio's Python bindings (the pin package, in the test extra): an independent caller
+    import pinocchio
+
+    model = pinocchio.buildModelFromUrdf(str(path))
+    model.gravity.linear = np.asarray(gravity, dtype=float)
+    data = model.createData()
+    config = np.zeros(model.nq)  # a continuous joint's q is (cos, sin) in Pinocchio
+    for i in range(1, model.njoints):
+        joint = model.joints[i]
+        if joint.nq == 2:
+            config[joint.idx_q : joint.idx_q + 2] = np.cos(q[joint.idx_v]), np.sin(q[joint.idx_v])
+        else:
+            config[joint.idx_q] = q[joint.idx_v]
+    M = np.triu(pinocchio.crba(model, data, config))
+    Minv = np.triu(pinocchio.computeMinverse(model, data, config))
+    return {
+        "M": M + np.triu(M, 1).T,
+        "M_inv": Minv + np.triu(Minv, 1).T,
+        "C": pinocchio.computeCoriolisMatrix(model, data, config, dq).copy(),
+        "G": pinocchio.computeGeneralizedGravity(model, data, config).copy(),
+        "names": list(model.names)[1:],
+        "pi": np.concatenate(
+            [model.inertias[i].toDynamicParameters() for i in range(1, model.njoints)]
+        ),
+    }

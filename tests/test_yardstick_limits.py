@@ -10,6 +10,8 @@ import pytest
 
 import adparm
 
+from numpy_reference import pinocchio_terms
+
 ARMS = Path(__file__).resolve().parents[1] / "examples" / "arms"
 SPATIAL = ARMS / "spatial_3dof.urdf"
 #: A fixed horizon and discretisation: the same NLP with and without constraints, and each test
@@ -17,25 +19,6 @@ SPATIAL = ARMS / "spatial_3dof.urdf"
 FAST = {"horizon": 12.0, "intervals": 200, "max_intervals": 400}
 
 pytest.importorskip("adam.casadi", reason="adam-robotics builds a URDF arm's CasADi terms")
-
-
-def pinocchio_terms(path: Path, gravity, q: np.ndarray, dq: np.ndarray) -> tuple:
-    import pinocchio
-
-    model = pinocchio.buildModelFromUrdf(str(path))
-    model.gravity.linear = np.asarray(gravity, dtype=float)
-    data = model.createData()
-    config = np.zeros(model.nq)  # a continuous joint's q is (cos, sin) in Pinocchio
-    for i in range(1, model.njoints):
-        joint = model.joints[i]
-        if joint.nq == 2:
-            config[joint.idx_q : joint.idx_q + 2] = np.cos(q[joint.idx_v]), np.sin(q[joint.idx_v])
-        else:
-            config[joint.idx_q] = q[joint.idx_v]
-    M = np.triu(pinocchio.crba(model, data, config))
-    C = pinocchio.computeCoriolisMatrix(model, data, config, dq).copy()
-    G = pinocchio.computeGeneralizedGravity(model, data, config).copy()
-    return M + np.triu(M, 1).T, C, G
 
 
 @pytest.mark.parametrize("name", ["two_link", "planar_3link", "spatial_3dof", "ur5"])
@@ -56,7 +39,8 @@ def test_urdf_terms_match_pinocchio(name: str, rng) -> None:
     for _ in range(10):
         qv, dqv = rng.uniform(-2.0, 2.0, n), rng.uniform(-2.0, 2.0, n)
         M, C, G, F = (np.array(v) for v in function(qv, dqv))
-        theirs = pinocchio_terms(path, gravity, qv, dqv)
+        terms = pinocchio_terms(path, gravity, qv, dqv)
+        theirs = (terms["M"], terms["C"], terms["G"])
         scale = max(1.0, np.abs(theirs[0]).max())
         for ours, expected in zip((M, C, G.ravel()), theirs, strict=True):
             np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-10 * scale)
