@@ -359,6 +359,40 @@ def test_planar_3link_learns_W_star_while_the_policy_saturates() -> None:
     assert result.diagnostics["verdict"] == "ok"
 
 
+def test_ur5_learns_W_star_while_the_policy_saturates() -> None:
+    """The issue's target on the UR5: the exact saturated family of examples/ur5.toml (K =
+    diag(2, 1.5, 1, 0.8, 0.5, 0.3), alpha1 = 2 I, R = I, 55 structured functions, 110 fixed
+    extrapolation points, no probe) with lambda = 0.12, a third of the unbounded |u*(0)| = 0.4:
+    the actor's input is saturated (|u_hat| > 0.9 lambda on a joint) for the first half second
+    (measured: to 0.81 s), and critic and policy are within 1 % of W* well before t = 10 s
+    (measured: the critic from t = 0.41 s, 3e-7 at 5 s; the policy 1e-3 over the last 0.5 s;
+    T = 5 s keeps the test at about 4 s of computing)."""
+    n, bound = 6, 0.12
+    base = adparm.load_config(ROOT / "examples" / "ur5.toml")
+    K = np.diag([2.0, 1.5, 1.0, 0.8, 0.5, 0.3])
+    cost = adparm.saturated_cost(K, 2.0 * np.eye(n), np.eye(n), bound)
+    config = base.updated({"cost": cost})
+    assert config.sim.T == 5.0 and config.controller.basis == "structured"
+    unbounded = np.abs(
+        np.linalg.solve(np.array(config.cost.R), adparm.initial_error_state(config)[n:])
+    )
+    assert unbounded.max() > 3.0 * bound  # the unbounded u*(0) = -R^-1 e2(0) is 0.4 per joint
+    result = adparm.simulate(config)
+    saturated = np.any(np.abs(result.u_hat) > 0.9 * bound, axis=1)
+    assert saturated[result.t <= 0.5].all()
+    assert not saturated[result.t >= 2.0].any()
+    assert np.all(np.abs(result.u_hat) <= bound)
+    W = adparm.optimal_weights(config)
+    error = np.linalg.norm(result.critic_weights - W, axis=1) / np.linalg.norm(W)
+    assert error[0] > 0.1  # K = I and the base parameters at the start: 33 % off
+    assert np.all(error[result.t >= 1.0] < 0.01), error[result.t >= 1.0].max()
+    diagnostics = result.diagnostics
+    assert diagnostics["critic_relative_error"] < 1e-5
+    assert diagnostics["policy_relative_error"] < 0.01
+    assert diagnostics["actor_relative_error"] < 0.01
+    assert diagnostics["verdict"] == "ok"
+
+
 @pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 @pytest.mark.parametrize("kind", ["adp", "optimal"])
 def test_the_bounded_run_is_the_same_through_dynamic_sizes(kind: str) -> None:
