@@ -371,9 +371,10 @@ class _Transcription:
         e1, e2 = x[:n], x[n:]
         q = casadi.DM(qd) - e1
         dq = casadi.mtimes(casadi.DM(alpha1), e1) - e2
+        a = casadi.SX.sym("a", n)  # de2 at a stage, a decision variable
         terms = arm_expressions(config, q, dq)
         de1 = -casadi.mtimes(casadi.DM(alpha1), e1) + e2
-        de2 = casadi.solve(terms["M"], -casadi.mtimes(terms["C"], e2) + u)
+        rhs = -casadi.mtimes(terms["C"], e2) + u
         if e2_cost == "logcosh":
             q22 = _diagonal(Q[n:, n:], "cost.Q", "e2_cost = 'logcosh' (its e2 block)")
             r = _diagonal(R, "cost.R", "an input bound")
@@ -394,7 +395,13 @@ class _Transcription:
             )
         else:
             effort = casadi.bilin(casadi.DM(R), u, u)
-        self.f = casadi.Function("f", [x, u], [casadi.vertcat(de1, de2, state + effort)])
+        # M(q) de2 = -C e2 + u as the equality M a - rhs = 0 (no symbolic inverse of M)
+        self.f = casadi.Function(
+            "f",
+            [x, u, a],
+            [casadi.vertcat(de1, a, state + effort), casadi.mtimes(terms["M"], a) - rhs],
+        )
+        self.mass = casadi.Function("mass", [x, u], [casadi.vec(terms["M"]), rhs])
         self.bound = None if bound is None else np.asarray(bound) * (1.0 - self.BOUND_MARGIN)
         self.limits = None if limits is None else np.asarray(limits)
         self.tau = None
@@ -421,19 +428,24 @@ class _Transcription:
         f, step, n = self.f, self.horizon / intervals, self.n
         xa = casadi.SX.sym("xa", 2 * n)
         ua, ub = casadi.SX.sym("ua", n), casadi.SX.sym("ub", n)
-        k1 = f(xa, ua)
-        k2 = f(xa + step / 2 * k1[: 2 * n], (ua + ub) / 2)
-        k3 = f(xa + step / 2 * k2[: 2 * n], (ua + ub) / 2)
-        k4 = f(xa + step * k3[: 2 * n], ub)
+        stages = casadi.SX.sym("stages", n, 4)  # de2 at the four RK4 stages
+        k1, r1 = f(xa, ua, stages[:, 0])
+        k2, r2 = f(xa + step / 2 * k1[: 2 * n], (ua + ub) / 2, stages[:, 1])
+        k3, r3 = f(xa + step / 2 * k2[: 2 * n], (ua + ub) / 2, stages[:, 2])
+        k4, r4 = f(xa + step * k3[: 2 * n], ub, stages[:, 3])
         end = casadi.vertcat(xa, 0) + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        rk4 = casadi.Function("rk4", [xa, ua, ub], [end]).map(intervals)
+        residuals = casadi.vertcat(r1, r2, r3, r4)
+        rk4 = casadi.Function("rk4", [xa, ua, ub, stages], [end, residuals])
+        rk4 = rk4.map(intervals)
 
         opti = casadi.Opti()
         X = opti.variable(2 * n, intervals + 1)
         U = opti.variable(n, intervals + 1)
-        ends = rk4(X[:, :-1], U[:, :-1], U[:, 1:])  # every interval at once
+        A = opti.variable(n, 4 * intervals)  # interval i's stages in columns 4i to 4i + 3
+        ends, residuals = rk4(X[:, :-1], U[:, :-1], U[:, 1:], A)  # every interval at once
         opti.subject_to(X[:, 0] == self.x0)
         opti.subject_to(X[:, 1:] == ends[: 2 * n, :])
+        opti.subject_to(casadi.vec(residuals) == 0)
         if self.bound is not None:
             limit = np.repeat(self.bound[:, None], intervals + 1, axis=1)
             opti.subject_to(opti.bounded(-limit, U, limit))
@@ -447,11 +459,14 @@ class _Transcription:
         opti.minimize(total)
         t = np.linspace(0.0, self.horizon, intervals + 1)
         if guess is None:  # the LQR policy's decay as the initial guess
-            opti.set_initial(X, np.outer(self.x0, np.exp(-t)))
+            X_start, U_start = np.outer(self.x0, np.exp(-t)), np.zeros((n, intervals + 1))
         else:
             t_old, X_old, U_old = guess
-            opti.set_initial(X, np.array([np.interp(t, t_old, row) for row in X_old]))
-            opti.set_initial(U, np.array([np.interp(t, t_old, row) for row in U_old]))
+            X_start = np.array([np.interp(t, t_old, row) for row in X_old])
+            U_start = np.array([np.interp(t, t_old, row) for row in U_old])
+        opti.set_initial(X, X_start)
+        opti.set_initial(U, U_start)
+        opti.set_initial(A, self._stage_guess(X_start, U_start))
         opti.solver(
             "ipopt",
             {"print_time": False, "detect_simple_bounds": True},
@@ -470,6 +485,18 @@ class _Transcription:
         inputs = np.atleast_2d(solution.value(U))
         self.value = float(solution.value(total))
         return self.value, (t, states, inputs)
+
+    def _stage_guess(self, X: np.ndarray, U: np.ndarray) -> np.ndarray:
+        """de2 = M^-1 (-C e2 + u) at the nodes and the interval midpoints of a guess (X, U),
+        as the four stages of each interval (start, middle, middle, end)."""
+        n = self.n
+        X_mid, U_mid = (X[:, :-1] + X[:, 1:]) / 2, (U[:, :-1] + U[:, 1:]) / 2
+        columns = X.shape[1] + X_mid.shape[1]
+        mass, rhs = self.mass.map(columns)(np.hstack([X, X_mid]), np.hstack([U, U_mid]))
+        mass = np.array(mass).T.reshape(columns, n, n).transpose(0, 2, 1)  # vec is column-major
+        de2 = np.linalg.solve(mass, np.array(rhs).T[:, :, None])[:, :, 0].T
+        nodes, middles = de2[:, : X.shape[1]], de2[:, X.shape[1] :]
+        return np.stack([nodes[:, :-1], middles, middles, nodes[:, 1:]], axis=2).reshape(n, -1)
 
     def active_until(self, solution: Any) -> float:
         """The last node time at which a torque limit is active (to 1e-6 relative), else 0."""
