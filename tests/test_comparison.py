@@ -375,3 +375,20 @@ def test_optimal_cost_is_left_out_on_a_six_joint_urdf_arm(monkeypatch) -> None:
     assert comparison._optimal_cost(config) == (None, None)
     note = adparm.Comparison(results={}, rows=[]).cost_note()
     assert f"more than {comparison.COMPARE_URDF_MAX_DOF} joints" in note
+
+
+def test_applied_cost_charges_the_quadratic_cost_with_an_input_bound() -> None:
+    """result.cost of a bounded controller charges U(u) and the ln cosh e2 cost; applied_cost
+    still charges x^T Q x + u^T R u (compare's and a sweep's J, J*'s footing): with lambda = 1e6
+    it is the unbounded run's J to the quadrature's error (Simpson's rule on the recorded rows:
+    measured 1.3e-6 apart, estimated 5e-4), with lambda = 5 N m and logcosh it differs from
+    result.cost."""
+    base = adparm.paper_config().updated(
+        {"probe": {"until": 0.0}, "extrapolation": {"points": 10}, "sim": {"T": 2.0}}
+    )
+    J, _ = applied_cost(adparm.simulate(base))
+    J_huge, error = applied_cost(adparm.simulate(base.updated({"cost": {"input_bound": 1e6}})))
+    assert J_huge == pytest.approx(J, rel=1e-5) and error < 1e-3
+    bounded = adparm.simulate(base.updated({"cost": {"input_bound": 5.0, "e2_cost": "logcosh"}}))
+    J_bounded, _ = applied_cost(bounded)
+    assert abs(J_bounded / (bounded.cost[-1] - bounded.cost[0]) - 1.0) > 0.01

@@ -5,12 +5,13 @@ from __future__ import annotations
 import csv
 import json
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import adparm
-from adparm.sweep import SWEEP_METRICS
+from adparm.sweep import SWEEP_METRICS, SWEEP_OPTIMAL_METRICS
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -250,3 +251,49 @@ def test_cli_sweep_exit_status_1_when_a_run_diverges(tmp_path, capsys) -> None:
     assert "1 of 2 runs diverged" in captured.err and "| diverged |" in captured.out
     lines = (tmp_path / "s.csv").read_text().splitlines()
     assert sum("diverged" in line for line in lines) == 1  # its status and verdict
+
+
+def test_rows_carry_J_over_J_star_on_request() -> None:
+    """optimal_cost=True adds compare's J, J* (with the plant's torque limits) and J / J* - 1 to
+    each row, the same numbers compare's machinery gives for that run; a bad value is refused."""
+    from adparm.comparison import applied_cost, run_optimal_cost
+
+    base = adparm.paper_config().updated(
+        {"sim": {"T": 1.0}, "plant": {"torque_limits": [60.0, 25.0]}, "probe": {"until": 0.0}}
+    )
+    table = adparm.sweep(base, {"cost.input_bound": [5.0, 20.0]}, optimal_cost=True)
+    assert table.columns[-3:] == SWEEP_OPTIMAL_METRICS
+    config = base.updated({"cost": {"input_bound": 5.0}})
+    J = applied_cost(adparm.simulate(config))[0]
+    J_star = run_optimal_cost(config)[0]
+    row = table.rows[0]
+    assert row["applied_cost"] == pytest.approx(J, rel=1e-12)
+    assert row["optimal_cost"] == pytest.approx(float(J_star), rel=1e-9)
+    assert row["cost_vs_optimal_cost"] == pytest.approx(J / J_star - 1.0, rel=1e-9)
+    assert all(r["cost_vs_optimal_cost"] > 0.0 for r in table)  # J* bounds every J
+    with pytest.raises(TypeError, match="optimal_cost: expected True, False or a dict"):
+        adparm.sweep(base, {"cost.input_bound": [5.0]}, optimal_cost="yes")
+
+
+def test_a_lambda_sweep_on_the_ur5_carries_saturation_and_J_over_J_star() -> None:
+    """The issue's test: a sweep over lambda on the UR5 (its URDF torque limits, the exact
+    saturated family of examples/ur5.toml, a 0.3 s horizon; J* with 20 intervals to keep it to
+    seconds) runs, and its rows carry the saturated time per joint and J / J* - 1 >= 0."""
+    n = 6
+    base = adparm.load_config(
+        Path(__file__).resolve().parents[1] / "examples" / "ur5.toml"
+    ).updated({"sim": {"T": 0.3}, "extrapolation": {"points": 60}})
+    K = np.diag([2.0, 1.5, 1.0, 0.8, 0.5, 0.3])
+    points = [
+        {"cost." + key: value for key, value in cost.items()}
+        for cost in (
+            adparm.saturated_cost(K, 2.0 * np.eye(n), np.eye(n), bound) for bound in (0.12, 1.0)
+        )
+    ]
+    table = adparm.sweep(base, points, optimal_cost={"intervals": 20, "max_intervals": 20})
+    assert len(table) == 2
+    for row in table:
+        assert row["status"] == "finished" and row["post_run_errors"] == []
+        assert len(row["saturated_time"]) == n
+        assert row["optimal_cost"] > 0.0
+        assert 0.0 <= row["cost_vs_optimal_cost"] < 10.0

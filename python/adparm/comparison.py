@@ -52,6 +52,7 @@ __all__ = [
     "applied_cost",
     "applied_input",
     "compare",
+    "run_optimal_cost",
 ]
 
 #: The controller kinds :func:`compare` runs by default (all of them).
@@ -227,7 +228,9 @@ def applied_cost(result: SimulationResult) -> tuple[float, float]:
     quadrature error.
 
     ``result.cost`` (RK4 with the state) charges the controller's input u_c; the difference
-    u^T R u - u_c^T R u_c is integrated over the recorded rows by Simpson's rule. The error
+    u^T R u - u_c^T R u_c is integrated over the recorded rows by Simpson's rule. With
+    ``cost.input_bound`` (or the ln cosh e2 cost) ``result.cost`` charges those costs, so the
+    whole quadratic integrand is integrated over the recorded rows by Simpson's rule. The error
     estimate is the change of that integral from every other row to every row, relative to J
     (0 when u = u_c: no RISE, no disturbance, an exact model)."""
     t = result.t
@@ -235,6 +238,19 @@ def applied_cost(result: SimulationResult) -> tuple[float, float]:
         return math.nan, math.nan
     R = np.array(result.config.cost.R)
     u, u_c = applied_input(result), result.u
+    cost_section = result.config.cost
+    if cost_section.input_bound is not None or cost_section.e2_cost != "quadratic":
+        # result.cost charges the bounded input cost U(u_c) (and the ln cosh e2 cost): J is
+        # then the quadratic cost of the recorded rows alone, by Simpson's rule
+        x = np.hstack([result.e1, result.e2])
+        whole = np.einsum("ri,ij,rj->r", x, np.array(cost_section.Q), x)
+        whole += np.einsum("ri,ij,rj->r", u, R, u)
+        cost = _simpson(whole, t)
+        every_other = np.unique(np.r_[np.arange(0, t.size, 2), t.size - 1])
+        if every_other.size < 3:
+            return cost, math.nan
+        change = abs(cost - _simpson(whole[every_other], t[every_other]))
+        return cost, change / abs(cost) if cost else math.nan
     extra = np.einsum("ri,ij,rj->r", u, R, u) - np.einsum("ri,ij,rj->r", u_c, R, u_c)
     cost = float(result.cost[-1] - result.cost[0]) + _simpson(extra, t)
     if not np.any(extra):
@@ -494,26 +510,34 @@ def _optimal_cost_json(best: float) -> dict[str, Any]:
 
 
 def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
-    """J* on the same footing as the rows' J: adparm.optimal_cost on the plant's error system
-    (model=False), over sim.T without a terminal cost when sim.T is shorter than its default
-    horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*), with the
-    config's torque limits and the quadratic cost the rows' J charge (a controller's bounded
-    input cost is not charged); or None where it does not apply (a moving qd, a URDF arm of
-    more than COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes: call
-    adparm.optimal_cost(config, model=False) for it) or fails (e.g. a URDF arm with locked
-    joints); and the failure (one line) or None."""
+    """:func:`run_optimal_cost` with compare's cap: None on a URDF arm of more than
+    COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes (call
+    adparm.optimal_cost(config, model=False) for it)."""
+    if config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF:
+        return None, None
+    return run_optimal_cost(config)
+
+
+def run_optimal_cost(config: Config, **options: Any) -> tuple[float | None, str | None]:
+    """J* on the same footing as :func:`applied_cost`'s J of a run of ``config`` (compare's
+    J / J* - 1, a sweep's with ``optimal_cost``): adparm.optimal_cost on the plant's error
+    system (model=False), over sim.T without a terminal cost when sim.T is shorter than its
+    default horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*), with
+    the config's torque limits widened by the disturbance's amplitude and the quadratic cost J
+    charges (a controller's bounded input cost is not charged); ``options`` go to
+    adparm.optimal_cost (e.g. ``intervals``, ``max_intervals``, ``rtol``). Returns J*, or None
+    where it does not apply (a moving qd) or fails (e.g. a URDF arm with locked joints), and the
+    failure (one line) or None."""
     from .truth import optimal_cost  # the module's attribute: tests replace it
     from .yardstick import default_horizon, plant_config
 
-    if not config.task.is_set_point or (
-        config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF
-    ):
+    if not config.task.is_set_point:
         return None, None
     # J charges x^T Q x + u^T R u (applied_cost), so J* does too, whatever the controller's cost
     quadratic = dataclasses.replace(config.cost, input_bound=None, e2_cost="quadratic")
     config = dataclasses.replace(config, cost=quadratic)
     limits = config.plant.limit_vector(config.dof)
-    options: dict[str, Any] = {"model": False}
+    options = {**options, "model": False}
     if limits.size:
         # a run's applied input u = h + tau_d - tau keeps |h - u| <= limit + |d| (tau_d_i is
         # d_i sin t or d_i cos t): J* over these relaxed limits bounds every row's J

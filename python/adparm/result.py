@@ -238,9 +238,10 @@ class SimulationResult:
         explored region relative to x^T Q x, and the learned V against the best yardstick."""
         return presenter("diagnose")(self)
 
-    def summary(self, tolerance: float | None = None) -> dict[str, Any]:
-        """The metrics of summary.json (adparm.summary.summarize)."""
-        return presenter("summary")(self, tolerance=tolerance)
+    def summary(self, tolerance: float | None = None, optimal_cost: Any = None) -> dict[str, Any]:
+        """The metrics of summary.json (adparm.summary.summarize; ``optimal_cost``: True or
+        adparm.optimal_cost's options adds J / J* - 1, at the cost of an IPOPT solve)."""
+        return presenter("summary")(self, tolerance=tolerance, optimal_cost=optimal_cost)
 
     def __repr__(self) -> str:
         return (

@@ -235,11 +235,50 @@ def _limits(config: Config) -> list[float | None] | None:
     return [float(v) if np.isfinite(v) else None for v in limits]
 
 
-def summarize(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
+def _cost_against_optimum(
+    result: SimulationResult, options: Any, post_run_errors: list[str]
+) -> dict[str, Any]:
+    """applied_cost, optimal_cost and cost_vs_optimal_cost of summarize's ``optimal_cost``."""
+    from .comparison import applied_cost, run_optimal_cost
+
+    if options is True:
+        options = {}
+    if not isinstance(options, dict):
+        raise TypeError(
+            f"optimal_cost: expected True or a dict of adparm.optimal_cost options, got {options!r}"
+        )
+    out: dict[str, Any] = {"applied_cost": None, "optimal_cost": None}
+    out["cost_vs_optimal_cost"] = None
+    try:
+        cost = applied_cost(result)[0]
+        out["applied_cost"] = _number(cost)
+    except Exception as error:  # noqa: BLE001
+        post_run_errors.append(post_run_failure("J (adparm.comparison.applied_cost)", error))
+        return out
+    best, problem = run_optimal_cost(result.config, **options)
+    if problem is not None:
+        post_run_errors.append(problem)
+    if best is not None:
+        out["optimal_cost"] = _number(float(best))
+        if best > 0.0 and result.status == "finished" and math.isfinite(cost):
+            out["cost_vs_optimal_cost"] = _number(cost / float(best) - 1.0)
+    return out
+
+
+def summarize(
+    result: SimulationResult, *, tolerance: float | None = None, optimal_cost: Any = None
+) -> dict[str, Any]:
     """The metrics of ``summary.json``: final weights beside W*, per-weight and relative errors,
     time to enter and stay within ``tolerance`` of W* (default: the config's
     diagnostics.tolerance, 1 %), the error at the paper's 110 s, final |e1|, accumulated cost,
-    covariance resets, wall time and the deviations from the paper."""
+    covariance resets, wall time and the deviations from the paper.
+
+    ``optimal_cost`` (True, or a dict of options for adparm.optimal_cost such as
+    ``{"intervals": 40}``; default None: not computed, it costs an IPOPT solve) adds compare's
+    J / J* - 1: "applied_cost" (J of adparm.comparison.applied_cost, the quadratic cost of the
+    input the error system received), "optimal_cost" (J*, adparm.comparison.run_optimal_cost,
+    with the plant's torque limits) and "cost_vs_optimal_cost" (None unless the run finished
+    and J* > 0)."""
     if tolerance is None:
         tolerance = result.config.diagnostics.tolerance
     if not 0.0 < tolerance < 1.0:
@@ -298,6 +337,8 @@ def summarize(result: SimulationResult, *, tolerance: float | None = None) -> di
     out["hjb_residual_explored"] = diagnostics.get("hjb_residual_explored")
     out["diagnostics"] = diagnostics
     out["post_run_errors"] = post_run_errors
+    if optimal_cost is not None and optimal_cost is not False:
+        out.update(_cost_against_optimum(result, optimal_cost, post_run_errors))
     if target is None:
         out["optimal_weights_unavailable"] = no_target
         return out
@@ -507,4 +548,9 @@ def summary_markdown(summary: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-register("summary", lambda result, tolerance=None: summarize(result, tolerance=tolerance))
+register(
+    "summary",
+    lambda result, tolerance=None, optimal_cost=None: summarize(
+        result, tolerance=tolerance, optimal_cost=optimal_cost
+    ),
+)

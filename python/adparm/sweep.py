@@ -40,7 +40,14 @@ from .table import rows_dataframe, rows_json, rows_markdown, write_csv
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-__all__ = ["SWEEP_METRICS", "SweepResult", "grid_points", "sweep", "sweep_row"]
+__all__ = [
+    "SWEEP_METRICS",
+    "SWEEP_OPTIMAL_METRICS",
+    "SweepResult",
+    "grid_points",
+    "sweep",
+    "sweep_row",
+]
 
 #: The metrics of each row (from adparm.summary.summarize), after the grid's own columns.
 SWEEP_METRICS = (
@@ -62,6 +69,10 @@ SWEEP_METRICS = (
     "hjb_residual_explored",
     "wall_time",
 )
+
+#: The columns a sweep adds with ``optimal_cost``: compare's J (the quadratic cost of the input
+#: the error system received), J* (with the plant's torque limits) and J / J* - 1.
+SWEEP_OPTIMAL_METRICS = ("applied_cost", "optimal_cost", "cost_vs_optimal_cost")
 
 # Runs built and not yet summarised, per thread, in the in-process sweep (each holds its recording
 # until it is summarised and freed).
@@ -173,15 +184,35 @@ def _point_text(point: Mapping[str, Any]) -> str:
     return short.repr(dict(point))
 
 
-def _metrics(result: SimulationResult, tolerance: float | None) -> dict[str, Any]:
-    summary = result.summary(tolerance=tolerance)
-    return {name: summary.get(name) for name in SWEEP_METRICS}
+def _metric_names(optimal_cost: Any) -> tuple[str, ...]:
+    if optimal_cost is None or optimal_cost is False:
+        return SWEEP_METRICS
+    if optimal_cost is not True and not isinstance(optimal_cost, Mapping):
+        raise TypeError(
+            "optimal_cost: expected True, False or a dict of adparm.optimal_cost options (e.g. "
+            f"{{'intervals': 40}}), got {type(optimal_cost).__name__}"
+        )
+    return (*SWEEP_METRICS, *SWEEP_OPTIMAL_METRICS)
 
 
-def sweep_row(config: Config, tolerance: float | None = None) -> dict[str, Any]:
+def _metrics(
+    result: SimulationResult, tolerance: float | None, optimal_cost: Any = None
+) -> dict[str, Any]:
+    if isinstance(optimal_cost, Mapping):
+        optimal_cost = dict(optimal_cost)
+    elif optimal_cost is False:
+        optimal_cost = None
+    summary = result.summary(tolerance=tolerance, optimal_cost=optimal_cost)
+    return {name: summary.get(name) for name in _metric_names(optimal_cost)}
+
+
+def sweep_row(
+    config: Config, tolerance: float | None = None, optimal_cost: Any = None
+) -> dict[str, Any]:
     """The metrics of one run of ``config`` (the task an executor runs; a diverged run gives its
-    partial result's metrics with status "diverged")."""
-    return _metrics(simulate_batch([config], threads=1, on_divergence="keep")[0], tolerance)
+    partial result's metrics with status "diverged"); ``optimal_cost`` as :func:`sweep`'s."""
+    result = simulate_batch([config], threads=1, on_divergence="keep")[0]
+    return _metrics(result, tolerance, optimal_cost)
 
 
 @dataclass(frozen=True)
@@ -192,10 +223,12 @@ class SweepResult:
 
     parameters: tuple[str, ...]
     rows: tuple[dict[str, Any], ...]
+    #: The metric columns: SWEEP_METRICS, then SWEEP_OPTIMAL_METRICS when asked for.
+    metrics: tuple[str, ...] = SWEEP_METRICS
 
     @property
     def columns(self) -> tuple[str, ...]:
-        return (*self.parameters, *SWEEP_METRICS)
+        return (*self.parameters, *self.metrics)
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -248,6 +281,7 @@ def sweep(
     threads: int | None = None,
     tolerance: float | None = None,
     progress: bool = False,
+    optimal_cost: Any = False,
 ) -> SweepResult:
     """Run ``base_config`` at every point of ``grid`` and tabulate the summary metrics.
 
@@ -275,13 +309,22 @@ def sweep(
         diagnostics.tolerance, 1 %).
     progress : bool, optional
         Show a progress bar.
+    optimal_cost : bool or dict, optional
+        True (or a dict of options for :func:`adparm.optimal_cost`, e.g. ``{"intervals": 40,
+        "max_intervals": 40}``) adds the columns :data:`SWEEP_OPTIMAL_METRICS`: each row's J
+        (``applied_cost``), J* (``optimal_cost``, on the plant's error system with its torque
+        limits, as :func:`adparm.compare`'s) and ``cost_vs_optimal_cost`` = J / J* - 1. Off by
+        default: it is one IPOPT solve per row, about a second on the paper's arm, 15 s on a
+        3-joint URDF arm and minutes on a 6-joint one at the default intervals (fewer intervals
+        and a short sim.T cut it; J* is then a coarser estimate, its error not in the row).
 
     Returns
     -------
     SweepResult
         One row per point: the point's values, then status, t_end, the critic's and actor's
         relative errors (at the end and at 110 s), the time from which each stays within
-        ``tolerance``, final ``|e1|``, accumulated cost, covariance resets and wall time.
+        ``tolerance``, final ``|e1|``, accumulated cost, covariance resets, saturated time
+        and wall time; with ``optimal_cost`` also J, J* and J / J* - 1.
 
     Raises
     ------
@@ -294,6 +337,7 @@ def sweep(
     if tolerance is not None and not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
     workers = check_threads(threads)
+    metrics = _metric_names(optimal_cost)
     points = grid_points(grid)
     configs = [_point_config(base_config, point) for point in points]
     parameters = tuple(points[0])
@@ -305,30 +349,33 @@ def sweep(
     done: dict[int, dict[str, Any]] = {}  # point index -> metrics, as the runs finish
     try:
         if executor is None:
-            rows = _run_in_process(configs, workers, tolerance, progress)
+            rows = _run_in_process(configs, workers, tolerance, progress, optimal_cost)
         else:
-            rows = _run_on_executor(executor, configs, tolerance, progress)
+            rows = _run_on_executor(executor, configs, tolerance, progress, optimal_cost)
         for index, row in rows:
             done[index] = row
     except KeyboardInterrupt:
-        table = _table(parameters, points, done)
+        table = _table(parameters, points, done, metrics)
         raise SimulationInterrupted(
             f"sweep interrupted with {len(done)} of {len(points)} points done; their rows are in "
             "the exception's .result",
             table,
         ) from None
-    return _table(parameters, points, done)
+    return _table(parameters, points, done, metrics)
 
 
 def _table(
-    parameters: tuple[str, ...], points: list[dict[str, Any]], done: Mapping[int, dict[str, Any]]
+    parameters: tuple[str, ...],
+    points: list[dict[str, Any]],
+    done: Mapping[int, dict[str, Any]],
+    metrics: tuple[str, ...] = SWEEP_METRICS,
 ) -> SweepResult:
     rows = tuple({**points[i], **done[i]} for i in sorted(done))
-    return SweepResult(parameters=parameters, rows=rows)
+    return SweepResult(parameters=parameters, rows=rows, metrics=metrics)
 
 
 def _run_in_process(
-    configs: list[Config], threads: int, tolerance: float, progress: bool
+    configs: list[Config], threads: int, tolerance: float, progress: bool, optimal_cost: Any
 ) -> Iterator[tuple[int, dict[str, Any]]]:
     """(point index, metrics) of every run, as the runs end: one stream through the core's worker
     threads (no barrier between runs), each run summarised and freed as soon as it ends, so at
@@ -346,7 +393,8 @@ def _run_in_process(
     def summarise() -> None:
         while ended:
             i, run = ended.popitem()
-            rows.append((i, _metrics(make_result(run, configs[i], batch.seconds(i)), tolerance)))
+            result = make_result(run, configs[i], batch.seconds(i))
+            rows.append((i, _metrics(result, tolerance, optimal_cost)))
 
     def on_end(i: int, run: Any) -> None:  # summarised at once: the run is freed on return
         ended[i] = run
@@ -366,11 +414,12 @@ def _run_in_process(
 
 
 def _run_on_executor(
-    executor: Any, configs: list[Config], tolerance: float, progress: bool
+    executor: Any, configs: list[Config], tolerance: float, progress: bool, optimal_cost: Any
 ) -> Iterator[tuple[int, dict[str, Any]]]:
     """(point index, metrics) of every task, in order; Ctrl-C cancels the tasks not started and
     keeps those that ended."""
-    futures = [executor.submit(sweep_row, config, tolerance) for config in configs]
+    options = dict(optimal_cost) if isinstance(optimal_cost, Mapping) else optimal_cost
+    futures = [executor.submit(sweep_row, config, tolerance, options) for config in configs]
     waiting = 0  # the first task whose row has not been yielded
     try:
         for waiting, future in enumerate(tqdm(futures, disable=not progress, desc="sweep")):
