@@ -306,6 +306,26 @@ def _compare_panels(joints: int) -> list[tuple[str, int, str]]:
     ]
 
 
+def _draw_compare_limit(axes: Axes, group: dict[str, SimulationResult], joint: int) -> None:
+    """The joint's torque limit on a comparison's tau panel: +-limit dashed grey (legend "limit
+    +-x") within LIMIT_SCALE of the largest applied |tau| of the group, else named over the
+    panel ("off scale"); nothing without a limit."""
+    results = list(group.values())
+    config = results[0].config
+    limits = config.plant.limit_vector(config.dof)
+    if limits.size == 0 or not np.isfinite(limits[joint]):
+        return
+    limit = float(limits[joint])
+    largest = max((float(np.abs(r.tau[:, joint]).max()) for r in results if r.t.size), default=0)
+    if limit > LIMIT_SCALE * largest:
+        axes.set_title(f"limit $\\pm${limit:.3g} N m (off scale)", fontsize=7, loc="right")
+        return
+    for sign in (1.0, -1.0):
+        line = axes.axhline(sign * limit, color="0.4", ls=(0, (5, 2)), lw=0.9, alpha=0.8)
+    line.set_label(f"limit $\\pm${limit:.3g}")
+    axes.legend(handles=[line], loc="upper right", fontsize=7, frameon=False)
+
+
 def plot_comparison(
     comparison: Any,
     *,
@@ -319,7 +339,9 @@ def plot_comparison(
     time axis with the end of probing marked; the controllers that do not learn during the run
     (``adp (learned)``, ``rise``, ``pd``, ``optimal``) share the right-hand column, each in its
     own colour and line style (:data:`CONTROLLER_STYLES`). Without an ``adp`` row the figure has
-    the right-hand column only.
+    the right-hand column only. With ``plant.torque_limits`` each tau panel draws its joint's
+    limit as dashed grey lines (or names it over the panel when it is more than twice the
+    largest applied torque).
 
     Parameters
     ----------
@@ -384,6 +406,8 @@ def plot_comparison(
                         label=label + suffix,
                         **style,
                     )
+                if name == "tau":  # the plant's torque limit of this joint
+                    _draw_compare_limit(axes, group, joint)
                 if is_learning:
                     mark_probe_end(axes, group["adp"], label=row == 0)
                 if column == 0:
