@@ -402,7 +402,13 @@ def _sweep_checked(
     command = "sweep"
     interrupt: SimulationInterrupted | None = None
     try:
-        table = sweep(config, dict(args.grid), threads=args.threads, progress=not args.no_progress)
+        table = sweep(
+            config,
+            dict(args.grid),
+            threads=args.threads,
+            progress=not args.no_progress,
+            optimal_cost=args.optimal_cost,
+        )
     except SimulationInterrupted as stopped:
         interrupt, table = stopped, stopped.result
     except (ValueError, TypeError) as error:
