@@ -392,3 +392,18 @@ def test_applied_cost_charges_the_quadratic_cost_with_an_input_bound() -> None:
     bounded = adparm.simulate(base.updated({"cost": {"input_bound": 5.0, "e2_cost": "logcosh"}}))
     J_bounded, _ = applied_cost(bounded)
     assert abs(J_bounded / (bounded.cost[-1] - bounded.cost[0]) - 1.0) > 0.01
+
+
+def test_figure_draws_the_torque_limits() -> None:
+    """With plant.torque_limits each tau panel draws its joint's limit at +-limit (dashed, in
+    its legend), or names it over the panel when it is beyond twice the applied torques."""
+    config = adparm.paper_config().updated(
+        {"plant": {"torque_limits": [60.0, 400.0]}, "sim": {"T": 0.5}}
+    )
+    figure = adparm.compare(config, ["adp", "optimal"]).plot()
+    for axes in figure.axes[4:6]:  # tau_1 of both columns: drawn
+        lines = [line for line in axes.get_lines() if line.get_color() == "0.4"]
+        assert sorted(float(line.get_ydata()[0]) for line in lines) == [-60.0, 60.0]
+        assert [t.get_text() for t in axes.get_legend().get_texts()] == ["limit $\\pm$60"]
+    for axes in figure.axes[6:8]:  # tau_2: 400 N m is off scale, named over the panel
+        assert "400 N m (off scale)" in axes.get_title(loc="right")

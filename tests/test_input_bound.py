@@ -157,6 +157,15 @@ def test_right_hand_side_matches_numpy(kind: str, e2_cost: str, basis: str, rng)
         assert beyond > 0
 
 
+def test_the_accumulated_cost_without_probe_matches_numpy(rng) -> None:
+    """With the probe off the applied input is the actor's u_hat, and the core charges U(u_hat)
+    from the policy's own tanh terms (closed_loop.hpp): the same as the reference's U(u)."""
+    from test_closed_loop import compare_right_hand_sides
+
+    config = bounded_paper_config(rng, cost={"e2_cost": "logcosh"}, probe={"until": 0.0})
+    compare_right_hand_sides(config, rng, 15)
+
+
 def test_the_unbounded_rates_are_unchanged(rng) -> None:
     """Without an input bound the reference is the quadratic one (the bounded code is off)."""
     from test_closed_loop import compare_right_hand_sides
