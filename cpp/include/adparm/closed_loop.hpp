@@ -319,7 +319,11 @@ class ClosedLoop {
     rate.template segment<kDof>(kQ, n) = dq;
     rate.template segment<kDof>(dq_offset(), n) =
         plant_.acceleration(plant_terms, dq, tau, signals.disturbance);
-    rate[cost_offset()] = point.state_cost + cost_.input_cost(u);  // eq. (10): x^T Q x + u^T R u
+    // eq. (10): x^T Q x + u^T R u; with an input bound and u = u_hat (an adp controller, no
+    // probe) U(u_hat) of the policy's own terms, to round-off the same as input_cost(u)
+    const bool policy_alone =
+        cost_.bounded() && controller_.learns() && (signals.probe.array() == 0.0).all();
+    rate[cost_offset()] = point.state_cost + (policy_alone ? hjb.input_cost : cost_.input_cost(u));
 
     if (outputs != nullptr) {
       outputs->errors = errors;

@@ -32,7 +32,8 @@ struct HjbEvaluation {
   using ActorType = Actor<Basis, Dof>;
   typename ActorType::Input u_hat;  // eq. (20)
   typename Basis::Vector omega;
-  double error = 0.0;  // eq. (21)
+  double error = 0.0;       // eq. (21)
+  double input_cost = 0.0;  // u_hat^T R u_hat, or U(u_hat) with an input bound
 };
 
 // The weight-free part at x, given the desired state, the drift f(x) and the model terms at the
@@ -62,15 +63,14 @@ void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& 
                   const typename Basis::Vector& critic_weights,
                   const typename Basis::Vector& actor_weights, HjbEvaluation<Basis, Dof>& out) {
   out.u_hat = Actor<Basis, Dof>::policy(point.input_gradient, cost.R_inverse(), actor_weights);
-  double input_cost;
   if (cost.bounded()) {  // u_hat = -lambda tanh(D) and U(u_hat) (input_bound.hpp)
-    input_cost = cost.bound().bound_policy(out.u_hat);
+    out.input_cost = cost.bound().bound_policy(out.u_hat);
   } else {
-    input_cost = cost.input_cost(out.u_hat);
+    out.input_cost = cost.input_cost(out.u_hat);
   }
   out.omega = point.drift_rate;
   out.omega.noalias() += point.input_gradient * out.u_hat;
-  out.error = point.state_cost + input_cost + critic_weights.dot(out.omega);
+  out.error = point.state_cost + out.input_cost + critic_weights.dot(out.omega);
 }
 
 // The weight-free part at an error state x with the desired state `desired` (q, dq recovered from

@@ -30,12 +30,13 @@ enum class E2Cost { quadratic, logcosh };
 constexpr double kLn2 = 0.69314718055994530942;
 
 // ln cosh z without overflow or cancellation: |z| + log1p(exp(-2 |z|)) - ln 2 for |z| >= 1,
-// log1p(2 sinh^2(z / 2)) below (accurate to round-off near z = 0, where ln cosh z ~ z^2 / 2).
+// below log1p(m^2 / (2 (1 + m))), m = expm1(|z|), as cosh z - 1 = (e^|z| - 1)^2 / (2 e^|z|)
+// (accurate to round-off near z = 0, where ln cosh z ~ z^2 / 2; one expm1, not sinh's call).
 inline double log_cosh(double z) {
   const double a = std::abs(z);
   if (a < 1.0) {
-    const double h = std::sinh(0.5 * a);
-    return std::log1p(2.0 * h * h);
+    const double m = std::expm1(a);
+    return std::log1p(m * m / (2.0 * (1.0 + m)));
   }
   return a + std::log1p(std::exp(-2.0 * a)) - kLn2;
 }
@@ -100,18 +101,20 @@ class InputBoundT {
 
   // The policy and its cost in one pass: `u` holds the unbounded policy v on entry and
   // u = lambda tanh(v / lambda) = -lambda tanh(D) on return (D = -v / lambda); returns
-  // U(u) = sum_i R_i lambda_i^2 [2 D_i tanh D_i - 2 ln cosh D_i], with ln cosh D_i from
-  // t = tanh D_i: -1/2 ln(1 - t^2) for |D_i| < 1, else |D_i| + ln(1 + (1 - |t|) / (1 + |t|)) - ln 2
-  // (exp(-2|D|) = (1 - |t|) / (1 + |t|); accurate to round-off, also when t rounds to +-1).
+  // U(u) = sum_i R_i lambda_i^2 [2 D_i tanh D_i - 2 ln cosh D_i]. One expm1 per joint gives both:
+  // m = expm1(-2|D|) = e^-2|D| - 1, tanh|D| = -m / (2 + m), and ln cosh D = -1/2 ln(1 - t^2) for
+  // |D| < 1, else |D| + ln(1 + e^-2|D|) - ln 2 (accurate to round-off, also when t rounds to +-1).
   double bound_policy(Joint& u) const {
     double sum = 0.0;
     for (Eigen::Index i = 0; i < u.size(); ++i) {
       const double D = -u[i] / bound_[i];
-      const double t = std::tanh(D);
-      const double a = std::abs(D), b = std::abs(t);
+      const double a = std::abs(D);
+      const double m = std::expm1(-2.0 * a);
+      const double b = -m / (2.0 + m);  // tanh |D|
+      const double t = std::copysign(b, D);
       const double log_cosh_D =
-          a < 1.0 ? -0.5 * std::log1p(-t * t) : a + std::log1p((1.0 - b) / (1.0 + b)) - kLn2;
-      sum += input_weight_[i] * bound_[i] * bound_[i] * 2.0 * (D * t - log_cosh_D);
+          a < 1.0 ? -0.5 * std::log1p(-b * b) : a + std::log1p(1.0 + m) - kLn2;
+      sum += input_weight_[i] * bound_[i] * bound_[i] * 2.0 * (a * b - log_cosh_D);
       u[i] = -bound_[i] * t;
     }
     return sum;
