@@ -49,6 +49,7 @@ class Critic {
     Block omegas, gamma_omegas, scaled;
     Eigen::VectorXd coefficients, weights;
     Eigen::Index gathered = 0;
+    bool lower_only = false;  // gamma_rate holds blocks in its lower triangle only (flush)
   };
 
   Critic() = default;
@@ -101,35 +102,27 @@ class Critic {
     w.omegas.col(w.gathered) = omega;
     w.coefficients[w.gathered] = hjb_error;
     w.weights[w.gathered] = weight;
-    if (++w.gathered == kBlock) flush(gamma, weight_rate, gamma_rate, w);
+    if (++w.gathered == kBlock) add_block(gamma, weight_rate, gamma_rate, w);
   }
 
   // Adds the gathered samples' shares (eqs. 23-24) to the rates, then empties the block:
   //   G = Gamma [omega_1 ... omega_s]                            (one product)
   //   g_i = w_i eta_c / (1 + nu omega_i^T G_i)
   //   weight_rate -= G [g_i eps_i],  gamma_rate -= [g_i G_i] G^T   (rank s)
+  // The rank-s term is symmetric: only its lower triangle is computed (half the products), and
+  // the upper triangle is its mirror image, written once per evaluation (the rate is then exactly
+  // symmetric, so Gamma stays so).
   template <class CovarianceIn, class CovarianceOut>
   void flush(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut&& gamma_rate,
              Workspace& w) const {
     static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
-    const Eigen::Index s = w.gathered;
-    if (s == 0) return;
-    w.gathered = 0;
-    const auto omegas = w.omegas.leftCols(s);
-    auto gamma_omegas = w.gamma_omegas.leftCols(s);
-    auto scaled = w.scaled.leftCols(s);
-    gamma_omegas.noalias() = gamma * omegas;
-    for (Eigen::Index i = 0; i < s; ++i) {
-      const double gain = w.weights[i] * settings_.eta_c /
-                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
-      w.coefficients[i] *= gain;
-      scaled.col(i) = gain * gamma_omegas.col(i);
+    add_block(gamma, weight_rate, gamma_rate, w);
+    if (w.lower_only) {  // mirror the lower triangle (the blocks of this evaluation)
+      w.lower_only = false;
+      const Eigen::Index n = gamma_rate.rows();
+      for (Eigen::Index j = 1; j < n; ++j)
+        gamma_rate.col(j).head(j) = gamma_rate.row(j).head(j).transpose();
     }
-    weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
-    if (s == 1)  // an outer product (no GEMM for one column)
-      gamma_rate.noalias() -= scaled.col(0).lazyProduct(gamma_omegas.col(0).transpose());
-    else
-      gamma_rate.noalias() -= scaled * gamma_omegas.transpose();
   }
 
   // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): an in-place Cholesky
@@ -181,6 +174,33 @@ class Critic {
   }
 
  private:
+  // flush() without the mirror: the gathered block's shares, the rank-s term in the lower triangle
+  // of gamma_rate only (w.lower_only remembers that the upper one is still to be written).
+  template <class CovarianceIn, class CovarianceOut>
+  void add_block(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut& gamma_rate,
+                 Workspace& w) const {
+    const Eigen::Index s = w.gathered;
+    if (s == 0) return;
+    w.gathered = 0;
+    w.lower_only = true;
+    const auto omegas = w.omegas.leftCols(s);
+    auto gamma_omegas = w.gamma_omegas.leftCols(s);
+    auto scaled = w.scaled.leftCols(s);
+    gamma_omegas.noalias() = gamma * omegas;
+    for (Eigen::Index i = 0; i < s; ++i) {
+      const double gain = w.weights[i] * settings_.eta_c /
+                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
+      w.coefficients[i] *= gain;
+      scaled.col(i) = gain * gamma_omegas.col(i);
+    }
+    weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
+    auto lower = gamma_rate.template triangularView<Eigen::Lower>();
+    if (s == 1)  // an outer product (no GEMM for one column)
+      lower -= scaled.col(0).lazyProduct(gamma_omegas.col(0).transpose());
+    else  // the lower triangle of the rank-s product (Eigen's triangular GEMM kernel)
+      lower -= scaled * gamma_omegas.transpose();
+  }
+
   CriticSettings settings_{};
   Eigen::Index size_ = kSize == Dynamic ? 0 : kSize;
 };
