@@ -356,6 +356,20 @@ class ClosedLoop {
     critic_.reset(covariance(state));
     return true;
   }
+  // The same after a step from `previous` (the state one step before): dynamic sizes skip the
+  // test's factorisation while a bound rules a reset out (Critic::needs_reset(previous, gamma)).
+  bool reset_covariance_if_needed(const State& previous, State& state, Data& data) const {
+    if constexpr (kBasisSize == Dynamic) {
+      const State& current = state;
+      if (!critic_.needs_reset(covariance(previous), covariance(current), data.critic))
+        return false;
+      critic_.reset(covariance(state));
+      critic_.after_reset(data.critic);
+      return true;
+    } else {
+      return reset_covariance_if_needed(state, data);
+    }
+  }
 
  private:
   // Dynamic sizes, prepared extrapolation points (Extrapolation::stacked()): each point's shares
