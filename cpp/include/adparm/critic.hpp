@@ -138,7 +138,8 @@ class Critic {
 
   // The same answer as needs_reset(gamma), after a step from previous_gamma, mostly without the
   // Cholesky factorisation (dynamic sizes; the covariance is symmetric). Weyl's inequality:
-  //   lambda_min(Gamma_k+1) >= lambda_min(Gamma_k) - ||Gamma_k+1 - Gamma_k||_2,   ||.||_2 <= ||.||_F
+  //   lambda_min(Gamma_k+1) >= lambda_min(Gamma_k) - ||Gamma_k+1 - Gamma_k||_2    (||.||_2 <=
+  //   ||.||_F)
   // so once lambda_min >= epsilon_T + m is known (gamma0 after a reset, or a factorisation of
   // Gamma - (epsilon_T + m) I that succeeded), no reset is due while the steps' summed changes
   // ||dGamma||_F stay below m (less a tolerance above the factorisation's round-off, so that the
@@ -152,9 +153,10 @@ class Critic {
     double change = 0.0;  // ||Gamma - previous||_F of the symmetric matrices (lower triangles)
     for (Eigen::Index j = 0; j < n; ++j) {
       const double diagonal = gamma(j, j) - previous_gamma(j, j);
-      change += diagonal * diagonal +
-                2.0 * (gamma.col(j).tail(n - j - 1) - previous_gamma.col(j).tail(n - j - 1))
-                          .squaredNorm();
+      change +=
+          diagonal * diagonal +
+          2.0 *
+              (gamma.col(j).tail(n - j - 1) - previous_gamma.col(j).tail(n - j - 1)).squaredNorm();
     }
     w.bound_used += std::sqrt(change);
     if (w.bound_used < w.bound) return false;  // lambda_min > epsilon_T (also false for NaN)
