@@ -138,8 +138,8 @@ class Critic {
 
   // The same answer as needs_reset(gamma), after a step from previous_gamma, mostly without the
   // Cholesky factorisation (dynamic sizes; the covariance is symmetric). Weyl's inequality:
-  //   lambda_min(Gamma_k+1) >= lambda_min(Gamma_k) - ||Gamma_k+1 - Gamma_k||_2    (||.||_2 <=
-  //   ||.||_F)
+  //   lambda_min(Gamma_k+1) >= lambda_min(Gamma_k) - ||Gamma_k+1 - Gamma_k||_2,
+  //   ||.||_2 <= ||.||_F,
   // so once lambda_min >= epsilon_T + m is known (gamma0 after a reset, or a factorisation of
   // Gamma - (epsilon_T + m) I that succeeded), no reset is due while the steps' summed changes
   // ||dGamma||_F stay below m (less a tolerance above the factorisation's round-off, so that the
