@@ -137,7 +137,8 @@ class Critic {
   }
 
   // The same answer as needs_reset(gamma), after a step from previous_gamma, mostly without the
-  // Cholesky factorisation (dynamic sizes; the covariance is symmetric). Weyl's inequality:
+  // Cholesky factorisation (dynamic sizes; Gamma is the symmetric matrix of its lower triangle,
+  // the one the factorisation reads). Weyl's inequality:
   //   lambda_min(Gamma_k+1) >= lambda_min(Gamma_k) - ||Gamma_k+1 - Gamma_k||_2,
   //   ||.||_2 <= ||.||_F,
   // so once lambda_min >= epsilon_T + m is known (gamma0 after a reset, or a factorisation of
