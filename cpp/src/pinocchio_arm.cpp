@@ -492,15 +492,26 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   pinocchio::Data& data = w.data;
   s.set_configuration(q, w.configuration);
   w.velocity = dq;
-  // CRBA and the articulated-body M^-1 fill the upper triangles only: mirror them.
+  // CRBA fills the upper triangle only: mirror it.
   pinocchio::crba(model, data, w.configuration);
   terms.mass = data.M.selfadjointView<Eigen::Upper>();
   pinocchio::computeCoriolisMatrix(model, data, w.configuration, w.velocity);
   terms.coriolis = data.C;
   pinocchio::computeGeneralizedGravity(model, data, w.configuration);
   terms.gravity = data.g;
-  pinocchio::computeMinverse(model, data, w.configuration);
-  terms.mass_inverse = data.Minv.selfadjointView<Eigen::Upper>();
+  // M^-1 from the Cholesky factor of M (M = L L^T, n^3 / 3 multiply-adds for the inverse: cheaper
+  // than the articulated-body algorithm's pass over the bodies), its lower triangle mirrored. An M
+  // that is not positive definite in floating point falls back to pinocchio::computeMinverse.
+  w.mass_factor.compute(terms.mass);
+  if (w.mass_factor.info() == Eigen::Success) {
+    terms.mass_inverse.setIdentity();
+    w.mass_factor.solveInPlace(terms.mass_inverse);
+    for (Eigen::Index j = 1; j < dof_; ++j)
+      terms.mass_inverse.col(j).head(j) = terms.mass_inverse.row(j).head(j).transpose();
+  } else {
+    pinocchio::computeMinverse(model, data, w.configuration);
+    terms.mass_inverse = data.Minv.selfadjointView<Eigen::Upper>();
+  }
   for (Eigen::Index i = 0; i < dof_; ++i)
     terms.friction[i] =
         s.coulomb[i] * static_cast<double>((dq[i] > 0.0) - (dq[i] < 0.0)) + s.viscous[i] * dq[i];

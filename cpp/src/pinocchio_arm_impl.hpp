@@ -3,6 +3,7 @@
 // Pinocchio); users of the core never see them.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cmath>
 #include <memory>
@@ -52,13 +53,15 @@ struct PinocchioArm::WorkspaceData {
   Eigen::VectorXd velocity;
   Eigen::VectorXd zero_velocity;
   Eigen::VectorXd unit_acceleration;
+  Eigen::LLT<Eigen::MatrixXd> mass_factor;  // of M, for M^-1 (sized once)
 
   explicit WorkspaceData(const pinocchio::Model& model)
       : data(model),
         configuration(pinocchio::neutral(model)),
         velocity(Eigen::VectorXd::Zero(model.nv)),
         zero_velocity(Eigen::VectorXd::Zero(model.nv)),
-        unit_acceleration(Eigen::VectorXd::Zero(model.nv)) {}
+        unit_acceleration(Eigen::VectorXd::Zero(model.nv)),
+        mass_factor(model.nv) {}
 };
 
 }  // namespace adparm

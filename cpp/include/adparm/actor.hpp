@@ -68,6 +68,19 @@ class Actor {
         (B * projected);
   }
 
+  // add_gradient's share as the coefficients c of B, gradient -= B c, given the product
+  // B^T (Wa - Wc) (ClosedLoop stacks the B of the prepared extrapolation points: one product
+  // [B_1 ... B_N] [c_1; ...; c_N] for all of them).
+  template <class Bound>
+  Input gradient_coefficients(const Input& input_gradient_times_difference,
+                              const InputWeight& R_inverse, const Bound& bound, const Input& u_hat,
+                              const Vector& omega, double hjb_error, double weight) const {
+    Input projected = R_inverse * input_gradient_times_difference;
+    if (bound.bounded()) bound.scale_by_slope(u_hat, projected);
+    return (weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
+           projected;
+  }
+
   // eq. (26): dWa = proj{gradient - eta_a2 (Wa - Wc)}, difference = Wa - Wc.
   Vector weight_rate(const Basis& basis, const Vector& gradient, const Vector& difference,
                      const Vector& Wa) const {

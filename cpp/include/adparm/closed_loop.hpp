@@ -114,6 +114,10 @@ class ClosedLoop {
     Terms point_terms;                  // the model's terms at an extrapolation point
     typename Critic<Basis>::Workspace critic;
     BasisWorkspace<Basis> basis;  // the basis' work buffers (basis.hpp)
+    // Stacked extrapolation points (dynamic sizes, Extrapolation::stacked()): [B_i^T Wa,
+    // B_i^T (Wa - Wc)] of every point (nN x 2) and the actor's coefficients c_i (nN).
+    Eigen::MatrixXd point_products;
+    Eigen::VectorXd point_coefficients;
   };
 
   struct Outputs {
@@ -193,6 +197,10 @@ class ClosedLoop {
     error_system_.model().init_terms(data.point_terms);
     data.critic = critic_.workspace();
     data.basis = basis_workspace(basis_);
+    if (kBasisSize == Dynamic && extrapolation_.enabled()) {
+      data.point_products.setZero(dof() * extrapolation_.size(), 2);
+      data.point_coefficients.setZero(dof() * extrapolation_.size());
+    }
     return data;
   }
   const Arm& plant() const { return plant_; }
@@ -279,8 +287,16 @@ class ClosedLoop {
                             e.error, difference, weight, actor_gradient);  // (26)
       };
       learn(point, hjb, 1.0);
-      extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights, actor_weights,
-                              data.point_terms, data.basis, learn);
+      bool stacked = false;
+      if constexpr (kBasisSize == Dynamic) {
+        stacked = gathers_ && extrapolation_.stacked();
+        if (stacked)  // the same shares, with the points' products stacked
+          learn_from_stacked_points(critic_weights, actor_weights, difference, gamma, critic_rate,
+                                    gamma_rate, actor_gradient, data);
+      }
+      if (!stacked)
+        extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights,
+                                actor_weights, data.point_terms, data.basis, learn);
       if constexpr (kBasisSize == Dynamic)
         critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
@@ -344,8 +360,50 @@ class ClosedLoop {
     critic_.reset(covariance(state));
     return true;
   }
+  // The same after a step from `previous` (the state one step before): dynamic sizes skip the
+  // test's factorisation while a bound rules a reset out (Critic::needs_reset(previous, gamma)).
+  bool reset_covariance_if_needed(const State& previous, State& state, Data& data) const {
+    if constexpr (kBasisSize == Dynamic) {
+      const State& current = state;
+      if (!critic_.needs_reset(covariance(previous), covariance(current), data.critic))
+        return false;
+      critic_.reset(covariance(state));
+      critic_.after_reset(data.critic);
+      return true;
+    } else {
+      return reset_covariance_if_needed(state, data);
+    }
+  }
 
  private:
+  // Dynamic sizes, prepared extrapolation points (Extrapolation::stacked()): each point's shares
+  // of eqs. (20)-(21), (23)-(24) and (26) as the trajectory's (learn in derivative()), with the
+  // products of the points' B = [B_1 ... B_N] (K x nN) stacked: [B^T Wa, B^T (Wa - Wc)] is two
+  // matrix-vector products, the actor's gradient one (gradient -= B [c_1; ...; c_N]); the critic
+  // gathers the points' omega (critic.hpp).
+  template <class Gamma, class GammaRate>
+  void learn_from_stacked_points(const Weights& critic_weights, const Weights& actor_weights,
+                                 const Weights& difference, const Gamma& gamma,
+                                 Weights& critic_rate, GammaRate& gamma_rate,
+                                 Weights& actor_gradient, Data& data) const {
+    const Eigen::Index n = dof();
+    const Eigen::MatrixXd& stacked = extrapolation_.stacked_input_gradients();
+    data.point_products.col(0).noalias() = stacked.transpose() * actor_weights;
+    data.point_products.col(1).noalias() = stacked.transpose() * difference;
+    const double weight = 1.0 / static_cast<double>(extrapolation_.size());
+    Evaluation e;
+    for (long i = 0; i < extrapolation_.size(); ++i) {
+      const Point& p = extrapolation_.prepared(i);
+      const Joint times_actor_weights = data.point_products.col(0).segment(i * n, n);
+      evaluate_hjb_from_product(p, cost_, critic_weights, times_actor_weights, e);
+      critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, data.critic);
+      const Joint times_difference = data.point_products.col(1).segment(i * n, n);
+      data.point_coefficients.segment(i * n, n) = actor_.gradient_coefficients(
+          times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
+    }
+    actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
+  }
+
   struct NoTerms {};
   template <class Local>
   static Terms& pick_terms(Local& local, Terms& buffer) {

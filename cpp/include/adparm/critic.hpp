@@ -49,6 +49,10 @@ class Critic {
     Block omegas, gamma_omegas, scaled;
     Eigen::VectorXd coefficients, weights;
     Eigen::Index gathered = 0;
+    bool lower_only = false;  // gamma_rate holds blocks in its lower triangle only (flush)
+    // needs_reset(previous, gamma, w)'s evolving state: lambda_min(Gamma) >= epsilon_T + bound -
+    // bound_used; the margin of its next test above epsilon_T (0: none).
+    double bound = 0.0, bound_used = 0.0, margin = 0.0;
   };
 
   Critic() = default;
@@ -74,6 +78,7 @@ class Critic {
       w.coefficients.setZero(kBlock);
       w.weights.setZero(kBlock);
     }
+    w.margin = 0.5 * (settings_.gamma0 - settings_.epsilon_T);  // needs_reset(previous, ...)'s
     return w;
   }
 
@@ -101,48 +106,94 @@ class Critic {
     w.omegas.col(w.gathered) = omega;
     w.coefficients[w.gathered] = hjb_error;
     w.weights[w.gathered] = weight;
-    if (++w.gathered == kBlock) flush(gamma, weight_rate, gamma_rate, w);
+    if (++w.gathered == kBlock) add_block(gamma, weight_rate, gamma_rate, w);
   }
 
   // Adds the gathered samples' shares (eqs. 23-24) to the rates, then empties the block:
   //   G = Gamma [omega_1 ... omega_s]                            (one product)
   //   g_i = w_i eta_c / (1 + nu omega_i^T G_i)
   //   weight_rate -= G [g_i eps_i],  gamma_rate -= [g_i G_i] G^T   (rank s)
+  // The rank-s term is symmetric: for s > 1 only its lower triangle is computed (half the
+  // products), and the upper triangle is its mirror image, written once per evaluation (one
+  // sample, s = 1, is a whole outer product). The covariance test reads the lower triangle.
   template <class CovarianceIn, class CovarianceOut>
   void flush(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut&& gamma_rate,
              Workspace& w) const {
     static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
-    const Eigen::Index s = w.gathered;
-    if (s == 0) return;
-    w.gathered = 0;
-    const auto omegas = w.omegas.leftCols(s);
-    auto gamma_omegas = w.gamma_omegas.leftCols(s);
-    auto scaled = w.scaled.leftCols(s);
-    gamma_omegas.noalias() = gamma * omegas;
-    for (Eigen::Index i = 0; i < s; ++i) {
-      const double gain = w.weights[i] * settings_.eta_c /
-                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
-      w.coefficients[i] *= gain;
-      scaled.col(i) = gain * gamma_omegas.col(i);
+    add_block(gamma, weight_rate, gamma_rate, w);
+    if (w.lower_only) {  // mirror the lower triangle (the blocks of this evaluation)
+      w.lower_only = false;
+      const Eigen::Index n = gamma_rate.rows();
+      for (Eigen::Index j = 1; j < n; ++j)
+        gamma_rate.col(j).head(j) = gamma_rate.row(j).head(j).transpose();
     }
-    weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
-    if (s == 1)  // an outer product (no GEMM for one column)
-      gamma_rate.noalias() -= scaled.col(0).lazyProduct(gamma_omegas.col(0).transpose());
-    else
-      gamma_rate.noalias() -= scaled * gamma_omegas.transpose();
   }
 
-  // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): an in-place Cholesky
-  // factorisation of Gamma - epsilon_T I (lower triangle; Gamma is symmetric), fixed size, that
+  // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): below(gamma,
+  // epsilon_T, w), a Cholesky factorisation.
+  template <class CovarianceIn>
+  bool needs_reset(const CovarianceIn& gamma, Workspace& w) const {
+    return below(gamma, settings_.epsilon_T, w);
+  }
+
+  // The same answer as needs_reset(gamma), after a step from previous_gamma, mostly without the
+  // Cholesky factorisation (dynamic sizes; Gamma is the symmetric matrix of its lower triangle,
+  // the one the factorisation reads). Weyl's inequality:
+  //   lambda_min(Gamma_k+1) >= lambda_min(Gamma_k) - ||Gamma_k+1 - Gamma_k||_2,
+  //   ||.||_2 <= ||.||_F,
+  // so once lambda_min >= epsilon_T + m is known (gamma0 after a reset, or a factorisation of
+  // Gamma - (epsilon_T + m) I that succeeded), no reset is due while the steps' summed changes
+  // ||dGamma||_F stay below m (less a tolerance above the factorisation's round-off, so that the
+  // answer is needs_reset's at every step). When that bound is used up: the test at epsilon_T + m
+  // (success: a new bound m), else needs_reset's test; m is quartered after each failed try (down
+  // to 0: needs_reset's test alone at every step until the next reset).
+  template <class PreviousIn, class CovarianceIn>
+  bool needs_reset(const PreviousIn& previous_gamma, const CovarianceIn& gamma,
+                   Workspace& w) const {
+    const Eigen::Index n = gamma.rows();
+    double change = 0.0;  // ||Gamma - previous||_F of the symmetric matrices (lower triangles)
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double diagonal = gamma(j, j) - previous_gamma(j, j);
+      change +=
+          diagonal * diagonal +
+          2.0 *
+              (gamma.col(j).tail(n - j - 1) - previous_gamma.col(j).tail(n - j - 1)).squaredNorm();
+    }
+    w.bound_used += std::sqrt(change);
+    if (w.bound_used < w.bound) return false;  // lambda_min > epsilon_T (also false for NaN)
+    w.bound = 0.0;
+    w.bound_used = 0.0;
+    const double tolerance = round_off_tolerance(n);
+    if (w.margin > 0.0) {
+      if (!below(gamma, settings_.epsilon_T + w.margin, w)) {
+        w.bound = w.margin - tolerance;
+        return false;
+      }
+      w.margin = w.margin > 64.0 * tolerance ? 0.25 * w.margin : 0.0;
+    }
+    return needs_reset(gamma, w);
+  }
+
+  // After a reset (Gamma = gamma0 I, lambda_min = gamma0): the bound for needs_reset(previous,
+  // gamma, w) is gamma0 - epsilon_T.
+  void after_reset(Workspace& w) const {
+    const double tolerance = round_off_tolerance(size_);
+    w.bound = settings_.gamma0 - settings_.epsilon_T - tolerance;
+    w.bound_used = 0.0;
+    w.margin = 0.5 * (settings_.gamma0 - settings_.epsilon_T);
+  }
+
+  // True when lambda_min(Gamma) < threshold (also for a non-finite Gamma): an in-place Cholesky
+  // factorisation of Gamma - threshold I (lower triangle; Gamma is symmetric), fixed size, that
   // stops at the first pivot that is not positive: about N^3 / 6 multiply-adds, no
   // eigen-decomposition. A NaN or infinity reaches a pivot and fails the test.
   // Dynamic sizes above 24 functions factor column by column (left-looking: column j is updated
   // by one matrix-vector product with the columns before it, contiguous in the column-major
   // buffer); smaller ones use the loop below, whose short rows stay in cache.
   template <class CovarianceIn>
-  bool needs_reset(const CovarianceIn& gamma, Workspace& w) const {
+  bool below(const CovarianceIn& gamma, double threshold, Workspace& w) const {
     const Eigen::Index n = w.factor.rows();
-    Covariance& factor = w.factor;  // its lower triangle becomes L, Gamma - epsilon_T I = L L^T
+    Covariance& factor = w.factor;  // its lower triangle becomes L, Gamma - threshold I = L L^T
     factor = gamma;                 // (a buffer sized once: no allocation)
     if constexpr (kSize == Dynamic) {
       if (n > 24) {
@@ -150,7 +201,7 @@ class Critic {
           if (j > 0)
             factor.col(j).tail(n - j).noalias() -=
                 factor.block(j, 0, n - j, j) * factor.row(j).head(j).transpose();
-          const double pivot = factor(j, j) - settings_.epsilon_T;
+          const double pivot = factor(j, j) - threshold;
           if (!(pivot > 0.0)) return true;  // also catches NaN
           factor.col(j).tail(n - j - 1) *= 1.0 / std::sqrt(pivot);
         }
@@ -158,7 +209,7 @@ class Critic {
       }
     }
     for (Eigen::Index j = 0; j < n; ++j) {
-      double pivot = factor(j, j) - settings_.epsilon_T;
+      double pivot = factor(j, j) - threshold;
       for (Eigen::Index k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
       if (!(pivot > 0.0)) return true;  // also catches NaN
       const double diagonal = std::sqrt(pivot);
@@ -181,6 +232,39 @@ class Critic {
   }
 
  private:
+  // Above the round-off of a Cholesky factorisation of an n x n matrix of norm <= gamma0 (Gamma
+  // only decreases between resets: each RK4 stage's dGamma is negative semi-definite).
+  double round_off_tolerance(Eigen::Index n) const {
+    return 1e-12 * static_cast<double>(n * n) * settings_.gamma0;
+  }
+
+  // flush() without the mirror: the gathered block's shares, the rank-s term (s > 1) in the lower
+  // triangle of gamma_rate only (w.lower_only remembers that the upper one is still to be written).
+  template <class CovarianceIn, class CovarianceOut>
+  void add_block(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut& gamma_rate,
+                 Workspace& w) const {
+    const Eigen::Index s = w.gathered;
+    if (s == 0) return;
+    w.gathered = 0;
+    const auto omegas = w.omegas.leftCols(s);
+    auto gamma_omegas = w.gamma_omegas.leftCols(s);
+    auto scaled = w.scaled.leftCols(s);
+    gamma_omegas.noalias() = gamma * omegas;
+    for (Eigen::Index i = 0; i < s; ++i) {
+      const double gain = w.weights[i] * settings_.eta_c /
+                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
+      w.coefficients[i] *= gain;
+      scaled.col(i) = gain * gamma_omegas.col(i);
+    }
+    weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
+    if (s == 1) {  // an outer product, whole (no GEMM for one column; cheaper than a mirror)
+      gamma_rate.noalias() -= scaled.col(0).lazyProduct(gamma_omegas.col(0).transpose());
+    } else {  // the lower triangle of the rank-s product (Eigen's triangular GEMM kernel)
+      gamma_rate.template triangularView<Eigen::Lower>() -= scaled * gamma_omegas.transpose();
+      w.lower_only = true;
+    }
+  }
+
   CriticSettings settings_{};
   Eigen::Index size_ = kSize == Dynamic ? 0 : kSize;
 };

@@ -127,8 +127,24 @@ class Extrapolation {
       for (long i = 0; i < size(); ++i)
         prepare_hjb_point(basis, system, cost, points_[i], desired, terms, prepared_[i], workspace);
       prepared_valid_ = true;
+      if constexpr (kDof == Dynamic) {  // [B_1 ... B_N], once (allocates: first preparation only)
+        const Eigen::Index n = desired.q.size(), k = basis.size();
+        if (settings_.mode != ExtrapolationMode::local && k * n * size() <= kMaxStacked) {
+          stacked_input_gradients_.resize(k, n * size());
+          for (long i = 0; i < size(); ++i)
+            stacked_input_gradients_.middleCols(i * n, n) = prepared_[i].input_gradient;
+        }
+      }
     }
   }
+
+  // Dynamic sizes: whether the prepared points' B are also side by side in
+  // stacked_input_gradients() (fixed or grid points of a constant desired state, up to
+  // kMaxStacked coefficients), for ClosedLoop's stacked products.
+  bool stacked() const { return prepared_valid_ && stacked_input_gradients_.size() > 0; }
+  const Eigen::MatrixXd& stacked_input_gradients() const { return stacked_input_gradients_; }
+  const Point& prepared(long i) const { return prepared_[i]; }
+  static constexpr Eigen::Index kMaxStacked = Eigen::Index(1) << 22;  // 32 MB
 
   // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state
   // (`terms`, `workspace` as for begin_step).
@@ -167,6 +183,7 @@ class Extrapolation {
   bool prepared_valid_ = false;
   Points points_;
   std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
+  Eigen::MatrixXd stacked_input_gradients_;  // K x nN, [B_1 ... B_N] (stacked())
 };
 
 }  // namespace adparm

@@ -73,6 +73,21 @@ void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& 
   out.error = point.state_cost + out.input_cost + critic_weights.dot(out.omega);
 }
 
+// The same as evaluate_hjb, given the product B^T Wa of eq. (20) (ClosedLoop computes it for all
+// prepared extrapolation points at once).
+template <class Basis, int Dof>
+void evaluate_hjb_from_product(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& cost,
+                               const typename Basis::Vector& critic_weights,
+                               const JointVector<Dof>& input_gradient_times_actor_weights,
+                               HjbEvaluation<Basis, Dof>& out) {
+  out.u_hat = -0.5 * (cost.R_inverse() * input_gradient_times_actor_weights);  // eq. (20)
+  const double input_cost =
+      cost.bounded() ? cost.bound().bound_policy(out.u_hat) : cost.input_cost(out.u_hat);
+  out.omega = point.drift_rate;
+  out.omega.noalias() += point.input_gradient * out.u_hat;
+  out.error = point.state_cost + input_cost + critic_weights.dot(out.omega);
+}
+
 // The weight-free part at an error state x with the desired state `desired` (q, dq recovered from
 // x), on the model the controller believes; `terms` is a buffer (Arm::init_terms).
 template <class Basis, class Arm>

@@ -3,7 +3,7 @@
 //   M      CRBA (pinocchio::crba), symmetrised
 //   C      Pinocchio's Coriolis matrix (pinocchio::computeCoriolisMatrix), so dM/dt - 2C is skew
 //   G      pinocchio::computeGeneralizedGravity for the given gravity vector
-//   M^-1   pinocchio::computeMinverse (articulated-body algorithm), symmetrised
+//   M^-1   from the Cholesky factor of M (Eigen::LLT), symmetrised
 //   F      coulomb_i sign(dq_i) + viscous_i dq_i, per joint
 // The joints q are the URDF's revolute, continuous and prismatic joints in Pinocchio's model order
 // (depth first from the root); fixed joints merge their links into the parent body. A continuous

@@ -166,7 +166,7 @@ class Simulation {
       }
       current_ = 1 - current_;
       if (control.step != nullptr) control.step->store(step_, std::memory_order_relaxed);
-      if (system_.reset_covariance_if_needed(state, data_)) reset_times_.push_back(t_end);
+      if (system_.reset_covariance_if_needed(previous, state, data_)) reset_times_.push_back(t_end);
       system_.begin_step(t_end, state, data_);  // for the next step (and the row recorded at t_end)
       if (step_ == steps_) {
         if (record(t_end, state))
