@@ -589,13 +589,13 @@ class IdentifierConfig:
         core="identifier.enabled",
     )
     gain: float = setting(
-        1.0,
+        0.01,
         "Gamma = gain I of the adaptive law d beta_hat/dt = Gamma [Y_r^T e2 + k sum_j Y_j^T "
         "(b_j - Y_j beta_hat)] (> 0).",
         core="identifier.gain",
     )
     concurrent_gain: float = setting(
-        1000.0,
+        1e6,
         "k, the weight of the history stack's term in the adaptive law (>= 0; integrated "
         "implicitly, stable for any value).",
         core="identifier.concurrent_gain",

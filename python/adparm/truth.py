@@ -175,7 +175,7 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
 def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
     """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200 of
     them): u_hat of the recorded actor weights, u* of W*, at the recorded states."""
-    config = result.config
+    config = judged_config(result.config)
     tail = np.nonzero(result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0]))[0]
     tail = tail[np.linspace(0, tail.size - 1, min(tail.size, 200)).round().astype(int)]
     x = np.hstack([result.e1, result.e2])[tail]
@@ -314,6 +314,13 @@ def plant_model_config(config: Config) -> Config:
     return dataclasses.replace(config, model=ModelConfig())
 
 
+def judged_config(config: Config) -> Config:
+    """The config a run's learning is judged by: its own, or for an identifying run
+    (``identifier.enabled``) the plant's (plant_model_config): its critic should reach the plant's
+    W*, the optimum the identified model leads to."""
+    return plant_model_config(config) if config.identifier.enabled else config
+
+
 def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     """The online identifier's truth (None without ``identifier.enabled``): the plant's beta
     (known in simulation) against the final estimate, and whether the history stack ever became
@@ -397,8 +404,9 @@ def _diagnose_learning(
     The region learning fits (the extrapolation box with fixed or grid points, else the explored
     region) is where the basis's best residual is measured: a residual the basis can reach there
     is "not converged", one it cannot is "the basis cannot represent V*".
-    Only learning (adp) runs with rows are diagnosed; others give verdict "not a learning run"."""
-    config = result.config
+    Only learning (adp) runs with rows are diagnosed; others give verdict "not a learning run".
+    An identifying run (``identifier.enabled``) is judged against the plant (judged_config)."""
+    config = judged_config(result.config)
     if tolerance is None:
         tolerance = config.diagnostics.tolerance
     out: dict[str, Any] = {"verdict": "ok", "problems": [], "advice": []}
@@ -432,10 +440,8 @@ def _diagnose_learning(
         )  # what the config shows beforehand
         out["verdict"] = "; ".join(out["problems"])
         return out
-    try:  # identifying: the plant's W*, the optimum the identified model leads to
-        target = optimal_weights(
-            plant_model_config(config) if config.identifier.enabled else config
-        )
+    try:
+        target = optimal_weights(config)
     except ValueError:
         target = None
     rng = np.random.default_rng(_SEED)
