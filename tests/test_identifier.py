@@ -162,7 +162,7 @@ def test_identification_reaches_the_plant_from_a_model_30_percent_off() -> None:
     error = np.abs(beta_hat[-1, :5] / beta_plant[:5] - 1).max()
     assert error < 0.01, (error, beta_hat[-1], beta_plant)
     np.testing.assert_array_equal(beta_hat[:, 5:], np.tile(beta_model[5:], (result.t.size, 1)))
-    W_plant = adparm.optimal_weights(adparm.truth.plant_model_config(config))
+    W_plant = adparm.optimal_weights(adparm.identification.plant_model_config(config))
     assert critic_error(result, W_plant) < 0.01, critic_error(result, W_plant)
     assert result.stack_singular_value.shape == (result.t.size,)
     diagnostics = adparm.diagnose(result)

@@ -209,6 +209,7 @@ class Identifier {
       selected_[i] = (g == ParameterGroup::inertia && settings.inertia) ||
                      (g == ParameterGroup::gravity && settings.gravity) ||
                      (g == ParameterGroup::friction && settings.friction);
+      if (selected_[i]) index_[identified_++] = i;
     }
   }
 
@@ -327,18 +328,14 @@ class Identifier {
     data.ever_informative = data.ever_informative || data.informative;
   }
 
-  // sqrt(lambda_min) of S over the identified parameters: the others' rows and columns are
-  // replaced by a diagonal above S's trace, so the minimum is the identified block's.
+  // sqrt(lambda_min) of S's block of the identified parameters (a bounded matrix: no heap).
   double min_singular_value(const ParameterMatrix& S) const {
-    ParameterMatrix block = S;
-    const double above = S.trace() + 1.0;
-    for (int i = 0; i < kParameters; ++i) {
-      if (selected_[i]) continue;
-      block.row(i).setZero();
-      block.col(i).setZero();
-      block(i, i) = above;
-    }
-    const Eigen::SelfAdjointEigenSolver<ParameterMatrix> solver(block, Eigen::EigenvaluesOnly);
+    using Block =
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kParameters, kParameters>;
+    Block block(identified_, identified_);
+    for (int a = 0; a < identified_; ++a)
+      for (int b = 0; b < identified_; ++b) block(a, b) = S(index_[a], index_[b]);
+    const Eigen::SelfAdjointEigenSolver<Block> solver(block, Eigen::EigenvaluesOnly);
     return std::sqrt(std::max(0.0, solver.eigenvalues()[0]));
   }
 
@@ -346,6 +343,8 @@ class Identifier {
   Parameters initial_ = Parameters::Zero();
   long window_steps_ = 1;
   bool selected_[kParameters] = {};
+  int index_[kParameters] = {};  // the identified parameters' indices, identified_ of them
+  int identified_ = 0;
 };
 
 // The identifier of each arm type (a new arm's identifier: its Regressor and one entry here).
