@@ -178,6 +178,20 @@ def test_identification_reaches_the_plant_from_a_model_30_percent_off() -> None:
     assert critic_error(plain, W_plant) > 0.05
 
 
+@pytest.mark.parametrize("seed", [3, 4, 5])
+def test_with_the_paper_disturbance_the_estimate_stays_within_five_percent(seed: int) -> None:
+    # tau_d(t) (0.1 N m) enters each window's int tau dt unmodelled: a bias, documented as within
+    # 5 % after 5 s (measured: 1.5-3 %); the critic still ends within 1 % of the plant's W*
+    config = model_off(base(identifier={"enabled": True}, plant={"disturbance": [0.1, 0.1]}), seed)
+    result = adparm.simulate(config, diagnose=False)
+    assert result.status == "finished"
+    beta = adparm.base_parameters(config, "plant")[:5]
+    error = np.abs(result.model_parameters[:, :5] / beta - 1).max(axis=1)
+    assert error[result.t >= 5.0].max() < 0.05, error[result.t >= 5.0].max()
+    W_plant = adparm.optimal_weights(adparm.identification.plant_model_config(config))
+    assert critic_error(result, W_plant) < 0.01
+
+
 def test_without_excitation_the_stack_never_becomes_informative() -> None:
     # at rest at the set-point, no probe: only gravity is seen, the stack has rank 2 of 5
     config = model_off(
