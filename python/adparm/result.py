@@ -212,12 +212,14 @@ class SimulationResult:
         return int(self.covariance_reset_times.size)
 
     def to_dict(self) -> dict[str, Any]:
-        """The arrays by name (copies), with status and wall_time."""
+        """The arrays by name (copies), with status and wall_time (model_parameters and
+        stack_singular_value only with identification)."""
         names = (*ARRAYS_1, *ARRAYS_2, *ARRAYS_N, "covariance_reset_times", "saturated_time")
         out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
-        for name in ARRAYS_IDENTIFIER:  # None without identification
+        for name in ARRAYS_IDENTIFIER:  # only with identification
             value = getattr(self, name)
-            out[name] = None if value is None else np.array(value)
+            if value is not None:
+                out[name] = np.array(value)
         out["status"] = self.status
         out["wall_time"] = self.wall_time
         return out
