@@ -272,3 +272,14 @@ def test_the_core_refuses_a_loop_without_an_identifier() -> None:
     settings.identifier = identifier
     with pytest.raises(ValueError, match=r"^identifier\.enabled: "):
         _core.Simulation(settings)
+
+
+def test_base_parameters_of_a_urdf_arm_are_the_structured_basis_ones() -> None:
+    # the kinetic energy's base parameters: the tail of the structured basis' W* (s = 1 here)
+    config = adparm.load_config(adparm.example_path("planar_3link.toml"))
+    names = adparm.base_parameter_names(config)
+    beta = adparm.base_parameters(config, "plant")
+    assert len(names) == beta.size > 0
+    assert adparm.basis_names(config)[-beta.size :] == tuple(f"e2'M_b e2 ({n})" for n in names)
+    assert adparm.optimal.value_scale(config) == 1.0
+    np.testing.assert_allclose(adparm.optimal_weights(config)[-beta.size :], beta, rtol=1e-12)
