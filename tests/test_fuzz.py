@@ -367,6 +367,12 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
     """Values known to be invalid for section.key, given the rest of ``data``."""
     values = data.get(section, {})
     value = values.get(key, default(section, key))
+    if section == "identifier":
+        if key in ("enabled", "inertia", "gravity", "friction"):
+            return ["true", 1, 0, 1.0, None, [True]]
+        if key == "history_size":
+            return [0, -1, 100001, 10**30, 2.5, "3", None, True]
+        return scalar_cases("pos" if key in ("gain", "window") else "nonneg")
     if section in ("plant", "model") and key in ARM_KEYS:
         cases = scalar_cases("pos" if key == "p2" else "real", nullable=section == "model")
         if key == "p1":

@@ -48,6 +48,7 @@ LAYERS = {
     # 4 analysis: what a run means
     "residual": 4,
     "yardstick": 4,
+    "identification": 4,
     "truth": 4,
     "comparison": 4,
     # 5 output: files, figures, summaries

@@ -221,9 +221,10 @@ def test_the_core_table_of_recorded_series_is_what_a_result_holds() -> None:
     run.advance(100)
     assert list(run.recording()) == names
     result = adparm.simulate(config)
-    assert list(result.to_dict())[: len(names)] == [
-        n for w in ("one", "joints", "basis") for n, width in RECORDED_SERIES if width == w
-    ]
+    first = [n for w in ("one", "joints", "basis") for n, width in RECORDED_SERIES if width == w]
+    assert list(result.to_dict())[: len(first)] == first
+    # the identifier's series: None without identification
+    assert result.model_parameters is None and result.stack_singular_value is None
 
 
 def test_an_approximation_warning_made_an_error_keeps_the_run() -> None:

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'simulate_open_loop', 'urdf_parse_count', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
+__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'IdentifierSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'two_link_regressors', 'simulate_open_loop', 'urdf_parse_count', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
 class ArmParameters:
     """
     Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.
@@ -564,6 +564,46 @@ class ExtrapolationSettings:
     @seed.setter
     def seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
         ...
+class IdentifierSettings:
+    """
+    The online identifier of beta (identifier.hpp): enabled, gain, concurrent_gain, history_size, window, singular_value_threshold, inertia, gravity, friction.
+    """
+    enabled: bool
+    friction: bool
+    gravity: bool
+    inertia: bool
+    def __init__(self) -> None:
+        ...
+    @property
+    def concurrent_gain(self) -> float:
+        ...
+    @concurrent_gain.setter
+    def concurrent_gain(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gain(self) -> float:
+        ...
+    @gain.setter
+    def gain(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def history_size(self) -> int:
+        ...
+    @history_size.setter
+    def history_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def singular_value_threshold(self) -> float:
+        ...
+    @singular_value_threshold.setter
+    def singular_value_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def window(self) -> float:
+        ...
+    @window.setter
+    def window(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class SimSettings:
     """
     T, dt, record_every, divergence_bound.
@@ -638,6 +678,7 @@ class Settings:
     dynamic_sizes: bool
     e2_cost: E2Cost
     extrapolation: ExtrapolationSettings
+    identifier: IdentifierSettings
     probe: ProbeSettings
     sim: SimSettings
     task: TaskSettings
@@ -1030,9 +1071,13 @@ def simulate_open_loop(parameters: ArmParameters, disturbance: typing.Annotated[
     """
     RK4 of the arm alone under tau = G(q) (or 0) from [q; dq] (4,); rows (steps + 1, 4).
     """
+def two_link_regressors(q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], ddq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], dq_r: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"], ddq_r: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[2, 1]"]) -> dict:
+    """
+    The two-link arm's regressors (2, 7) in beta = (p1, p2, p3, g1, g2, coulomb, viscous) (identifier.hpp): Y (M ddq + C dq + G + F), Y_r (M ddq_r + C(q, dq) dq_r + G + F), Y_M (M dq) and Y_N (G + F - C^T dq).
+    """
 def urdf_parse_count() -> int:
     """
     How many URDF texts the core has parsed so far, in every thread.
     """
-RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('tau_commanded', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'))
+RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('tau_commanded', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'), ('model_parameters', 'parameters'), ('stack_singular_value', 'identifier'))
 STATE_SIZE: int = 87

@@ -1,4 +1,4 @@
-"""The sections of the configuration that set the run: [extrapolation], [sim] and
+"""The sections of the configuration that set the run: [extrapolation], [identifier], [sim] and
 [diagnostics]."""
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ import numpy as np
 from ._fields import (
     AUTO,
     Vector,
+    boolean_value,
     choice_value,
     int_text,
     integer_value,
@@ -89,6 +90,95 @@ class ExtrapolationConfig:
     def box_vector(self, joints: int = 2) -> np.ndarray:
         """The half-widths as a (2 joints,) array."""
         return np.broadcast_to(np.array(self.box, dtype=float), (2 * joints,)).copy()
+
+
+@dataclass(frozen=True)
+class IdentifierConfig:
+    """The online identifier of the arm's base inertial parameters beta (issue 25, stage 1; not in
+    the paper; :doc:`/guide/unknown-dynamics`). The believed model (``[model]``) is the initial
+    estimate beta_hat(0); the controller then uses beta_hat wherever the model appears. Stage 1:
+    the two-link arm's fixed-size loop; URDF arms are refused (the next stage)."""
+
+    enabled: bool = setting(
+        False,
+        "Identify beta online (the Slotine-Li gradient term plus concurrent learning over a "
+        "history stack of windows of the momentum equation). false: the controller believes "
+        "``[model]`` throughout (the runs of adparm before the identifier, bit for bit).",
+        core="identifier.enabled",
+    )
+    gain: float = setting(
+        0.01,
+        "Gamma = gain I of the adaptive law d beta_hat/dt = Gamma [Y_r^T e2 + k sum_j Y_j^T "
+        "(b_j - Y_j beta_hat)] (> 0).",
+        core="identifier.gain",
+    )
+    concurrent_gain: float = setting(
+        1e6,
+        "k, the weight of the history stack's term in the adaptive law (>= 0; integrated "
+        "implicitly, stable for any value).",
+        core="identifier.concurrent_gain",
+    )
+    history_size: int = setting(
+        20,
+        "Samples (windows) the history stack holds; a new one replaces the stored sample whose "
+        "replacement most increases the stack's minimum singular value.",
+        core="identifier.history_size",
+    )
+    window: float = setting(
+        0.2,
+        "Length T (s) of each window of the measurable equation int tau dt = [M dq] + "
+        "int (G + F - C^T dq) dt (> 0).",
+        core="identifier.window",
+    )
+    singular_value_threshold: float = setting(
+        0.01,
+        "The stack's term is used only while its minimum singular value (over the identified "
+        "parameters) is at least this (>= 0): the rank condition.",
+        core="identifier.singular_value_threshold",
+    )
+    inertia: bool = setting(
+        True, "Identify the inertial parameters (two-link: p1, p2, p3).", core="identifier.inertia"
+    )
+    gravity: bool = setting(
+        True, "Identify the gravity coefficients (two-link: g1, g2).", core="identifier.gravity"
+    )
+    friction: bool = setting(
+        False,
+        "Identify the friction coefficients (two-link: coulomb, viscous); false: the model's.",
+        core="identifier.friction",
+    )
+
+    def __post_init__(self) -> None:
+        for name in ("enabled", "inertia", "gravity", "friction"):
+            object.__setattr__(self, name, boolean_value(getattr(self, name), f"identifier.{name}"))
+        object.__setattr__(
+            self, "gain", scalar_value(self.gain, "identifier.gain", minimum=0.0, strict=True)
+        )
+        object.__setattr__(
+            self,
+            "concurrent_gain",
+            scalar_value(self.concurrent_gain, "identifier.concurrent_gain", minimum=0.0),
+        )
+        object.__setattr__(
+            self,
+            "history_size",
+            integer_value(self.history_size, "identifier.history_size", minimum=1, maximum=100000),
+        )
+        object.__setattr__(
+            self, "window", scalar_value(self.window, "identifier.window", minimum=0.0, strict=True)
+        )
+        object.__setattr__(
+            self,
+            "singular_value_threshold",
+            scalar_value(
+                self.singular_value_threshold, "identifier.singular_value_threshold", minimum=0.0
+            ),
+        )
+        if not (self.inertia or self.gravity or self.friction):
+            raise ValueError(
+                "identifier.inertia, identifier.gravity, identifier.friction: at least one group "
+                "must be identified"
+            )
 
 
 @dataclass(frozen=True)

@@ -53,6 +53,7 @@ from ._sections import (
     CriticConfig,
     DiagnosticsConfig,
     ExtrapolationConfig,
+    IdentifierConfig,
     InitConfig,
     ProbeConfig,
     SimConfig,
@@ -78,6 +79,7 @@ class ConfigSchema:
     probe: ProbeConfig = field(default_factory=ProbeConfig)
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     extrapolation: ExtrapolationConfig = field(default_factory=ExtrapolationConfig)
+    identifier: IdentifierConfig = field(default_factory=IdentifierConfig)
     sim: SimConfig = field(default_factory=SimConfig)
     diagnostics: DiagnosticsConfig = field(default_factory=DiagnosticsConfig)
     #: "section.key" of every setting given explicitly through from_dict/updated/load_config (a
@@ -104,6 +106,7 @@ class ConfigSchema:
             model = self.model.resolve(self.plant)
             check_arm(model["p1"], model["p2"], model["p3"], "model")
         self._check_basis()
+        self._check_identifier()
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
                 f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
@@ -119,6 +122,23 @@ class ConfigSchema:
 
     def _check_basis(self) -> None:
         """The initial weights and the basis against the arm (adparm.Config)."""
+
+    def _check_identifier(self) -> None:
+        """The online identifier runs on the two-link arm's fixed-size loop (stage 1 of issue
+        25): a URDF arm or an expression basis with identifier.enabled is refused."""
+        if not self.identifier.enabled:
+            return
+        if self.plant.urdf is not None:
+            raise ValueError(
+                "identifier.enabled: the online identifier covers the two-link arm in this "
+                "version; URDF arms (plant.urdf) are its next stage (guide: Unknown dynamics)"
+            )
+        if self.controller.basis not in BASIS_KINDS:
+            raise ValueError(
+                "identifier.enabled: the online identifier runs with the two-link arm's bases "
+                f"({', '.join(BASIS_KINDS)}) in this version, not controller.basis = "
+                f"{self.controller.basis!r} (the expression bases are its next stage)"
+            )
 
     def _arm_defaults(self) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
         """The settings a URDF arm derives, with their reasons (adparm.Config)."""

@@ -32,7 +32,7 @@ from ._fields import (
     symmetric_positive_definite,
     vector_value,
 )
-from ._run_sections import DiagnosticsConfig, ExtrapolationConfig, SimConfig
+from ._run_sections import DiagnosticsConfig, ExtrapolationConfig, IdentifierConfig, SimConfig
 
 PAPER_Q: Matrix = (
     (40.0, 2.0, -4.0, 4.0),
@@ -586,6 +586,7 @@ SECTIONS: dict[str, type] = {
     "probe": ProbeConfig,
     "controller": ControllerConfig,
     "extrapolation": ExtrapolationConfig,
+    "identifier": IdentifierConfig,
     "sim": SimConfig,
     "diagnostics": DiagnosticsConfig,
 }

@@ -70,6 +70,7 @@ from ._sections import (
     CriticConfig,
     DiagnosticsConfig,
     ExtrapolationConfig,
+    IdentifierConfig,
     InitConfig,
     ProbeConfig,
     SimConfig,
@@ -88,6 +89,7 @@ __all__ = [
     "CriticConfig",
     "DiagnosticsConfig",
     "ExtrapolationConfig",
+    "IdentifierConfig",
     "InitConfig",
     "ModelConfig",
     "PlantConfig",
@@ -146,6 +148,8 @@ class Config(ConfigSchema):
         Controller kind (adp, rise, pd, optimal) and basis.
     extrapolation : ExtrapolationConfig
         Bellman-error extrapolation points.
+    identifier : IdentifierConfig
+        The online identifier of the arm's base parameters (off by default).
     sim : SimConfig
         Horizon, step, recording and divergence bound.
     diagnostics : DiagnosticsConfig
@@ -290,8 +294,8 @@ def paper_config() -> Config:
 
 def load_config(path: str | Path) -> Config:
     """Read a TOML file of sections [plant] [model] [task] [cost] [control] [critic] [actor]
-    [init] [probe] [controller] [extrapolation] [sim]; keys left out take the paper default. A
-    relative ``task.qd.file`` is relative to the TOML file's folder."""
+    [init] [probe] [controller] [extrapolation] [identifier] [sim]; keys left out take the paper
+    default. A relative ``task.qd.file`` is relative to the TOML file's folder."""
     path = Path(path)
     text = read_text_file(path, "config", MAX_CONFIG_BYTES)
     try:

@@ -1,7 +1,8 @@
 """The arm's dynamics as the controller believes them and what the optimum needs of them, with no
 basis: M, C, G, F at given states (arm_terms, inertia_matrices), the initial error state, the
-exact family's scale s (value_scale) and cost (solvable_cost), and the Riccati value of the
-linearised error system (lqr_value). adparm.optimal re-exports them."""
+exact family's scale s (value_scale) and cost (solvable_cost), the Riccati value of the
+linearised error system (lqr_value), and the base parameters beta in which the dynamics are linear
+(base_parameters, base_parameter_names). adparm.optimal re-exports them."""
 
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ from .urdf import config_arm
 
 __all__ = [
     "arm_terms",
+    "base_parameter_names",
+    "base_parameters",
     "check_config",
     "error_states",
     "exact_family",
@@ -84,6 +87,53 @@ def arm_terms(
         setattr(parameters, key, value)
     terms = _core.arm_terms(parameters, q_array, dq_array)
     return {key: np.array(terms[key]) for key in ("M", "C", "G", "F")}
+
+
+#: The two-link arm's beta, in which M ddq + C dq + G + F is linear (the online identifier's
+#: parameters, cpp/include/adparm/identifier.hpp).
+TWO_LINK_BASE_PARAMETERS = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+
+
+def base_parameters(config: ConfigSchema, which: str = "plant") -> np.ndarray:
+    """The base parameters beta of the plant (``which="plant"``) or of the model the controller
+    believes (``which="model"``), in the order of :func:`base_parameter_names`.
+
+    Two-link arm: (p1, p2, p3, g1, g2, coulomb, viscous), in which M ddq + C dq + G + F =
+    Y(q, dq, ddq) beta (the online identifier's parameters; ``result.model_parameters`` holds its
+    estimate). URDF arm: the base inertial parameters of the kinetic energy
+    (``UrdfArm.base_parameters``, those of the structured basis' W*).
+
+    Examples
+    --------
+    >>> import adparm
+    >>> adparm.base_parameters(adparm.paper_config())
+    array([ 5.  ,  1.  ,  1.  , 11.76,  9.8 , -0.1 ,  0.  ])
+    """
+    check_config(config)
+    if which not in ("plant", "model"):
+        raise ValueError(f'which: expected "plant" or "model", got {which!r}')
+    if config.plant.urdf is not None:
+        values = config_arm(config, model=which == "model").base_parameters()[0]
+        return np.array(values, dtype=float)
+    values = (
+        config.model.resolve(config.plant)
+        if which == "model"
+        else {key: getattr(config.plant, key) for key in TWO_LINK_BASE_PARAMETERS}
+    )
+    return np.array([float(values[key]) for key in TWO_LINK_BASE_PARAMETERS])
+
+
+def base_parameter_names(config: ConfigSchema) -> tuple[str, ...]:
+    """Names of :func:`base_parameters`: ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous") for
+    the two-link arm; for a URDF arm the inertial parameter each base parameter is named by
+    ("m link2", ..., as in the structured basis' names)."""
+    check_config(config)
+    if config.plant.urdf is None:
+        return TWO_LINK_BASE_PARAMETERS
+    arm = config_arm(config)
+    r = len(arm.base_parameters()[0])
+    names = arm.structured_names()[-r:]
+    return tuple(name.removeprefix("e2'M_b e2 (").removesuffix(")") for name in names)
 
 
 def inertia_matrices(config: ConfigSchema, positions: Any, *, model: bool = False) -> np.ndarray:

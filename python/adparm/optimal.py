@@ -16,6 +16,8 @@ from .basis_family import BASIS_NAMES, STRUCTURED_BASIS_NAMES, basis_for
 from .desired import desired_state
 from .dynamics import (
     arm_terms,
+    base_parameter_names,
+    base_parameters,
     check_config,
     error_states,
     inertia_matrices,
@@ -31,6 +33,8 @@ __all__ = [
     "BASIS_NAMES",
     "STRUCTURED_BASIS_NAMES",
     "arm_terms",
+    "base_parameter_names",
+    "base_parameters",
     "basis",
     "basis_names",
     "linearisation",

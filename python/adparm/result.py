@@ -62,13 +62,19 @@ STATUSES = ("finished", "diverged", "interrupted", "running")
 
 #: The series a run records, (name, width) in the core's order (adparm._core.RECORDED_SERIES, the
 #: C++ table kRecordedSeries): width "one" (a value per row), "joints" (a column per joint) or
-#: "basis" (a column per basis function). Each is an array attribute of SimulationResult.
+#: "basis" (a column per basis function), "parameters" (a column per model parameter) or
+#: "identifier" (one value per row); the last two only with identification (``identifier``),
+#: else None. Each is an array attribute of SimulationResult.
 RECORDED_SERIES: tuple[tuple[str, str], ...] = tuple(
     (str(name), str(width)) for name, width in _core.RECORDED_SERIES
 )
 ARRAYS_1 = tuple(name for name, width in RECORDED_SERIES if width == "one")
 ARRAYS_2 = tuple(name for name, width in RECORDED_SERIES if width == "joints")
 ARRAYS_N = tuple(name for name, width in RECORDED_SERIES if width == "basis")
+#: The series of the online identifier (None without identification).
+ARRAYS_IDENTIFIER = tuple(
+    name for name, width in RECORDED_SERIES if width in ("parameters", "identifier")
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,6 +126,12 @@ class SimulationResult:
     saturated_time : ndarray, shape (joints,)
         Seconds each joint's commanded torque lay beyond its limit (``plant.torque_limits``),
         counted per RK4 step by the core (zeros without limits).
+    model_parameters : ndarray, shape (n, P), or None
+        With ``identifier.enabled``: the estimate beta_hat the controller used from each row's
+        time, in the order of ``adparm.base_parameter_names(config)``; None without.
+    stack_singular_value : ndarray, shape (n,), or None
+        With ``identifier.enabled``: the history stack's minimum singular value (over the
+        identified parameters); None without.
     """
 
     t: np.ndarray
@@ -143,6 +155,8 @@ class SimulationResult:
     status: str = "finished"
     wall_time: float = field(default=float("nan"))
     saturated_time: np.ndarray | None = None
+    model_parameters: np.ndarray | None = None
+    stack_singular_value: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
@@ -171,6 +185,16 @@ class SimulationResult:
             raise ValueError(f"saturated_time: expected shape {(joints,)}, got {saturated.shape}")
         saturated.flags.writeable = False
         object.__setattr__(self, "saturated_time", saturated)
+        for name in ARRAYS_IDENTIFIER:
+            value = getattr(self, name)
+            if value is None or np.size(value) == 0:  # the core's empty columns: no identifier
+                object.__setattr__(self, name, None)
+                continue
+            array = read_only_float(value)
+            if array.shape[0] != n:
+                raise ValueError(f"{name}: expected {n} rows, got shape {array.shape}")
+            array.flags.writeable = False
+            object.__setattr__(self, name, array)
         if self.status not in STATUSES:
             raise ValueError(f"status: expected one of {', '.join(STATUSES)}, got {self.status!r}")
 
@@ -188,9 +212,14 @@ class SimulationResult:
         return int(self.covariance_reset_times.size)
 
     def to_dict(self) -> dict[str, Any]:
-        """The arrays by name (copies), with status and wall_time."""
+        """The arrays by name (copies), with status and wall_time (model_parameters and
+        stack_singular_value only with identification)."""
         names = (*ARRAYS_1, *ARRAYS_2, *ARRAYS_N, "covariance_reset_times", "saturated_time")
         out: dict[str, Any] = {name: np.array(getattr(self, name)) for name in names}
+        for name in ARRAYS_IDENTIFIER:  # only with identification
+            value = getattr(self, name)
+            if value is not None:
+                out[name] = np.array(value)
         out["status"] = self.status
         out["wall_time"] = self.wall_time
         return out

@@ -178,10 +178,13 @@ def _point_bytes(config: Config) -> int:
 
 def _recording_bytes(config: Config) -> int:
     """Bytes of one copy of the recording of ``config`` (all its rows): t, hjb_error, cost, n
-    values of each joint series and the K critic and K actor weights per row."""
+    values of each joint series and the K critic and K actor weights per row (with
+    identification, beta_hat's 7 values and the stack's singular value too)."""
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
     width = len(ARRAYS_1) + config.dof * len(ARRAYS_2) + config.basis_size * len(ARRAYS_N)
+    if config.identifier.enabled:  # the two-link arm's 7 parameters and sigma_min
+        width += 8
     return 8 * rows * width
 
 

@@ -37,6 +37,7 @@ _COLUMN_NAMES = {
 _COLUMNS: tuple[tuple[str, str], ...] = tuple(
     (name, _COLUMN_NAMES.get(name, name + "{j}" if width == "joints" else name))
     for name, width in RECORDED_SERIES
+    if width in ("one", "joints", "basis")  # the identifier's series are not saved yet
 )
 
 

@@ -31,6 +31,7 @@ from .divergence import (
     initial_actor_e2_block,
     structured_e2_block_min_eigenvalue,
 )
+from .identification import identifier_diagnosis, judged_config
 from .optimal import (
     basis,
     lqr_value,
@@ -175,7 +176,7 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
 def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
     """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200 of
     them): u_hat of the recorded actor weights, u* of W*, at the recorded states."""
-    config = result.config
+    config = judged_config(result.config)
     tail = np.nonzero(result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0]))[0]
     tail = tail[np.linspace(0, tail.size - 1, min(tail.size, 200)).round().astype(int)]
     x = np.hstack([result.e1, result.e2])[tail]
@@ -288,6 +289,15 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     ``saturated_time`` (seconds per joint) and ``saturation`` (:func:`saturation_text`, None when
     no torque was clipped), which the verdict ends with."""
     out = _diagnose_learning(result, tolerance=tolerance)
+    identifier = identifier_diagnosis(result)
+    out["identifier"] = identifier
+    if identifier is not None:
+        if out["verdict"] == "not a learning run" or out["verdict"] == "no rows":
+            pass
+        elif not identifier["ever_informative"] and out["verdict"] == "ok":
+            out["verdict"] = identifier["text"]
+        else:
+            out["verdict"] += "; " + identifier["text"]
     out["saturated_time"] = [float(v) for v in result.saturated_time]
     out["saturation"] = saturation_text(result)
     if out["saturation"] is not None:
@@ -319,8 +329,9 @@ def _diagnose_learning(
     The region learning fits (the extrapolation box with fixed or grid points, else the explored
     region) is where the basis's best residual is measured: a residual the basis can reach there
     is "not converged", one it cannot is "the basis cannot represent V*".
-    Only learning (adp) runs with rows are diagnosed; others give verdict "not a learning run"."""
-    config = result.config
+    Only learning (adp) runs with rows are diagnosed; others give verdict "not a learning run".
+    An identifying run (``identifier.enabled``) is judged against the plant (judged_config)."""
+    config = judged_config(result.config)
     if tolerance is None:
         tolerance = config.diagnostics.tolerance
     out: dict[str, Any] = {"verdict": "ok", "problems": [], "advice": []}

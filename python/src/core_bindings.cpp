@@ -187,6 +187,20 @@ void bind_settings(py::module_& m) {
       .def_readwrite("box", &ExtrapolationSettings::box)
       .def_readwrite("mode", &ExtrapolationSettings::mode)
       .def_readwrite("seed", &ExtrapolationSettings::seed);
+  py::class_<IdentifierSettings>(m, "IdentifierSettings",
+                                 "The online identifier of beta (identifier.hpp): enabled, gain, "
+                                 "concurrent_gain, history_size, window, "
+                                 "singular_value_threshold, inertia, gravity, friction.")
+      .def(py::init<>())
+      .def_readwrite("enabled", &IdentifierSettings::enabled)
+      .def_readwrite("gain", &IdentifierSettings::gain)
+      .def_readwrite("concurrent_gain", &IdentifierSettings::concurrent_gain)
+      .def_readwrite("history_size", &IdentifierSettings::history_size)
+      .def_readwrite("window", &IdentifierSettings::window)
+      .def_readwrite("singular_value_threshold", &IdentifierSettings::singular_value_threshold)
+      .def_readwrite("inertia", &IdentifierSettings::inertia)
+      .def_readwrite("gravity", &IdentifierSettings::gravity)
+      .def_readwrite("friction", &IdentifierSettings::friction);
   py::class_<SimSettings>(m, "SimSettings", "T, dt, record_every, divergence_bound.")
       .def(py::init<>())
       .def_readwrite("T", &SimSettings::T)
@@ -244,6 +258,7 @@ void bind_settings(py::module_& m) {
       .def_readwrite("basis_program", &Settings::basis_program)
       .def_readwrite("dynamic_sizes", &Settings::dynamic_sizes)
       .def_readwrite("extrapolation", &Settings::extrapolation)
+      .def_readwrite("identifier", &Settings::identifier)
       .def_readwrite("critic_weights", &Settings::critic_weights)
       .def_readwrite("actor_weights", &Settings::actor_weights)
       .def_readwrite("probe", &Settings::probe)
@@ -267,6 +282,21 @@ void bind_arm(py::module_& m) {
       },
       py::arg("parameters"), py::arg("q"), py::arg("dq"),
       "Model terms at q (2,), dq (2,): dict of M, M_inv, C (2, 2) and G, F (2,).");
+  m.def(
+      "two_link_regressors",
+      [](const Vec2& q, const Vec2& dq, const Vec2& ddq, const Vec2& dq_r, const Vec2& ddq_r) {
+        using R = TwoLinkRegressor;
+        py::dict out;
+        out["Y"] = R::Matrix(R::regressor(q, dq, ddq));
+        out["Y_r"] = R::Matrix(R::reference_regressor(q, dq, dq_r, ddq_r));
+        out["Y_M"] = R::Matrix(R::momentum_regressor(q, dq));
+        out["Y_N"] = R::Matrix(R::momentum_rate_regressor(q, dq));
+        return out;
+      },
+      py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("dq_r"), py::arg("ddq_r"),
+      "The two-link arm's regressors (2, 7) in beta = (p1, p2, p3, g1, g2, coulomb, viscous) "
+      "(identifier.hpp): Y (M ddq + C dq + G + F), Y_r (M ddq_r + C(q, dq) dq_r + G + F), Y_M "
+      "(M dq) and Y_N (G + F - C^T dq).");
   m.def(
       "simulate_open_loop",
       [](const TwoLinkArmParameters& parameters, const Vec2& disturbance, const Vec4& initial_state,
@@ -680,13 +710,18 @@ void bind_closed_loop(py::module_& m) {
 }
 
 void bind_simulation(py::module_& m) {
-  // (name, width) of each recorded series, in order; width "one", "joints" or "basis"
+  // (name, width) of each recorded series, in order; width "one", "joints", "basis", "parameters"
+  // (beta_hat: one column per model parameter, none without identification) or "identifier" (one
+  // column with identification, none without)
   py::tuple series(kRecordedSeries.size());
   for (std::size_t i = 0; i < kRecordedSeries.size(); ++i) {
     const SeriesWidth width = kRecordedSeries[i].width;
-    series[i] = py::make_tuple(kRecordedSeries[i].name, width == SeriesWidth::one      ? "one"
-                                                        : width == SeriesWidth::joints ? "joints"
-                                                                                       : "basis");
+    const char* name = width == SeriesWidth::one          ? "one"
+                       : width == SeriesWidth::joints     ? "joints"
+                       : width == SeriesWidth::basis      ? "basis"
+                       : width == SeriesWidth::parameters ? "parameters"
+                                                          : "identifier";
+    series[i] = py::make_tuple(kRecordedSeries[i].name, name);
   }
   m.attr("RECORDED_SERIES") = series;
   py::class_<AnySimulation>(m, "Simulation",
@@ -727,7 +762,8 @@ void bind_simulation(py::module_& m) {
             py::dict out;
             for (const RecordedSeries& series : kRecordedSeries) {
               Recording::Rows& rows = r.*series.member;
-              if (series.width == SeriesWidth::one)  // a 1-D array
+              if (series.width == SeriesWidth::one ||
+                  (series.width == SeriesWidth::identifier && rows.cols() == 1))  // a 1-D array
                 out[series.name] =
                     py::cast(Eigen::Map<const Eigen::VectorXd>(rows.data(), rows.rows()),
                              py::return_value_policy::copy);

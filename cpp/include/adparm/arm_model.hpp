@@ -91,6 +91,14 @@ class TwoLinkArm {
                                   "(need p1 p2 - p2^2 - p3^2 > 0 and finite)");
   }
 
+  // Without the checks: for parameters known to give a positive definite M(q) (the identifier's
+  // estimate, identifier.hpp, which keeps it so), built at every step without allocating.
+  static TwoLinkArm unchecked(const Parameters& parameters) {
+    TwoLinkArm arm;
+    arm.parameters_ = parameters;
+    return arm;
+  }
+
   const Parameters& parameters() const { return parameters_; }
   static constexpr int dof() { return kDof; }
   static void init_terms(Terms&) {}

@@ -30,6 +30,12 @@
 // fast path, n = 2, K = 8) or Eigen::Dynamic; then the loop's per-step vectors are bounded types
 // (types.hpp), the arm's terms live in buffers sized once (Arm::init_terms), and a step allocates
 // nothing.
+// Online identification (identifier.hpp; Settings::identifier, off by default): the model the
+// controller believes is then the identifier's estimate beta_hat, held over each step and updated
+// after it (end_step); its arm, in Data, replaces the fixed model wherever the model appears (the
+// feedforward h_hat, f_hat and g_hat of the HJB error along the trajectory and at the
+// extrapolation points, hence the critic and the actor). Off, the loop computes exactly what it
+// computed before (one branch per evaluation).
 #pragma once
 
 #include <Eigen/Eigenvalues>
@@ -42,6 +48,7 @@
 #include "adparm/critic.hpp"
 #include "adparm/extrapolation.hpp"
 #include "adparm/hjb.hpp"
+#include "adparm/identifier.hpp"
 #include "adparm/positive_block.hpp"
 #include "adparm/rise.hpp"
 #include "adparm/settings.hpp"
@@ -99,6 +106,10 @@ class ClosedLoop {
   using ConstCovarianceMap = Eigen::Map<const Covariance>;
   using Point = HjbPoint<Basis, kDof>;
   using Evaluation = HjbEvaluation<Basis, kDof>;
+  using IdentifierType = typename IdentifierOf<Arm>::type;
+  static constexpr bool kIdentifies = IdentifierType::kAvailable;
+
+  struct NoTerms {};
 
   struct TimeSignals {
     Joint disturbance;  // tau_d(t)
@@ -118,6 +129,10 @@ class ClosedLoop {
     // B_i^T (Wa - Wc)] of every point (nN x 2) and the actor's coefficients c_i (nN).
     Eigen::MatrixXd point_products;
     Eigen::VectorXd point_coefficients;
+    // With identification: beta_hat and the history stack, and the error system of the arm of
+    // beta_hat (the believed model during the current step).
+    typename IdentifierType::Data identifier;
+    std::conditional_t<kIdentifies, ErrorSystem<Arm>, NoTerms> believed;
   };
 
   struct Outputs {
@@ -148,13 +163,17 @@ class ClosedLoop {
         actor_(settings.actor),
         controller_(settings.controller, dof_),
         trajectory_(settings.task.qd, dof_),
-        extrapolation_(settings.extrapolation, trajectory_.is_constant(), model),
+        // with identification the model changes every step: no points prepared once
+        extrapolation_(settings.extrapolation,
+                       trajectory_.is_constant() && !settings.identifier.enabled, model),
         probe_(settings.probe, dof_),
         torque_limits_(checked_torque_limits(settings.torque_limits, dof_)),
         limited_(settings.torque_limits.size() > 0 &&
                  (settings.torque_limits.array() < kInfinity).any()),
         anti_windup_(settings.control.anti_windup),
-        gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)) {
+        gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)),
+        identifier_(make_identifier(settings, model)),
+        identifies_(identifier_.enabled()) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -201,7 +220,36 @@ class ClosedLoop {
       data.point_products.setZero(dof() * extrapolation_.size(), 2);
       data.point_coefficients.setZero(dof() * extrapolation_.size());
     }
+    if constexpr (kIdentifies) {
+      if (identifies_) {
+        data.identifier = identifier_.make_data();
+        data.believed =
+            ErrorSystem<Arm>(IdentifierType::arm(data.identifier), error_system_.alpha1());
+      }
+    }
     return data;
+  }
+  // Whether the loop identifies the model online (Settings::identifier.enabled).
+  bool identifies() const { return identifies_; }
+  // The identified parameters' count (the recorded beta_hat's width): 0 without identification.
+  Eigen::Index parameter_count() const { return identifies_ ? IdentifierType::kParameters : 0; }
+  const IdentifierType& identifier() const { return identifier_; }
+
+  // After a step from (t, state), whose first stage gave `outputs` (the applied torque): the
+  // identifier's sample and update of beta_hat (identifier.hpp), and the believed model of the
+  // next step. Only with identification.
+  void end_step(double t, double h, const State& state, const Outputs& outputs, Data& data) const {
+    if constexpr (kIdentifies) {
+      const Eigen::Index n = dof();
+      const Joint q = state.template segment<kDof>(kQ, n);
+      const Joint dq = state.template segment<kDof>(dq_offset(), n);
+      const Desired desired = trajectory_(t);
+      const auto& alpha1 = error_system_.alpha1();
+      const Joint dq_r = desired.dq + alpha1 * outputs.errors.e1;    // dqd + alpha1 e1
+      const Joint ddq_r = desired.ddq + alpha1 * (desired.dq - dq);  // ddqd + alpha1 de1
+      identifier_.update(t, q, dq, outputs.tau, dq_r, ddq_r, outputs.errors.e2, h, data.identifier);
+      data.believed = ErrorSystem<Arm>(IdentifierType::arm(data.identifier), alpha1);
+    }
   }
   const Arm& plant() const { return plant_; }
   // Whether some joint has a finite torque limit (otherwise the clip is skipped entirely).
@@ -230,12 +278,13 @@ class ClosedLoop {
   // extrapolation points around the current error state, or prepares fixed ones once.
   void begin_step(double t, const State& state, Data& data) {
     if (!extrapolation_.needs_begin_step()) return;
+    const ErrorSystem<Arm>& system = believed_system(data);
     const Eigen::Index n = dof();
     const Desired desired = trajectory_(t);
     const Errors errors = tracking_errors<kDof>(state.template segment<kDof>(kQ, n),
                                                 state.template segment<kDof>(dq_offset(), n),
                                                 desired, error_system_.alpha1());
-    extrapolation_.begin_step(basis_, error_system_, cost_, errors.x(), desired, data.point_terms,
+    extrapolation_.begin_step(basis_, system, cost_, errors.x(), desired, data.point_terms,
                               data.basis);
   }
 
@@ -248,6 +297,7 @@ class ClosedLoop {
     const Weights actor_weights = state.template segment<kBasisSize>(actor_offset(), k);
     const Joint nu = state.template segment<kDof>(nu_offset(), n);
     const Desired& desired = signals.desired;
+    const ErrorSystem<Arm>& system = believed_system(data);  // error_system_ without identification
 
     const Errors errors = tracking_errors<kDof>(q, dq, desired, error_system_.alpha1());
     const Error x = errors.x();
@@ -258,12 +308,13 @@ class ClosedLoop {
     Terms& plant_terms = pick_terms(local_plant_terms, data.plant_terms);
     Terms& believed_terms = pick_terms(local_believed_terms, data.believed_terms);
     plant_.compute(q, dq, plant_terms);
-    if (!model_is_plant_) error_system_.model().compute(q, dq, believed_terms);
-    const Terms& model_terms = model_is_plant_ ? plant_terms : believed_terms;
+    const bool own_model = !model_is_plant_ || identifies_;
+    if (own_model) system.model().compute(q, dq, believed_terms);
+    const Terms& model_terms = own_model ? believed_terms : plant_terms;
 
     Point point;
-    prepare_hjb_point<Basis, kDof>(basis_, x, desired, error_system_.drift(x, model_terms),
-                                   model_terms, cost_, point, data.basis);
+    prepare_hjb_point<Basis, kDof>(basis_, x, desired, system.drift(x, model_terms), model_terms,
+                                   cost_, point, data.basis);
     Evaluation hjb;
     evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
 
@@ -295,8 +346,8 @@ class ClosedLoop {
                                     gamma_rate, actor_gradient, data);
       }
       if (!stacked)
-        extrapolation_.for_each(basis_, error_system_, cost_, desired, critic_weights,
-                                actor_weights, data.point_terms, data.basis, learn);
+        extrapolation_.for_each(basis_, system, cost_, desired, critic_weights, actor_weights,
+                                data.point_terms, data.basis, learn);
       if constexpr (kBasisSize == Dynamic)
         critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
       if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
@@ -317,8 +368,7 @@ class ClosedLoop {
     }
     const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(),
                                       cost_.bound(), hjb.u_hat, signals.probe);
-    const Joint tau_commanded =
-        error_system_.feedforward(model_terms, dq, errors, desired) + mu - u;
+    const Joint tau_commanded = system.feedforward(model_terms, dq, errors, desired) + mu - u;
     Joint tau = tau_commanded;
     if (limited_) {  // the drive's clip, and RISE's anti-windup (header comment)
       tau = tau_commanded.cwiseMax(-torque_limits_).cwiseMin(torque_limits_);
@@ -404,13 +454,35 @@ class ClosedLoop {
     actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
   }
 
-  struct NoTerms {};
   template <class Local>
   static Terms& pick_terms(Local& local, Terms& buffer) {
     if constexpr (kFixed)
       return local;
     else
       return buffer;
+  }
+
+  const ErrorSystem<Arm>& believed_system(const Data& data) const {
+    if constexpr (kIdentifies) {
+      if (identifies_) return data.believed;
+    }
+    return error_system_;
+  }
+
+  static IdentifierType make_identifier(const Settings& settings, const Arm& model) {
+    if constexpr (kIdentifies) {
+      if (!settings.identifier.enabled) return IdentifierType();
+      using Regressor = typename IdentifierType::RegressorType;
+      return IdentifierType(settings.identifier, Regressor::beta(Regressor::arm_parameters(model)),
+                            settings.sim.dt);
+    } else {
+      if (settings.identifier.enabled)
+        throw std::invalid_argument(
+            "identifier.enabled: the online identifier runs on the two-link arm's fixed-size "
+            "loop (the paper, augmented and structured bases, sim.dynamic_sizes off); URDF arms, "
+            "expression bases and the dynamic-size loop are its next stage");
+      return IdentifierType();
+    }
   }
 
   static Eigen::Index checked_dof(const Arm& plant, const Arm& model, const Basis& basis) {
@@ -464,6 +536,8 @@ class ClosedLoop {
   // extrapolation points or more than 24 functions; one small sample goes through add_rates,
   // whose coefficient-wise products beat a call of Eigen's matrix-vector kernel.
   bool gathers_;
+  IdentifierType identifier_;  // the online identifier (identifier.hpp; disabled by default)
+  bool identifies_;
   State initial_state_;
 };
 

@@ -50,6 +50,7 @@ class ErrorSystem {
   using Error = ErrorVector<kDof>;
   using Desired = DesiredStateT<kDof>;
 
+  ErrorSystem() = default;
   ErrorSystem(const Arm& model, const JointMatrix<kDof>& alpha1) : model_(model), alpha1_(alpha1) {}
 
   const Arm& model() const { return model_; }

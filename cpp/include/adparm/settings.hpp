@@ -19,6 +19,7 @@
 #include "adparm/critic.hpp"
 #include "adparm/expression_basis.hpp"
 #include "adparm/extrapolation.hpp"
+#include "adparm/identifier.hpp"
 #include "adparm/input_bound.hpp"
 #include "adparm/probing.hpp"
 #include "adparm/rise.hpp"
@@ -101,6 +102,8 @@ struct Settings {
   ExpressionProgram basis_program{};       // basis = expression: the compiled terms (bases.py)
   bool dynamic_sizes = false;  // run the two-link arm through the dynamic-size loop (a check)
   ExtrapolationSettings extrapolation{};
+  IdentifierSettings
+      identifier{};                // the online identifier of beta (identifier.hpp); off: the model
   Eigen::VectorXd critic_weights;  // Wc(0), one entry per basis function
   Eigen::VectorXd actor_weights;   // Wa(0)
   ProbeSettings probe{};

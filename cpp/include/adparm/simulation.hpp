@@ -35,30 +35,45 @@ struct Recording {
   Rows critic_weights, actor_weights;                // one column per basis function
   Rows hjb_error;                                    // eq. (21)
   Rows cost;                                         // accumulated cost of eq. (10) from t = 0
+  // With identification (identifier.hpp), else no columns: beta_hat, one column per parameter,
+  // and the history stack's minimum singular value.
+  Rows model_parameters, stack_singular_value;
   Eigen::Index rows = 0;
 
-  inline void allocate(Eigen::Index capacity, int dof, int basis_size);
+  inline void allocate(Eigen::Index capacity, int dof, int basis_size, int parameters = 0);
   // A copy of the rows written (not of the whole capacity, which a long run interrupted early
   // leaves mostly unwritten).
   inline Recording written() const;
 };
 
-// The columns of a recorded series.
-enum class SeriesWidth { one, joints, basis };
+// The columns of a recorded series: identifier, one column with identification, none without;
+// parameters, one per identified model parameter (none without identification).
+enum class SeriesWidth { one, joints, basis, parameters, identifier };
 
 struct RecordedSeries {
   const char* name;
   SeriesWidth width;
   Recording::Rows Recording::* member;
 
-  Eigen::Index columns(Eigen::Index dof, Eigen::Index basis_size) const {
-    return width == SeriesWidth::one ? 1 : width == SeriesWidth::joints ? dof : basis_size;
+  Eigen::Index columns(Eigen::Index dof, Eigen::Index basis_size, Eigen::Index parameters) const {
+    switch (width) {
+      case SeriesWidth::one:
+        return 1;
+      case SeriesWidth::joints:
+        return dof;
+      case SeriesWidth::basis:
+        return basis_size;
+      case SeriesWidth::parameters:
+        return parameters;
+      default:
+        return parameters > 0 ? 1 : 0;
+    }
   }
 };
 
 // The one table of the recorded series, in the order Python shows them (adparm._core's
 // RECORDED_SERIES and Simulation.recording() iterate it).
-inline constexpr std::array<RecordedSeries, 16> kRecordedSeries = {{
+inline constexpr std::array<RecordedSeries, 18> kRecordedSeries = {{
     {"t", SeriesWidth::one, &Recording::t},
     {"q", SeriesWidth::joints, &Recording::q},
     {"dq", SeriesWidth::joints, &Recording::dq},
@@ -75,11 +90,13 @@ inline constexpr std::array<RecordedSeries, 16> kRecordedSeries = {{
     {"actor_weights", SeriesWidth::basis, &Recording::actor_weights},
     {"hjb_error", SeriesWidth::one, &Recording::hjb_error},
     {"cost", SeriesWidth::one, &Recording::cost},
+    {"model_parameters", SeriesWidth::parameters, &Recording::model_parameters},
+    {"stack_singular_value", SeriesWidth::identifier, &Recording::stack_singular_value},
 }};
 
-void Recording::allocate(Eigen::Index capacity, int dof, int basis_size) {
+void Recording::allocate(Eigen::Index capacity, int dof, int basis_size, int parameters) {
   for (const RecordedSeries& series : kRecordedSeries)
-    (this->*series.member).resize(capacity, series.columns(dof, basis_size));
+    (this->*series.member).resize(capacity, series.columns(dof, basis_size, parameters));
 }
 
 Recording Recording::written() const {
@@ -123,7 +140,8 @@ class Simulation {
     system_.begin_step(0.0, states_[0], data_);
     reset_times_.reserve(1024);  // resets are rare; keeps push_back out of the allocator
     recording_.allocate(steps_ / sim_.record_every + 2, static_cast<int>(system_.dof()),
-                        static_cast<int>(system_.basis_size()));
+                        static_cast<int>(system_.basis_size()),
+                        static_cast<int>(system_.parameter_count()));
     if (!record(0.0, states_[0])) stop_diverged(0.0);
   }
 
@@ -142,9 +160,10 @@ class Simulation {
       const State& previous = states_[current_];
       State& state = states_[1 - current_];
       const bool row_due = row_due_;
-      const bool limited = system_.limited();  // the step's start outputs give the clip
+      const bool limited = system_.limited();        // the step's start outputs give the clip
+      const bool identifies = system_.identifies();  // the identifier samples the applied torque
       rk4_step(system_, t_begin, t_end, previous, state, workspace_,
-               row_due || limited ? &row_outputs_ : nullptr, data_);
+               row_due || limited || identifies ? &row_outputs_ : nullptr, data_);
       row_due_ = false;
       if (row_due && !record(t_begin, previous, row_outputs_)) {
         stop_diverged(t_begin);  // the step is not taken: state() stays at t_begin
@@ -152,6 +171,7 @@ class Simulation {
       }
       ++step_;
       ++taken;
+      if (identifies) system_.end_step(t_begin, t_end - t_begin, previous, row_outputs_, data_);
       if (limited) {  // a joint clipped at the step's start counts the whole step as saturated
         for (Eigen::Index i = 0; i < saturated_time_.size(); ++i)
           if (row_outputs_.tau[i] != row_outputs_.tau_commanded[i])
@@ -249,6 +269,12 @@ class Simulation {
         state.template segment<System::kBasisSize>(system_.actor_offset(), k).transpose();
     r.hjb_error(i, 0) = outputs.hjb_error;
     r.cost(i, 0) = state[system_.cost_offset()];
+    if constexpr (System::kIdentifies) {
+      if (system_.identifies()) {
+        r.model_parameters.row(i) = data_.identifier.estimate.transpose();
+        r.stack_singular_value(i, 0) = data_.identifier.min_singular_value;
+      }
+    }
     return true;
   }
 

@@ -1,0 +1,360 @@
+// The online identifier of the arm's base inertial parameters beta (issue 25, stage 1; guide
+// "Unknown dynamics"). The arm's dynamics are linear in beta:
+//   M(q) ddq + C(q, dq) dq + G(q) + F(dq) = Y(q, dq, ddq) beta                      (eq. 1)
+// and so is the feedforward of eq. (5), with dq_r = dqd + alpha1 e1, ddq_r = ddqd + alpha1 de1:
+//   h = M ddq_r + C(q, dq) dq_r + G + F(dq) = Y_r(q, dq, dq_r, ddq_r) beta  (Slotine & Li 1987).
+// Measurable form (no ddq): with dM/dt = C + C^T (C from the Christoffel symbols),
+//   M ddq + C dq = d/dt (M dq) - C^T dq, so over a window [t - T, t] (tau_d = 0)
+//   int tau dt = [M dq]_{t-T}^{t} + int (G + F - C^T dq) dt = Y_w beta,                (I1)
+//   Y_w = Y_M(t) - Y_M(t - T) + int Y_N dt,  Y_M beta = M dq,  Y_N beta = G + F - C^T dq,
+// in q, dq and the applied tau only. Each closed window is a sample (Y_j, b_j) for a history
+// stack of at most `history_size` samples (Chowdhary & Johnson 2010, concurrent learning;
+// Kamalapurkar et al. 2016): while the stack is not full a sample is added; then it replaces the
+// stored sample whose replacement most increases the stack's minimum singular value
+//   sigma_min = sqrt(lambda_min(S)),  S = sum_j Y_j^T Y_j   (over the identified parameters),
+// and is dropped when no replacement increases it. The adaptive law
+//   d beta_hat / dt = Gamma [Y_r^T e2 + k sum_j Y_j^T (b_j - Y_j beta_hat)]            (I2)
+// is the gradient term of Slotine & Li (from V = e2^T M e2 / 2 + beta_tilde^T Gamma^-1
+// beta_tilde / 2 with M de2 = -C e2 + Y_r (beta - beta_hat) + ... in this project's sign
+// convention, error_system.hpp) plus the concurrent-learning term, which is used only while
+// sigma_min >= singular_value_threshold (the rank condition: the stack then determines beta).
+// Gamma = gain I on the identified parameters, 0 on the others (held at the model's values).
+//
+// Discretisation (a digital adaptive law at the loop's rate): beta_hat is held over each RK4
+// step (zero-order hold) and updated after it from the sample at the step's start: the gradient
+// term explicitly (forward Euler), the concurrent-learning term implicitly (backward Euler),
+//   (I + h Gamma k S) beta_new = beta_hat + h Gamma (Y_r^T e2 + k sum_j Y_j^T b_j),
+// stable for any k (the implicit step tends to the stack's least-squares solution). An update
+// that would make M_hat(q) indefinite for some q is not taken (a crude projection). beta_hat and
+// the stack are the identifier's evolving state, in its Data; the Identifier holds the fixed
+// parameters. Nothing allocates after make_data().
+//
+// A Regressor (the arm's, e.g. TwoLinkRegressor below) gives, for its arm: kDof, kParameters,
+// beta of the arm's parameters and back, whether a beta is physical, the group of each
+// parameter (inertia, gravity, friction) and the four regressors Y, Y_r, Y_M, Y_N. A URDF arm's
+// identifier is its own Regressor (Pinocchio's computeJointTorqueRegressor, in cpp/src) and one
+// IdentifierOf entry; in this stage a loop whose arm has none refuses identifier.enabled.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "adparm/arm_model.hpp"
+#include "adparm/types.hpp"
+
+namespace adparm {
+
+struct IdentifierSettings {
+  bool enabled = false;
+  double gain = 0.01;                      // Gamma = gain I (I2)
+  double concurrent_gain = 1e6;            // k (I2)
+  long history_size = 20;                  // samples in the stack
+  double window = 0.2;                     // T of (I1), s
+  double singular_value_threshold = 0.01;  // sigma_min under which the stack is not used
+  bool inertia = true;                     // which parameters are identified
+  bool gravity = true;
+  bool friction = false;
+};
+
+enum class ParameterGroup { inertia, gravity, friction };
+
+// The two-link arm of arm_model.hpp: beta = (p1, p2, p3, g1, g2, coulomb, viscous).
+struct TwoLinkRegressor {
+  static constexpr int kDof = 2;
+  static constexpr int kParameters = 7;
+  using Arm = TwoLinkArm;
+  using Parameters = Eigen::Matrix<double, kParameters, 1>;
+  using Matrix = Eigen::Matrix<double, kDof, kParameters>;
+
+  static Parameters beta(const TwoLinkArmParameters& p) {
+    Parameters b;
+    b << p.p1, p.p2, p.p3, p.g1, p.g2, p.coulomb, p.viscous;
+    return b;
+  }
+  static TwoLinkArmParameters arm_parameters(const Parameters& b) {
+    return {b[0], b[1], b[2], b[3], b[4], b[5], b[6]};
+  }
+  static TwoLinkArmParameters arm_parameters(const TwoLinkArm& arm) { return arm.parameters(); }
+  // M(q) positive definite for every q2 (TwoLinkArm's check), and finite.
+  static bool physical(const Parameters& b) {
+    return b.allFinite() && b[1] > 0.0 && b[0] * b[1] - b[1] * b[1] - b[2] * b[2] > 0.0;
+  }
+  static ParameterGroup group(int i) {
+    return i < 3   ? ParameterGroup::inertia
+           : i < 5 ? ParameterGroup::gravity
+                   : ParameterGroup::friction;
+  }
+
+  // Y(q, dq, ddq) beta = M ddq + C dq + G + F (eq. 1).
+  static Matrix regressor(const Vec2& q, const Vec2& dq, const Vec2& ddq) {
+    return reference_regressor(q, dq, dq, ddq);
+  }
+
+  // Y_r beta = M ddq_r + C(q, dq) dq_r + G + F(dq) (eq. 5's h, with v = dq_r, a = ddq_r).
+  static Matrix reference_regressor(const Vec2& q, const Vec2& dq, const Vec2& v, const Vec2& a) {
+    const double c2 = std::cos(q[1]), s2 = std::sin(q[1]);
+    Matrix Y;
+    Y.col(0) << a[0], 0.0;
+    Y.col(1) << a[1], a[0] + a[1];
+    Y.col(2) << c2 * (2.0 * a[0] + a[1]) - s2 * (dq[1] * v[0] + (dq[0] + dq[1]) * v[1]),
+        c2 * a[0] + s2 * dq[0] * v[0];
+    gravity_and_friction(q, dq, Y);
+    return Y;
+  }
+
+  // Y_M beta = M(q) dq.
+  static Matrix momentum_regressor(const Vec2& q, const Vec2& dq) {
+    const double c2 = std::cos(q[1]);
+    Matrix Y = Matrix::Zero();
+    Y.col(0) << dq[0], 0.0;
+    Y.col(1) << dq[1], dq[0] + dq[1];
+    Y.col(2) << c2 * (2.0 * dq[0] + dq[1]), c2 * dq[0];
+    return Y;
+  }
+
+  // Y_N beta = G + F - C^T dq (C^T dq = p3 sin q2 [0; -(dq1 + dq2) dq1]).
+  static Matrix momentum_rate_regressor(const Vec2& q, const Vec2& dq) {
+    Matrix Y = Matrix::Zero();
+    Y(1, 2) = std::sin(q[1]) * dq[0] * (dq[0] + dq[1]);
+    gravity_and_friction(q, dq, Y);
+    return Y;
+  }
+
+ private:
+  static void gravity_and_friction(const Vec2& q, const Vec2& dq, Matrix& Y) {
+    const double c1 = std::cos(q[0]), c12 = std::cos(q[0] + q[1]);
+    Y.col(3) << c1, 0.0;
+    Y.col(4) << c12, c12;
+    Y.col(5) = sign(dq);
+    Y.col(6) = dq;
+  }
+};
+
+// The identifier of an arm with no Regressor yet (URDF arms in this stage): never enabled.
+struct NoIdentifier {
+  static constexpr bool kAvailable = false;
+  static constexpr int kParameters = 0;
+  struct Data {};
+  bool enabled() const { return false; }
+};
+
+template <class Regressor>
+class Identifier {
+ public:
+  using RegressorType = Regressor;
+  static constexpr bool kAvailable = true;
+  static constexpr int kDof = Regressor::kDof;
+  static constexpr int kParameters = Regressor::kParameters;
+  using Parameters = typename Regressor::Parameters;
+  using Matrix = typename Regressor::Matrix;
+  using Joint = JointVector<kDof>;
+  using ParameterMatrix = Eigen::Matrix<double, kParameters, kParameters>;
+  using Arm = typename Regressor::Arm;
+
+  struct Sample {  // one window of (I1): Y_j beta = b_j
+    Matrix regressor = Matrix::Zero();
+    Joint torque = Joint::Zero();
+  };
+
+  // beta_hat, the stack and the open window: the identifier's evolving state.
+  struct Data {
+    Parameters estimate = Parameters::Zero();                     // beta_hat
+    std::vector<Sample, Eigen::aligned_allocator<Sample>> stack;  // capacity history_size
+    ParameterMatrix information = ParameterMatrix::Zero();        // S = sum Y_j^T Y_j
+    Parameters projection = Parameters::Zero();                   // sum Y_j^T b_j
+    double min_singular_value = 0.0;  // sigma_min of the stack (identified parameters)
+    bool informative = false;         // sigma_min >= threshold now
+    bool ever_informative = false;
+    // the implicit step's factor of I + h Gamma k S, for the step h it was computed with (again
+    // only when the stack or h changes)
+    Eigen::LLT<ParameterMatrix> implicit;
+    double implicit_step = 0.0;
+    long samples = 0;  // windows closed
+    // the open window
+    long window_samples = 0;  // samples taken in it (0: none yet)
+    double previous_time = 0.0;
+    Matrix momentum_start = Matrix::Zero();
+    Matrix rate_integral = Matrix::Zero();
+    Joint torque_integral = Joint::Zero();
+    Matrix previous_rate = Matrix::Zero();
+    Joint previous_torque = Joint::Zero();
+  };
+
+  Identifier() = default;
+
+  // `initial`: beta_hat(0), the believed model's parameters; `dt`: the loop's step (the window
+  // holds round(window / dt) steps).
+  Identifier(const IdentifierSettings& settings, const Parameters& initial, double dt)
+      : settings_(settings), initial_(initial) {
+    if (!settings.enabled) return;
+    check_positive(settings.gain, "identifier.gain");
+    if (!(settings.concurrent_gain >= 0.0) || !std::isfinite(settings.concurrent_gain))
+      throw std::invalid_argument("identifier.concurrent_gain: must be >= 0 and finite");
+    if (settings.history_size < 1 || settings.history_size > 100000)
+      throw std::invalid_argument("identifier.history_size: must be in [1, 100000]");
+    check_positive(settings.window, "identifier.window");
+    if (!(settings.singular_value_threshold >= 0.0) ||
+        !std::isfinite(settings.singular_value_threshold))
+      throw std::invalid_argument("identifier.singular_value_threshold: must be >= 0 and finite");
+    if (!settings.inertia && !settings.gravity && !settings.friction)
+      throw std::invalid_argument(
+          "identifier.inertia, gravity, friction: at least one group must be identified");
+    window_steps_ = std::max(1L, std::lround(settings.window / dt));
+    for (int i = 0; i < kParameters; ++i) {
+      const ParameterGroup g = Regressor::group(i);
+      selected_[i] = (g == ParameterGroup::inertia && settings.inertia) ||
+                     (g == ParameterGroup::gravity && settings.gravity) ||
+                     (g == ParameterGroup::friction && settings.friction);
+      if (selected_[i]) index_[identified_++] = i;
+    }
+  }
+
+  bool enabled() const { return settings_.enabled; }
+  const IdentifierSettings& settings() const { return settings_; }
+
+  Data make_data() const {
+    Data data;
+    data.estimate = initial_;
+    data.stack.reserve(static_cast<std::size_t>(std::max(1L, settings_.history_size)));
+    return data;
+  }
+
+  // The arm of the estimate (unchecked: update() keeps the estimate physical).
+  static Arm arm(const Data& data) {
+    return Arm::unchecked(Regressor::arm_parameters(data.estimate));
+  }
+
+  // After a step: the sample at its start t (q, dq, the applied tau), the reference dq_r, ddq_r
+  // and e2 there; h the step's length. Closes a window when due, then updates beta_hat (I2).
+  void update(double t, const Joint& q, const Joint& dq, const Joint& tau, const Joint& dq_r,
+              const Joint& ddq_r, const Joint& e2, double h, Data& data) const {
+    sample(t, q, dq, tau, data);
+    const Parameters gradient = Regressor::reference_regressor(q, dq, dq_r, ddq_r).transpose() * e2;
+    const double gain = settings_.gain;
+    Parameters next = data.estimate;
+    if (data.informative) {  // implicit step of the concurrent-learning term
+      const double k = h * gain * settings_.concurrent_gain;
+      if (!(data.implicit_step == h)) {
+        ParameterMatrix A = ParameterMatrix::Identity();
+        for (int i = 0; i < kParameters; ++i)
+          for (int j = 0; j < kParameters; ++j)
+            if (selected_[i] && selected_[j]) A(i, j) += k * data.information(i, j);
+        data.implicit.compute(A);
+        data.implicit_step = h;
+      }
+      Parameters rhs = data.estimate;
+      for (int i = 0; i < kParameters; ++i) {
+        if (!selected_[i]) continue;
+        rhs[i] += h * gain * gradient[i] + k * data.projection[i];
+        for (int j = 0; j < kParameters; ++j)
+          if (!selected_[j]) rhs[i] -= k * data.information(i, j) * data.estimate[j];
+      }
+      next = data.implicit.solve(rhs);
+    } else {
+      for (int i = 0; i < kParameters; ++i)
+        if (selected_[i]) next[i] += h * gain * gradient[i];
+    }
+    if (Regressor::physical(next)) data.estimate = next;
+  }
+
+ private:
+  // Trapezoidal integrals of (I1) over the open window; closes it after window_steps_ steps.
+  void sample(double t, const Joint& q, const Joint& dq, const Joint& tau, Data& data) const {
+    const Matrix rate = Regressor::momentum_rate_regressor(q, dq);
+    if (data.window_samples == 0) {
+      open_window(t, q, dq, tau, rate, data);
+      return;
+    }
+    const double h = t - data.previous_time;
+    data.torque_integral += (0.5 * h) * (data.previous_torque + tau);
+    data.rate_integral += (0.5 * h) * (data.previous_rate + rate);
+    data.previous_time = t;
+    data.previous_torque = tau;
+    data.previous_rate = rate;
+    if (++data.window_samples <= window_steps_) return;
+    Sample closed;
+    closed.regressor =
+        Regressor::momentum_regressor(q, dq) - data.momentum_start + data.rate_integral;
+    closed.torque = data.torque_integral;
+    add(closed, data);
+    open_window(t, q, dq, tau, rate, data);
+  }
+
+  static void open_window(double t, const Joint& q, const Joint& dq, const Joint& tau,
+                          const Matrix& rate, Data& data) {
+    data.window_samples = 1;
+    data.previous_time = t;
+    data.previous_torque = tau;
+    data.previous_rate = rate;
+    data.momentum_start = Regressor::momentum_regressor(q, dq);
+    data.rate_integral.setZero();
+    data.torque_integral.setZero();
+  }
+
+  // The swap-in rule (header comment), then S, sum Y^T b and sigma_min again.
+  void add(const Sample& sample, Data& data) const {
+    ++data.samples;
+    const ParameterMatrix own = sample.regressor.transpose() * sample.regressor;
+    if (static_cast<long>(data.stack.size()) < settings_.history_size) {
+      data.stack.push_back(sample);  // within the capacity reserved by make_data
+    } else {
+      double best = data.min_singular_value;
+      long best_index = -1;
+      for (std::size_t j = 0; j < data.stack.size(); ++j) {
+        const Matrix& old = data.stack[j].regressor;
+        const double value = min_singular_value(data.information - old.transpose() * old + own);
+        if (value > best) {
+          best = value;
+          best_index = static_cast<long>(j);
+        }
+      }
+      if (best_index < 0) return;
+      data.stack[static_cast<std::size_t>(best_index)] = sample;
+    }
+    data.information.setZero();
+    data.projection.setZero();
+    for (const Sample& s : data.stack) {
+      data.information.noalias() += s.regressor.transpose() * s.regressor;
+      data.projection.noalias() += s.regressor.transpose() * s.torque;
+    }
+    data.min_singular_value = min_singular_value(data.information);
+    data.implicit_step = 0.0;  // the factor is stale
+    data.informative = data.min_singular_value >= settings_.singular_value_threshold &&
+                       data.min_singular_value > 0.0;
+    data.ever_informative = data.ever_informative || data.informative;
+  }
+
+  // sqrt(lambda_min) of S's block of the identified parameters (a bounded matrix: no heap).
+  double min_singular_value(const ParameterMatrix& S) const {
+    using Block =
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kParameters, kParameters>;
+    Block block(identified_, identified_);
+    for (int a = 0; a < identified_; ++a)
+      for (int b = 0; b < identified_; ++b) block(a, b) = S(index_[a], index_[b]);
+    const Eigen::SelfAdjointEigenSolver<Block> solver(block, Eigen::EigenvaluesOnly);
+    return std::sqrt(std::max(0.0, solver.eigenvalues()[0]));
+  }
+
+  IdentifierSettings settings_{};
+  Parameters initial_ = Parameters::Zero();
+  long window_steps_ = 1;
+  bool selected_[kParameters] = {};
+  int index_[kParameters] = {};  // the identified parameters' indices, identified_ of them
+  int identified_ = 0;
+};
+
+// The identifier of each arm type (a new arm's identifier: its Regressor and one entry here).
+template <class Arm>
+struct IdentifierOf {
+  using type = NoIdentifier;
+};
+template <>
+struct IdentifierOf<TwoLinkArm> {
+  using type = Identifier<TwoLinkRegressor>;
+};
+
+}  // namespace adparm

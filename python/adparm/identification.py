@@ -1,0 +1,87 @@
+"""What an identifying run ([identifier], issue 25) did: the plant's base parameters against the
+final estimate, whether the history stack became informative, and the config an identifying run's
+learning is judged by (the plant's: its critic should reach the plant's W*). adparm.truth's
+diagnose reports it."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from .config import Config, ModelConfig
+from .optimal import base_parameter_names, base_parameters
+from .result import SimulationResult
+
+__all__ = ["identifier_diagnosis", "judged_config", "plant_model_config"]
+
+
+def plant_model_config(config: Config) -> Config:
+    """``config`` with the controller believing the plant (``[model]`` emptied): the config whose
+    W* an identifying run's critic should reach."""
+    return dataclasses.replace(config, model=ModelConfig())
+
+
+def judged_config(config: Config) -> Config:
+    """The config a run's learning is judged by: its own, or for an identifying run
+    (``identifier.enabled``) the plant's (plant_model_config): its critic should reach the plant's
+    W*, the optimum the identified model leads to."""
+    return plant_model_config(config) if config.identifier.enabled else config
+
+
+def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
+    """The online identifier's truth (None without ``identifier.enabled``): the plant's beta
+    (known in simulation) against the final estimate, and whether the history stack ever became
+    informative (its minimum singular value at or above identifier.singular_value_threshold):
+
+    - beta_plant, beta_hat: lists in the order of base_parameter_names;
+    - parameter_relative_error: max over the identified parameters of |beta_hat - beta| / |beta|
+      (parameters with beta = 0: the absolute error);
+    - ever_informative, informative_time (s, the first recorded row at the threshold, or None),
+      max_singular_value (the largest minimum singular value recorded);
+    - text: what the verdict says."""
+    config = result.config
+    if not config.identifier.enabled or result.model_parameters is None or result.t.size == 0:
+        return None
+    names = base_parameter_names(config)
+    beta = base_parameters(config, "plant")
+    beta_hat = np.asarray(result.model_parameters[-1], dtype=float)
+    groups = {"p1": "inertia", "p2": "inertia", "p3": "inertia", "g1": "gravity", "g2": "gravity"}
+    identified = [
+        i
+        for i, name in enumerate(names)
+        if getattr(config.identifier, groups.get(name, "friction"))
+    ]
+    errors = [
+        abs(beta_hat[i] - beta[i]) / abs(beta[i]) if beta[i] != 0.0 else abs(beta_hat[i])
+        for i in identified
+    ]
+    error = float(max(errors)) if errors else 0.0
+    sigma = np.asarray(result.stack_singular_value, dtype=float)
+    threshold = config.identifier.singular_value_threshold
+    informative = np.flatnonzero((sigma >= threshold) & (sigma > 0.0))
+    ever = bool(informative.size > 0)
+    largest = float(np.max(sigma)) if sigma.size else 0.0
+    if ever:
+        text = (
+            f"the identifier's history stack became informative at t = "
+            f"{result.t[informative[0]]:.3g} s; beta_hat ends {error:.3g} (relative) from the "
+            "plant's beta"
+        )
+    else:
+        text = (
+            "the identifier's history stack never became informative (its minimum singular value "
+            f"peaked at {largest:.3g}, below identifier.singular_value_threshold = {threshold:g}): "
+            f"the model is not identified (beta_hat ends {error:.3g} from the plant's beta); "
+            "excite the arm (probe) or lower the threshold"
+        )
+    return {
+        "beta_plant": [float(v) for v in beta],
+        "beta_hat": [float(v) for v in beta_hat],
+        "parameter_relative_error": error,
+        "ever_informative": ever,
+        "informative_time": float(result.t[informative[0]]) if ever else None,
+        "max_singular_value": largest,
+        "text": text,
+    }

@@ -1,0 +1,285 @@
+"""The online identifier of the two-link arm's base parameters ([identifier], issue 25 stage 1):
+its regressors against the arm's terms, the measurable (momentum) equation along a simulated
+trajectory, and identification with learning from a model 30 % off."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import adparm
+from adparm import _core
+
+from numpy_reference import arm_terms as reference_arm_terms
+
+NAMES = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+
+
+def random_parameters(rng: np.random.Generator) -> dict:
+    while True:
+        p = {
+            "p1": rng.uniform(2.0, 8.0),
+            "p2": rng.uniform(0.5, 2.0),
+            "p3": rng.uniform(0.1, 1.0),
+            "g1": rng.uniform(5.0, 15.0),
+            "g2": rng.uniform(2.0, 10.0),
+            "coulomb": rng.uniform(-0.5, 0.5),
+            "viscous": rng.uniform(0.0, 1.0),
+        }
+        if p["p1"] * p["p2"] - p["p2"] ** 2 - p["p3"] ** 2 > 0.0:
+            return p
+
+
+def core_terms(p: dict, q: np.ndarray, dq: np.ndarray) -> dict:
+    parameters = _core.ArmParameters()
+    for key, value in p.items():
+        setattr(parameters, key, value)
+    return _core.arm_terms(parameters, q, dq)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_regressors_times_beta_are_the_arm_terms(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    p = random_parameters(rng)
+    beta = np.array([p[name] for name in NAMES])
+    q, dq, ddq, dq_r, ddq_r = (rng.uniform(-3.0, 3.0, 2) for _ in range(5))
+    Y = _core.two_link_regressors(q, dq, ddq, dq_r, ddq_r)
+    for terms in (
+        core_terms(p, q, dq),
+        dict(zip("MCGF", reference_arm_terms(p, q, dq), strict=True)),
+    ):
+        M, C, G, F = (np.asarray(terms[key]) for key in "MCGF")
+        scale = 1.0 + np.abs(M @ ddq).max() + np.abs(C @ dq).max() + np.abs(G).max()
+        # eq. (1): Y beta = M ddq + C dq + G + F
+        np.testing.assert_allclose(
+            Y["Y"] @ beta, M @ ddq + C @ dq + G + F, rtol=0, atol=1e-12 * scale
+        )
+        # eq. (5): Y_r beta = h = M ddq_r + C(q, dq) dq_r + G + F(dq)
+        h = M @ ddq_r + C @ dq_r + G + F
+        np.testing.assert_allclose(Y["Y_r"] @ beta, h, rtol=0, atol=1e-12 * (1.0 + np.abs(h).max()))
+        # the momentum equation's regressors: M dq and G + F - C^T dq
+        np.testing.assert_allclose(Y["Y_M"] @ beta, M @ dq, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(Y["Y_N"] @ beta, G + F - C.T @ dq, rtol=0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_slotine_li_identity_of_the_issue(seed: int) -> None:
+    # C(q, a) b is symmetric bilinear in (a, b) (Christoffel symbols), so
+    # C(q, dq) dq_r = [C(q, dq + dq_r)(dq + dq_r) - C(q, dq - dq_r)(dq - dq_r)] / 4, and Y_r is
+    # Y(q, 0, ddq_r) + [Y(q, dq + dq_r, 0) - Y(q, dq - dq_r, 0)] / 4 on the inertial parameters
+    rng = np.random.default_rng(100 + seed)
+    p = random_parameters(rng)
+    q, dq, dq_r, ddq_r = (rng.uniform(-3.0, 3.0, 2) for _ in range(4))
+    C = np.asarray(core_terms(p, q, dq)["C"])
+    s, d = dq + dq_r, dq - dq_r
+    polar = (
+        np.asarray(core_terms(p, q, s)["C"]) @ s - np.asarray(core_terms(p, q, d)["C"]) @ d
+    ) / 4
+    np.testing.assert_allclose(C @ dq_r, polar, rtol=0, atol=1e-12 * (1 + np.abs(polar).max()))
+
+    def Y(v, a):
+        return _core.two_link_regressors(q, v, a, v, a)["Y"]
+
+    zero = np.zeros(2)
+    formula = Y(zero, ddq_r) + (Y(s, zero) - Y(d, zero)) / 4
+    Y_r = _core.two_link_regressors(q, dq, zero, dq_r, ddq_r)["Y_r"]
+    np.testing.assert_allclose(Y_r[:, :3], formula[:, :3], rtol=0, atol=1e-12 * 100)
+    # (the friction columns are F(dq), not the formula's [F(s) - F(d)] / 4)
+
+
+def base(**changes) -> adparm.Config:
+    config = adparm.paper_config().updated(
+        {
+            "controller": {"basis": "structured"},
+            "plant": {"disturbance": [0.0, 0.0]},
+            "extrapolation": {"points": 20, "mode": "fixed", "seed": 1},
+            "sim": {"T": 20.0, "record_every": 100},
+        }
+    )
+    return config.updated(changes) if changes else config
+
+
+def model_off(config: adparm.Config, seed: int = 3) -> adparm.Config:
+    """The model's p1, p2, p3, g1, g2 scaled by random factors in [0.7, 1.3] (M stays positive
+    definite)."""
+    rng = np.random.default_rng(seed)
+    while True:
+        factors = rng.uniform(0.7, 1.3, 5)
+        values = {
+            key: float(getattr(config.plant, key) * f)
+            for key, f in zip(("p1", "p2", "p3", "g1", "g2"), factors, strict=True)
+        }
+        if values["p1"] * values["p2"] - values["p2"] ** 2 - values["p3"] ** 2 > 0.0:
+            return config.updated({"model": values})
+
+
+def momentum_residual(config: adparm.Config, beta: np.ndarray, window: float = 0.2) -> float:
+    """The largest relative residual of int tau dt = Y_w beta over the run's windows, from the
+    recorded q, dq and applied tau (every step recorded), integrated by the trapezoid rule."""
+    result = adparm.simulate(config, diagnose=False)
+    t, q, dq, tau = result.t, result.q, result.dq, result.tau
+    regressors = [
+        _core.two_link_regressors(q[i], dq[i], dq[i], dq[i], dq[i]) for i in range(t.size)
+    ]
+    Y_M = np.array([r["Y_M"] for r in regressors])
+    Y_N = np.array([r["Y_N"] for r in regressors])
+    steps = round(window / config.sim.dt)
+    worst = 0.0
+    for start in range(0, t.size - steps, steps):
+        w = slice(start, start + steps + 1)
+        b = np.trapezoid(tau[w], t[w], axis=0)
+        Y = Y_M[start + steps] - Y_M[start] + np.trapezoid(Y_N[w], t[w], axis=0)
+        worst = max(worst, np.abs(Y @ beta - b).max() / (1.0 + np.abs(b).max()))
+    return worst
+
+
+def test_measurable_equation_holds_along_a_simulated_trajectory() -> None:
+    # int tau dt = [M dq] + int (G + F - C^T dq) dt over windows of a run (probing on, no
+    # disturbance): to the trapezoid rule's accuracy, which halving dt improves about 4 times
+    config = base(sim={"T": 2.0, "record_every": 1, "dt": 1e-3})
+    beta = adparm.base_parameters(config, "plant")
+    coarse = momentum_residual(config, beta)
+    fine = momentum_residual(config.updated({"sim": {"dt": 5e-4}}), beta)
+    assert coarse < 1e-3, coarse
+    assert fine < coarse / 3.0, (coarse, fine)
+    # a wrong beta does not satisfy it
+    assert momentum_residual(config, beta * np.array([1.1, 1, 1, 1, 1, 1, 1])) > 1e-2
+
+
+def critic_error(result: adparm.SimulationResult, W: np.ndarray) -> float:
+    return float(np.linalg.norm(result.critic_weights[-1] - W) / np.linalg.norm(W))
+
+
+def test_identification_reaches_the_plant_from_a_model_30_percent_off() -> None:
+    config = model_off(base(identifier={"enabled": True}))
+    beta_plant = adparm.base_parameters(config, "plant")
+    beta_model = adparm.base_parameters(config, "model")
+    assert np.abs(beta_model[:5] / beta_plant[:5] - 1).max() > 0.1
+    result = adparm.simulate(config, diagnose=False)
+    beta_hat = result.model_parameters
+    assert beta_hat.shape == (result.t.size, 7)
+    np.testing.assert_array_equal(beta_hat[0], beta_model)
+    error = np.abs(beta_hat[-1, :5] / beta_plant[:5] - 1).max()
+    assert error < 0.01, (error, beta_hat[-1], beta_plant)
+    np.testing.assert_array_equal(beta_hat[:, 5:], np.tile(beta_model[5:], (result.t.size, 1)))
+    W_plant = adparm.optimal_weights(adparm.identification.plant_model_config(config))
+    assert critic_error(result, W_plant) < 0.01, critic_error(result, W_plant)
+    assert result.stack_singular_value.shape == (result.t.size,)
+    diagnostics = adparm.diagnose(result)
+    assert diagnostics["identifier"]["ever_informative"]
+    assert diagnostics["identifier"]["parameter_relative_error"] < 0.01
+    assert "became informative" in diagnostics["verdict"]
+
+    # the same run without identification ends at the model's W*, not the plant's
+    plain = adparm.simulate(config.updated({"identifier": {"enabled": False}}), diagnose=False)
+    assert plain.model_parameters is None and plain.stack_singular_value is None
+    W_model = adparm.optimal_weights(config)
+    assert critic_error(plain, W_model) < 0.01, critic_error(plain, W_model)
+    assert critic_error(plain, W_plant) > 0.05
+
+
+@pytest.mark.parametrize("seed", [3, 4, 5])
+def test_with_the_paper_disturbance_the_estimate_stays_within_five_percent(seed: int) -> None:
+    # tau_d(t) (0.1 N m) enters each window's int tau dt unmodelled: a bias, documented as within
+    # 5 % after 5 s (measured: 1.5-3 %); the critic still ends within 1 % of the plant's W*
+    config = model_off(base(identifier={"enabled": True}, plant={"disturbance": [0.1, 0.1]}), seed)
+    result = adparm.simulate(config, diagnose=False)
+    assert result.status == "finished"
+    beta = adparm.base_parameters(config, "plant")[:5]
+    error = np.abs(result.model_parameters[:, :5] / beta - 1).max(axis=1)
+    assert error[result.t >= 5.0].max() < 0.05, error[result.t >= 5.0].max()
+    W_plant = adparm.optimal_weights(adparm.identification.plant_model_config(config))
+    assert critic_error(result, W_plant) < 0.01
+
+
+def test_without_excitation_the_stack_never_becomes_informative() -> None:
+    # at rest at the set-point, no probe: only gravity is seen, the stack has rank 2 of 5
+    config = model_off(
+        base(
+            identifier={"enabled": True},
+            task={"q0": [0.0, 0.0]},
+            probe={"until": 0.0},
+            extrapolation={"points": 0},
+            sim={"T": 5.0, "record_every": 100},
+        )
+    )
+    result = adparm.simulate(config, diagnose=False)
+    assert np.all(result.stack_singular_value < config.identifier.singular_value_threshold)
+    beta_model = adparm.base_parameters(config, "model")
+    assert np.all(np.isfinite(result.model_parameters))
+    assert np.abs(result.model_parameters - beta_model).max() < 2.0 * np.abs(beta_model).max()
+    diagnostics = adparm.diagnose(result)
+    assert not diagnostics["identifier"]["ever_informative"]
+    assert "never became informative" in diagnostics["verdict"]
+
+
+def test_identification_off_is_the_default_and_changes_nothing() -> None:
+    config = adparm.paper_config().updated({"sim": {"T": 0.2}})
+    assert config.identifier.enabled is False
+    a = adparm.simulate(config, diagnose=False)
+    b = adparm.simulate(config.updated({"identifier": {"gain": 5.0}}), diagnose=False)
+    for name in ("q", "dq", "tau", "critic_weights", "actor_weights", "cost"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.model_parameters is None
+
+
+def test_base_parameters_of_the_two_link_arm() -> None:
+    config = adparm.paper_config().updated({"model": {"p1": 6.0}})
+    assert adparm.base_parameter_names(config) == NAMES
+    np.testing.assert_array_equal(
+        adparm.base_parameters(config), [5.0, 1.0, 1.0, 9.8 * 1.2, 9.8, -0.1, 0.0]
+    )
+    assert adparm.base_parameters(config, "model")[0] == 6.0
+    with pytest.raises(ValueError, match="which"):
+        adparm.base_parameters(config, "believed")
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"identifier": {"gain": 0.0}}, r"^identifier\.gain: must be > 0"),
+        ({"identifier": {"window": -1.0}}, r"^identifier\.window: must be > 0"),
+        ({"identifier": {"history_size": 0}}, r"^identifier\.history_size: "),
+        (
+            {"identifier": {"inertia": False, "gravity": False}},
+            r"^identifier\.inertia, identifier\.gravity, identifier\.friction: at least one",
+        ),
+        (
+            {"identifier": {"enabled": True}, "controller": {"basis": "quadratic"}},
+            r"^identifier\.enabled: .*expression bases",
+        ),
+    ],
+)
+def test_bad_identifier_settings_are_refused_naming_the_field(changes, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        adparm.paper_config().updated(changes)
+
+
+def test_a_urdf_arm_is_refused_before_the_run(tmp_path) -> None:
+    urdf = adparm.example_path("arms/planar_3link.urdf")
+    with pytest.raises(ValueError, match=r"^identifier\.enabled: .*URDF arms .*next stage"):
+        adparm.Config.from_dict({"plant": {"urdf": str(urdf)}, "identifier": {"enabled": True}})
+
+
+def test_the_core_refuses_a_loop_without_an_identifier() -> None:
+    # the C++ check behind the schema's: the dynamic-size loop has no identifier yet
+    from adparm.translate import core_settings
+
+    settings = core_settings(adparm.paper_config().updated({"sim": {"T": 0.01}}))
+    settings.dynamic_sizes = True
+    identifier = settings.identifier
+    identifier.enabled = True
+    settings.identifier = identifier
+    with pytest.raises(ValueError, match=r"^identifier\.enabled: "):
+        _core.Simulation(settings)
+
+
+def test_base_parameters_of_a_urdf_arm_are_the_structured_basis_ones() -> None:
+    # the kinetic energy's base parameters: the tail of the structured basis' W* (s = 1 here)
+    config = adparm.load_config(adparm.example_path("planar_3link.toml"))
+    names = adparm.base_parameter_names(config)
+    beta = adparm.base_parameters(config, "plant")
+    assert len(names) == beta.size > 0
+    assert adparm.basis_names(config)[-beta.size :] == tuple(f"e2'M_b e2 ({n})" for n in names)
+    assert adparm.optimal.value_scale(config) == 1.0
+    np.testing.assert_allclose(adparm.optimal_weights(config)[-beta.size :], beta, rtol=1e-12)
