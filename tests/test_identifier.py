@@ -283,3 +283,23 @@ def test_base_parameters_of_a_urdf_arm_are_the_structured_basis_ones() -> None:
     assert adparm.basis_names(config)[-beta.size :] == tuple(f"e2'M_b e2 ({n})" for n in names)
     assert adparm.optimal.value_scale(config) == 1.0
     np.testing.assert_allclose(adparm.optimal_weights(config)[-beta.size :], beta, rtol=1e-12)
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".csv"])
+def test_save_and_load_keep_the_identifier_series(tmp_path, suffix) -> None:
+    config = model_off(base(identifier={"enabled": True}, sim={"T": 0.2, "record_every": 10}))
+    result = adparm.simulate(config, diagnose=False)
+    assert result.model_parameters is not None
+    path = result.save(tmp_path / ("run" + suffix))
+    back = adparm.load_result(path)
+    np.testing.assert_array_equal(back.model_parameters, result.model_parameters)
+    np.testing.assert_array_equal(back.stack_singular_value, result.stack_singular_value)
+    if suffix == ".csv":
+        names = adparm.storage.columns(6, 2, 7)
+        assert names[-8:] == [f"beta_hat{p}" for p in range(1, 8)] + ["stack_singular_value"]
+
+
+def test_a_run_without_identification_saves_no_identifier_series(tmp_path) -> None:
+    result = adparm.simulate(base(sim={"T": 0.05}), diagnose=False)
+    back = adparm.load_result(result.save(tmp_path / "run.csv"))
+    assert back.model_parameters is None and back.stack_singular_value is None

@@ -18,7 +18,16 @@ import numpy as np
 
 from ._files import atomic_write
 from .config import Config
-from .result import ARRAYS_1, ARRAYS_2, ARRAYS_N, RECORDED_SERIES, SimulationResult, register
+from .dynamics import base_parameter_names
+from .result import (
+    ARRAYS_1,
+    ARRAYS_2,
+    ARRAYS_IDENTIFIER,
+    ARRAYS_N,
+    RECORDED_SERIES,
+    SimulationResult,
+    register,
+)
 from .simulation import available_memory
 
 __all__ = ["FORMAT_VERSION", "columns", "load_result", "save_result", "table"]
@@ -33,41 +42,54 @@ _COLUMN_NAMES = {
     "e2": "e2_{j}",
     "critic_weights": "Wc{i}",
     "actor_weights": "Wa{i}",
+    "model_parameters": "beta_hat{p}",  # p = 1 ... P, in the order of base_parameter_names
 }
 _COLUMNS: tuple[tuple[str, str], ...] = tuple(
     (name, _COLUMN_NAMES.get(name, name + "{j}" if width == "joints" else name))
     for name, width in RECORDED_SERIES
-    if width in ("one", "joints", "basis")  # the identifier's series are not saved yet
 )
 
 
-def _columns(basis_size: int, joints: int = 2) -> list[tuple[str, tuple[str, ...]]]:
+def _columns(
+    basis_size: int, joints: int = 2, parameters: int = 0
+) -> list[tuple[str, tuple[str, ...]]]:
     out = []
     for attr, template in _COLUMNS:
+        if attr in ARRAYS_IDENTIFIER and parameters == 0:
+            continue  # the identifier's series: only with identification
         if "{i}" in template:
             names = tuple(template.format(i=i) for i in range(1, basis_size + 1))
         elif "{j}" in template:
             names = tuple(template.format(j=j) for j in range(1, joints + 1))
+        elif "{p}" in template:
+            names = tuple(template.format(p=p) for p in range(1, parameters + 1))
         else:
             names = (template,)
         out.append((attr, names))
     return out
 
 
-def columns(basis_size: int = 8, joints: int = 2) -> list[str]:
+def columns(basis_size: int = 8, joints: int = 2, parameters: int = 0) -> list[str]:
     """Column names of :func:`table`, the CSV file and ``to_dataframe()`` for a basis of
-    ``basis_size`` functions (8; 6 for the structured basis) and an arm of ``joints`` joints."""
-    return [name for _, names in _columns(basis_size, joints) for name in names]
+    ``basis_size`` functions (8; 6 for the structured basis) and an arm of ``joints`` joints;
+    with identification (``parameters`` > 0 identified parameters) also beta_hat1 ... and
+    stack_singular_value."""
+    return [name for _, names in _columns(basis_size, joints, parameters) for name in names]
+
+
+def _shape(result: SimulationResult) -> tuple[int, int, int]:
+    """(basis size, joints, identified parameters or 0) of ``result``'s columns."""
+    parameters = 0 if result.model_parameters is None else result.model_parameters.shape[1]
+    return result.critic_weights.shape[1], result.q.shape[1], parameters
 
 
 def table(result: SimulationResult) -> np.ndarray:
     """The recorded time series as one (rows, len(columns(K))) array."""
     n = result.t.size
-    size, joints = result.critic_weights.shape[1], result.q.shape[1]
     return np.hstack(
         [
             np.asarray(getattr(result, attr)).reshape(n, len(names))
-            for attr, names in _columns(size, joints)
+            for attr, names in _columns(*_shape(result))
         ]
     )
 
@@ -197,15 +219,14 @@ def _metadata(result: SimulationResult) -> dict[str, Any]:
 def write_result_csv(result: SimulationResult, path: Path) -> None:
     with open(path, "w", encoding="utf-8", newline="\n") as stream:
         stream.write(CSV_PREFIX + json.dumps(_metadata(result)) + "\n")
-        size, joints = result.critic_weights.shape[1], result.q.shape[1]
-        stream.write(",".join(columns(size, joints)) + "\n")
+        stream.write(",".join(columns(*_shape(result))) + "\n")
         n = result.t.size
         for start in range(0, n, _CSV_ROWS):
             stop = min(n, start + _CSV_ROWS)
             block = np.hstack(
                 [
                     np.asarray(getattr(result, attr))[start:stop].reshape(stop - start, len(names))
-                    for attr, names in _columns(size, joints)
+                    for attr, names in _columns(*_shape(result))
                 ]
             )
             np.savetxt(stream, block, delimiter=",", fmt="%.18e")
@@ -214,6 +235,7 @@ def write_result_csv(result: SimulationResult, path: Path) -> None:
 
 def write_result_npz(result: SimulationResult, path: Path) -> None:
     names = (*ARRAYS_1, *_RESULT_ARRAYS, "covariance_reset_times", "saturated_time")
+    names += tuple(name for name in ARRAYS_IDENTIFIER if getattr(result, name) is not None)
     config = result.config.to_dict()
     np.savez_compressed(
         path,
@@ -263,7 +285,8 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
             header = stream.readline().strip().split(",")
             size = sum(1 for name in header if name.startswith("Wc"))  # the basis size
             joints = sum(1 for name in header if name.startswith("dq"))  # n
-            if header != columns(size, joints):
+            parameters = sum(1 for name in header if name.startswith("beta_hat"))
+            if header != columns(size, joints, parameters):
                 raise _corrupt(path, "the header line does not name adparm's columns")
             lines = stream.read().splitlines()
             if not lines or lines[-1] != f"{CSV_END}{len(lines) - 1} rows":
@@ -277,16 +300,17 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         raise _corrupt(path, str(error)) from None
     if not isinstance(meta, dict):
         raise _corrupt(path, "the first line holds no JSON object")
-    width = len(columns(size, joints))
+    width = len(columns(size, joints, parameters))
     if data.size == 0:
         data = np.zeros((0, width))
     if data.shape[1] != width:
         raise _corrupt(path, f"expected {width} columns, got {data.shape[1]}")
     fields: dict[str, Any] = {}
     start = 0
-    for attr, names in _columns(size, joints):
+    for attr, names in _columns(size, joints, parameters):
         block = data[:, start : start + len(names)]
-        fields[attr] = block[:, 0] if attr in ("t", "hjb_error", "cost") else block
+        one = attr in (*ARRAYS_1, "stack_singular_value")
+        fields[attr] = block[:, 0] if one else block
         start += len(names)
     fields["covariance_reset_times"] = np.array(meta.get("covariance_reset_times", []), float)
     if meta.get("saturated_time") is not None:
@@ -333,6 +357,9 @@ def _check_npz_sizes(path: Path, archive: zipfile.ZipFile, config: Config) -> No
     expected.update({name: (rows,) for name in ARRAYS_1})
     expected.update({name: (rows, n) for name in ARRAYS_2})
     expected.update({name: (rows, k) for name in ARRAYS_N})
+    if config.identifier.enabled:
+        expected["model_parameters"] = (rows, len(base_parameter_names(config)))
+        expected["stack_singular_value"] = (rows,)
     unknown = [
         member
         for member in archive.namelist()
