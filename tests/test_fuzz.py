@@ -373,6 +373,16 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         if key == "history_size":
             return [0, -1, 100001, 10**30, 2.5, "3", None, True]
         return scalar_cases("pos" if key in ("gain", "window") else "nonneg")
+    if key == "e2_cost":  # "logcosh" needs cost.input_bound
+        return ["quadraticx", "", "QUADRATIC", 1, None, True, ["quadratic"], "logcosh"]
+    if key == "anti_windup":
+        return ["true", 1, 0, 1.0, None, [True]]
+    if key == "input_bound":  # "auto" needs a limited joint (the two-link arm has none)
+        return ["x", "Auto", "auto", -1.0, 0.0, NAN, INF, True, [1.0, 2.0, 3.0], [1.0, -1.0]]
+    if key == "torque_limits":  # a model has none of its own
+        if section == "model":
+            return [[1.0, 1.0], 1.0]
+        return ["x", -1.0, 0.0, NAN, True, [1.0, 2.0, 3.0], [1.0, -1.0], [[1.0, 1.0]]]
     if section in ("plant", "model") and key in ARM_KEYS:
         cases = scalar_cases("pos" if key == "p2" else "real", nullable=section == "model")
         if key == "p1":
