@@ -23,6 +23,7 @@ of times faster than the UR10's, which only a tiny step integrates.
 from __future__ import annotations
 
 import argparse
+import os
 import time
 import warnings
 from pathlib import Path
@@ -107,7 +108,11 @@ def arm_plant(name: str, folder: Path, seed: int = 0) -> dict[str, Any]:
     if name in CHAINS:
         path = folder / f"{name}_seed{seed}.urdf"
         rng = np.random.default_rng([seed, CHAINS[name]])
-        path.write_text(random_chain_urdf(rng, CHAINS[name]))
+        text = random_chain_urdf(rng, CHAINS[name])
+        if not path.exists() or path.read_text() != text:  # another process may be reading it
+            partial = path.with_suffix(f".{os.getpid()}.part")
+            partial.write_text(text)
+            os.replace(partial, path)  # atomic: a reader sees the old or the new file, whole
         return {"urdf": str(path)}
     plant: dict[str, Any] = {"urdf": f"example-robot-data:{name}"}
     if name in EXAMPLE_LOCKED_JOINTS:
