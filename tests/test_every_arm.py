@@ -112,3 +112,24 @@ def test_a_run_stopped_before_W_star_says_so(folder: Path) -> None:
     assert row["status"] == "finished" and not row["ok"]
     assert row["verdict"].startswith("ended away from the known W* (tolerance 0.01)")
     assert "critic ||Wc - W*|| / ||W*|| = " in row["verdict"]
+
+
+def test_the_learning_defaults_of_a_urdf_arm_and_the_paper_s() -> None:
+    """With extrapolation points a URDF arm derives critic.epsilon_T = 1e-5 and actor.eta_a1 = 0
+    (rates.EPSILON_T_URDF; the measurements of bench/every_arm.py), again on updated, and the
+    probing values without points; given values are kept; the paper's config is untouched."""
+    from adparm.rates import EPSILON_T_URDF
+
+    config = adparm.Config.from_dict({"plant": {"urdf": "examples/arms/planar_3link.urdf"}})
+    assert (config.critic.epsilon_T, config.actor.eta_a1) == (EPSILON_T_URDF, 0.0) == (1e-5, 0.0)
+    assert {"critic.epsilon_T", "actor.eta_a1"} <= set(config.derived)
+    assert config.left_out_values()["critic.epsilon_T"][0] == EPSILON_T_URDF
+    probing = config.updated({"extrapolation": {"points": 0}})
+    assert (probing.resolved_epsilon_T, probing.actor.eta_a1) == (1e-6, 0.01)
+    again = probing.updated({"extrapolation": {"points": 30}})
+    assert (again.critic.epsilon_T, again.actor.eta_a1) == (1e-5, 0.0)
+    given = config.updated({"critic": {"epsilon_T": 1e-3}, "actor": {"eta_a1": 0.01}})
+    assert (given.critic.epsilon_T, given.actor.eta_a1) == (1e-3, 0.01)
+    paper = adparm.paper_config()
+    assert (paper.critic.epsilon_T, paper.actor.eta_a1) == (None, 0.01)
+    assert "actor.eta_a1" not in paper.derived
