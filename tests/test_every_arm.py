@@ -91,7 +91,7 @@ def test_a_too_coarse_step_is_refused_on_every_arm_and_the_suggestions_run(
 
 
 #: The arms whose full target run is in the suite (the table in the docs has them all): light
-#: and quick ones; the 6- and 7-joint arms take 30-250 s each (bench/every_arm.py).
+#: and quick ones; the 6- and 7-joint arms take 30-400 s each (bench/every_arm.py).
 REPRESENTATIVE = ["chain3", "chain4", "finger_edu"]
 
 
