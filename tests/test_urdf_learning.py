@@ -312,3 +312,26 @@ def test_the_structured_e2_block_is_kept_positive_at_the_check_positions() -> No
         )
         assert lowest >= 0.99 * margin
     assert result.diagnostics["verdict"] == "ok", result.diagnostics["verdict"]
+
+
+def test_a_Q_alone_on_a_urdf_arm_says_R_was_derived() -> None:
+    """config.updated with cost.Q alone re-derives cost.R (I, since Q is given): a Q built with
+    the R the config had before is then not of the exact family with the new R, and the error
+    says that R was derived, its value and how to pin it; given with its R, W* is known."""
+    config = adparm.Config.from_dict({"plant": {"urdf": str(PLANAR)}})
+    R = np.array(config.cost.R)
+    assert not np.allclose(R, np.eye(3))  # diag(1 / (10 M_ii(qd))), derived
+    Q = adparm.solvable_cost(np.diag([2.0, 1.0, 0.5]), np.array(config.control.alpha1), R)
+    alone = config.updated({"cost": {"Q": Q.tolist()}})
+    with pytest.raises(ValueError, match=r"^cost\.Q: Q22 must equal s\^2 R\^-1") as error:
+        adparm.optimal_weights(alone)
+    message = str(error.value)
+    assert "cost.R was not given but derived for this arm" in message
+    assert "R = [[1.0, 0.0, 0.0]" in message and '"R": R' in message
+    pinned = config.updated({"cost": {"Q": Q.tolist(), "R": R.tolist()}})
+    assert adparm.optimal_weights(pinned)[0] == pytest.approx(2.0)
+    # an explicit R that does not fit Q: the error does not blame a derivation
+    wrong = pinned.updated({"cost": {"R": np.eye(3).tolist()}})
+    with pytest.raises(ValueError, match="Q22 must equal") as error:
+        adparm.optimal_weights(wrong)
+    assert "derived" not in str(error.value)

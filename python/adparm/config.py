@@ -78,7 +78,13 @@ from ._sections import (
 from .basis_family import BasisFamily, basis_for
 from .desired import desired_state
 from .optimal import initial_error_state
-from .rates import auto_input_bound, auto_step, closed_loop_rates, urdf_defaults
+from .rates import (
+    EPSILON_T_URDF,
+    auto_input_bound,
+    auto_step,
+    closed_loop_rates,
+    urdf_defaults,
+)
 
 __all__ = [
     "ActorConfig",
@@ -245,6 +251,11 @@ class Config(ConfigSchema):
             if self.extrapolation.points > 0
             else "learning from the probing signal alone (extrapolation.points = 0)",
         )
+        if self.plant.urdf is not None and self.extrapolation.points > 0:
+            out["critic.epsilon_T"] = (
+                EPSILON_T_URDF,
+                "a URDF arm with Bellman-error extrapolation (rates.EPSILON_T_URDF)",
+            )
         for key in ("critic_weights", "actor_weights"):
             out[f"init.{key}"] = (
                 self._default_initial_weights(key).tolist(),

@@ -355,8 +355,17 @@ def exact_family(config: ConfigSchema, rtol: float = 1e-9) -> tuple[np.ndarray, 
         )
     scale = value_scale(config)
     if scale is None:
+        derived = config.derived.get("cost.R")
         raise ValueError(
             f"cost.Q: Q22 must equal s^2 R^-1 for some s > 0 (got Q22 = {Q22.tolist()}, "
             f"R^-1 = {np.linalg.inv(R).tolist()})"
+            + (
+                # a URDF arm derives cost.R when left out, also on config.updated with Q alone
+                f"; cost.R was not given but derived for this arm ({derived}): R = "
+                f"{R.tolist()}; give cost.R with the R that Q was built from "
+                '(config.updated({"cost": {"Q": Q, "R": R}}))'
+                if derived is not None
+                else ""
+            )
         )
     return K, scale

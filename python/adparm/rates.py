@@ -29,6 +29,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._sections import EPSILON_T_PROBING
+
 if TYPE_CHECKING:  # pragma: no cover
     from ._schema import ConfigSchema
 
@@ -58,6 +60,20 @@ RISE_RATE = 30.0
 POLICY_RATE = 10.0
 #: alpha1 of a URDF arm (1/s), as the n-joint default before.
 ALPHA1 = 2.0
+#: critic.epsilon_T of a URDF arm with Bellman-error extrapolation. Gamma is reset to gamma0 I
+#: when its least eigenvalue, that of the best-informed direction, falls below epsilon_T; the
+#: weights of light joints (a wrist's inertia, 1e-4 kg m^2 next to a shoulder's 10) are informed
+#: orders of magnitude more slowly, and with the two-link arm's 1e-3 (gamma0 / epsilon_T = 1e5)
+#: each reset discards their information before they learn: the UR10 ends 5 % off W* after
+#: 10 s (104 resets), the Kinova 6 %. With 1e-5 both are within 1 % by 3-4 s
+#: (bench/every_arm.py, docs: URDF arms, "Every arm, measured").
+EPSILON_T_URDF = 1e-5
+#: actor.eta_a1 of the paper (and of a URDF arm learning from the probing signal alone); with
+#: Bellman-error extrapolation a URDF arm's is 0: the gradient term of the actor law (26),
+#: eta_a1 / sqrt(1 + omega^T omega) B R^-1 B^T (Wa - Wc) eps with B = dphi/dx M^-1, grows as
+#: M^-1 and, on the Kinova (lambda_min(M) = 1.2e-4 kg m^2), holds actor and critic 7 % off W*
+#: from 1 s on; without it the actor follows the critic at eta_a2 and both reach W*.
+ETA_A1_PAPER = 0.01
 
 _SAMPLES = 64
 _SEED = 20241202
@@ -122,7 +138,9 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     - learning: Bellman-error extrapolation at 2 K points (K basis functions) in a fixed box of
       half-widths ``b1 = max(1, 2 max|e1(0)|)`` rad on e1 and alpha b1 rad/s on e2, no probing
       signal (probe.until = 0; the amplitude, if it is turned on, 0.1 (ks + 1 + 1 / r) N m per
-      joint, which moves e2 by about 0.1 rad/s); sim.T = 10 s; sim.dt = "auto".
+      joint, which moves e2 by about 0.1 rad/s); critic.epsilon_T = EPSILON_T_URDF (1e-5; 1e-6
+      without extrapolation points); actor.eta_a1 = 0 with extrapolation points (ETA_A1_PAPER
+      without); sim.T = 10 s; sim.dt = "auto".
     """
     from .optimal import solvable_cost
 
@@ -231,6 +249,24 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         f"10 times ||W*|| = {size:.3g} (K and the base parameters), at least 100",
     )
     put("extrapolation.points", 2 * config.basis_size, "twice the basis functions")
+    points = values.get(("extrapolation", "points"), config.extrapolation.points)
+    if points > 0:
+        put(
+            "critic.epsilon_T",
+            EPSILON_T_URDF,
+            "Gamma reset when lambda_min(Gamma) < 1e-5 (the two-link arm's 1e-3 resets so often "
+            "that the weakly excited weights of an arm with light and heavy joints never learn)",
+        )
+        put(
+            "actor.eta_a1",
+            0.0,
+            "the actor follows the critic (eta_a2) alone: the gradient term eta_a1 B R^-1 B^T "
+            "acts through M^-1 and on arms with light joints holds the actor, and the critic "
+            "that evaluates its policy, away from W* (Kinova: 7 % off after 5 s)",
+        )
+    else:
+        put("critic.epsilon_T", EPSILON_T_PROBING, "learning from the probing signal alone")
+        put("actor.eta_a1", ETA_A1_PAPER, "the paper's, learning from the probing signal")
     put(
         "actor.e2_margin",
         0.1 * smallest,
