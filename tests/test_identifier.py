@@ -346,6 +346,14 @@ def test_the_model_parameters_figure_draws_the_estimate_over_the_plant() -> None
     assert time is not None and informative.get_xdata()[0] == time
     first = result.t[np.flatnonzero(result.stack_singular_value >= threshold.get_ydata()[0])[0]]
     assert time == first
+    # like the other figures: into given axes (the first panel alone) or a given figure
+    from matplotlib.figure import Figure
+
+    target = Figure()
+    assert result.plot("model_parameters", ax=target.subplots()) is target
+    assert len(target.axes) == 1
+    target = Figure()
+    assert result.plot("model_parameters", fig=target) is target and len(target.axes) == 2
 
 
 def test_the_model_parameters_figure_only_for_an_identifying_run(tmp_path) -> None:
