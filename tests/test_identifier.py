@@ -303,3 +303,79 @@ def test_a_run_without_identification_saves_no_identifier_series(tmp_path) -> No
     result = adparm.simulate(base(sim={"T": 0.05}), diagnose=False)
     back = adparm.load_result(result.save(tmp_path / "run.csv"))
     assert back.model_parameters is None and back.stack_singular_value is None
+
+
+def _identifying_run() -> adparm.SimulationResult:
+    config = model_off(base(identifier={"enabled": True}, sim={"T": 1.5, "record_every": 10}))
+    return adparm.simulate(config, diagnose=False)
+
+
+def test_the_model_parameters_figure_draws_the_estimate_over_the_plant() -> None:
+    result = _identifying_run()
+    config = result.config
+    assert "model_parameters" in adparm.plotting.figure_names(result)
+    figure = result.plot("model_parameters")
+    top, bottom = figure.axes[:2]
+    beta = adparm.base_parameters(config, "plant")
+    names = adparm.base_parameter_names(config)
+    identified = [names.index(name) for name in ("p1", "p2", "p3", "g1", "g2")]
+    lines = [line for line in top.get_lines() if not line.get_label().startswith("_")]
+    # one line per identified parameter, beta_hat_i / beta_i, then the plant's line at 1
+    assert len(lines) == len(identified) + 1
+    for line, i in zip(lines, identified, strict=False):
+        np.testing.assert_array_equal(line.get_xdata(), result.t)
+        np.testing.assert_array_equal(line.get_ydata(), result.model_parameters[:, i] / beta[i])
+        assert f"plant {beta[i]:.4g}" in line.get_label()
+    np.testing.assert_array_equal(lines[-1].get_ydata(), [1.0, 1.0])
+    # the model starts 30 % off and the estimate ends on the plant
+    start = np.array([line.get_ydata()[0] for line in lines[:-1]])
+    end = np.array([line.get_ydata()[-1] for line in lines[:-1]])
+    assert np.abs(start - 1.0).max() > 0.1
+    assert np.abs(end - 1.0).max() < 0.01
+    assert "coulomb, viscous" in top.get_title(loc="left")  # not identified: named, not drawn
+    # the stack's minimum singular value (an empty stack, 0, not drawn), its threshold, and the
+    # time it became informative
+    sigma, threshold, informative = (
+        line for line in bottom.get_lines() if not line.get_label().startswith("_")
+    )
+    expected = np.where(result.stack_singular_value > 0.0, result.stack_singular_value, np.nan)
+    np.testing.assert_array_equal(sigma.get_ydata(), expected)
+    assert bottom.get_yscale() == "log"
+    assert threshold.get_ydata()[0] == config.identifier.singular_value_threshold
+    time = adparm.diagnose(result)["identifier"]["informative_time"]
+    assert time is not None and informative.get_xdata()[0] == time
+    first = result.t[np.flatnonzero(result.stack_singular_value >= threshold.get_ydata()[0])[0]]
+    assert time == first
+    # like the other figures: into given axes (the first panel alone) or a given figure
+    from matplotlib.figure import Figure
+
+    target = Figure()
+    assert result.plot("model_parameters", ax=target.subplots()) is target
+    assert len(target.axes) == 1
+    target = Figure()
+    assert result.plot("model_parameters", fig=target) is target and len(target.axes) == 2
+
+
+def test_the_model_parameters_figure_only_for_an_identifying_run(tmp_path) -> None:
+    plain = adparm.simulate(base(sim={"T": 0.1, "record_every": 10}), diagnose=False)
+    assert "model_parameters" not in adparm.plotting.figure_names(plain)
+    with pytest.raises(ValueError, match=r"^identifier\.enabled: .*identifying run"):
+        plain.plot("model_parameters")
+    written = adparm.write_report(plain, tmp_path / "plain", formats=("png",))
+    assert not any(path.name.startswith("model_parameters") for path in written)
+    identifying = _identifying_run()
+    written = adparm.write_report(identifying, tmp_path / "identifying", formats=("png",))
+    assert (tmp_path / "identifying" / "model_parameters.png") in written
+
+
+def test_adparm_run_writes_the_model_parameters_figure_of_an_identifying_run(tmp_path) -> None:
+    from adparm import cli
+
+    config = model_off(base(identifier={"enabled": True}, sim={"T": 0.5, "record_every": 10}))
+    for name, run in (("plain", base(sim={"T": 0.1, "record_every": 10})), ("ident", config)):
+        path = tmp_path / f"{name}.toml"
+        path.write_text(run.to_toml(), encoding="utf-8")
+        out = tmp_path / name
+        cli.main(["run", str(path), "--out", str(out), "--formats", "png", "--no-progress"])
+        assert (out / "fig4_errors.png").is_file()
+        assert (out / "model_parameters.png").is_file() == (name == "ident")

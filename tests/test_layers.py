@@ -55,6 +55,7 @@ LAYERS = {
     "summary": 5,
     "_figure_style": 5,
     "weight_figures": 5,
+    "identifier_figure": 5,
     "plotting": 5,
     "storage": 5,
     "report": 5,

@@ -14,7 +14,12 @@ from .config import Config, ModelConfig
 from .optimal import base_parameter_names, base_parameters
 from .result import SimulationResult
 
-__all__ = ["identifier_diagnosis", "judged_config", "plant_model_config"]
+__all__ = [
+    "identified_parameters",
+    "identifier_diagnosis",
+    "judged_config",
+    "plant_model_config",
+]
 
 
 def plant_model_config(config: Config) -> Config:
@@ -28,6 +33,18 @@ def judged_config(config: Config) -> Config:
     (``identifier.enabled``) the plant's (plant_model_config): its critic should reach the plant's
     W*, the optimum the identified model leads to."""
     return plant_model_config(config) if config.identifier.enabled else config
+
+
+def identified_parameters(config: Config) -> list[int]:
+    """The indices (in the order of base_parameter_names) of the parameters the identifier
+    estimates: identifier.inertia, .gravity and .friction say which groups; the others stay at
+    the model's values."""
+    groups = {"p1": "inertia", "p2": "inertia", "p3": "inertia", "g1": "gravity", "g2": "gravity"}
+    return [
+        i
+        for i, name in enumerate(base_parameter_names(config))
+        if getattr(config.identifier, groups.get(name, "friction"))
+    ]
 
 
 def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
@@ -44,15 +61,9 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     config = result.config
     if not config.identifier.enabled or result.model_parameters is None or result.t.size == 0:
         return None
-    names = base_parameter_names(config)
     beta = base_parameters(config, "plant")
     beta_hat = np.asarray(result.model_parameters[-1], dtype=float)
-    groups = {"p1": "inertia", "p2": "inertia", "p3": "inertia", "g1": "gravity", "g2": "gravity"}
-    identified = [
-        i
-        for i, name in enumerate(names)
-        if getattr(config.identifier, groups.get(name, "friction"))
-    ]
+    identified = identified_parameters(config)
     errors = [
         abs(beta_hat[i] - beta[i]) / abs(beta[i]) if beta[i] != 0.0 else abs(beta_hat[i])
         for i in identified

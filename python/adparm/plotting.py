@@ -51,17 +51,21 @@ from ._figure_style import (
     mark_probe_end,
     mark_stop,
 )
+from .identifier_figure import plot_model_parameters
 from .weight_figures import WEIGHT_UNIT, plot_actor_weights, plot_critic_weights
 
 __all__ = [
     "FIGURES",
+    "IDENTIFIER_FIGURES",
     "OKABE_ITO",
     "STOP_COLOR",
     "WEIGHT_UNIT",
     "plot_actor_weights",
     "plot_comparison",
     "plot_critic_weights",
+    "figure_names",
     "plot_errors",
+    "plot_model_parameters",
     "plot_result",
     "plot_torques",
     "save_figures",
@@ -445,7 +449,18 @@ FIGURES = {
     "fig3_actor_weights": plot_actor_weights,
     "fig4_errors": plot_errors,
     "torques": plot_torques,
+    "model_parameters": plot_model_parameters,
 }
+
+#: The figures drawn only for an identifying run (``identifier.enabled``).
+IDENTIFIER_FIGURES = ("model_parameters",)
+
+
+def figure_names(result: SimulationResult) -> list[str]:
+    """The names of :data:`FIGURES` that ``result`` has: all of them for an identifying run
+    (``result.model_parameters`` is not None), the others without :data:`IDENTIFIER_FIGURES`."""
+    identified = result.model_parameters is not None
+    return [name for name in FIGURES if identified or name not in IDENTIFIER_FIGURES]
 
 
 def plot_result(
@@ -463,7 +478,8 @@ def plot_result(
         A run.
     which : str or iterable of str, optional
         Names from :data:`FIGURES`. A single name returns that figure alone; a list (or None,
-        all of them) returns a dict name -> Figure.
+        all of them: :func:`figure_names`, ``model_parameters`` only for an identifying run)
+        returns a dict name -> Figure.
     ax, fig : optional
         Passed to the plot function; only with a single name in ``which``.
 
@@ -472,7 +488,7 @@ def plot_result(
     Figure or dict of str to Figure
     """
     single = isinstance(which, str)
-    names = list(FIGURES) if which is None else [which] if single else list(which)
+    names = figure_names(result) if which is None else [which] if single else list(which)
     unknown = [name for name in names if name not in FIGURES]
     if unknown:
         raise ValueError(f"which: unknown figure(s) {unknown}; known: {', '.join(FIGURES)}")

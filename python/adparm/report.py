@@ -37,7 +37,8 @@ def check_formats(formats: Iterable[str]) -> tuple[str, ...]:
 
 
 def report_files(formats: Iterable[str] = ("png", "svg"), figures: bool = True) -> list[str]:
-    """The names of the files write_report writes."""
+    """The names of the files write_report may write (model_parameters.* only for an
+    identifying run)."""
     from .plotting import FIGURES
 
     names = ["result.npz", "result.csv", "config.toml", "summary.json", "summary.md"]
@@ -82,9 +83,11 @@ def write_report(
     # a failure to draw (not to write) loses neither the run nor the other files
     failed: list[str] = []
     if figures:
-        from .plotting import FIGURES
+        from .plotting import figure_names
 
-        for name in FIGURES:  # one figure at a time: progress, and one figure in memory
+        for name in figure_names(
+            result
+        ):  # one figure at a time: progress, and one figure in memory
             try:
                 drawn = result.plot([name])
             except Exception as error:  # noqa: BLE001 - reported in the summary

@@ -231,14 +231,16 @@ class SimulationResult:
         ax: Any = None,
         fig: Figure | None = None,
     ) -> dict[str, Figure] | Figure:
-        """Figures 2-4 of the paper and the torques (:func:`adparm.plotting.plot_result`).
+        """Figures 2-4 of the paper, the torques, and the identified model's parameters
+        (:func:`adparm.plotting.plot_result`).
 
         Parameters
         ----------
         which : str or iterable of str, optional
             Names from ``adparm.plotting.FIGURES`` (``fig2_critic_weights``,
-            ``fig3_actor_weights``, ``fig4_errors``, ``torques``). None (default) gives all of
-            them as a dict name -> Figure; a single name gives that Figure.
+            ``fig3_actor_weights``, ``fig4_errors``, ``torques``, and ``model_parameters``
+            for an identifying run: beta_hat against the plant's beta). None (default) gives
+            all of this run's as a dict name -> Figure; a single name gives that Figure.
         ax : Axes or sequence of Axes, optional
             With a single name: draw into these axes (see :mod:`adparm.plotting`).
         fig : Figure, optional
