@@ -50,6 +50,10 @@ _COLUMNS: tuple[tuple[str, str], ...] = tuple(
 )
 
 
+# The series of one value per row (widths "one" and "identifier"): a 1-d array of the result.
+_ONE_COLUMN = tuple(name for name, width in RECORDED_SERIES if width in ("one", "identifier"))
+
+
 def _columns(
     basis_size: int, joints: int = 2, parameters: int = 0
 ) -> list[tuple[str, tuple[str, ...]]]:
@@ -309,8 +313,7 @@ def _load_csv(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     start = 0
     for attr, names in _columns(size, joints, parameters):
         block = data[:, start : start + len(names)]
-        one = attr in (*ARRAYS_1, "stack_singular_value")
-        fields[attr] = block[:, 0] if one else block
+        fields[attr] = block[:, 0] if attr in _ONE_COLUMN else block
         start += len(names)
     fields["covariance_reset_times"] = np.array(meta.get("covariance_reset_times", []), float)
     if meta.get("saturated_time") is not None:
