@@ -18,7 +18,6 @@ from ._fields import (
     ARM_KEYS,
     DEFAULT_GRAVITY,
     MAX_SAMPLES,
-    MAX_SAMPLES_FILE_BYTES,
     TWO_LINK_DEFAULTS,
     TWO_LINK_KEYS,
     Matrix,
@@ -30,7 +29,7 @@ from ._fields import (
     key_text,
     limit_vector,
     matrix_value,
-    read_text_file,
+    read_samples,
     rows_value,
     scalar_value,
     setting,
@@ -43,6 +42,9 @@ from .urdf import example_robot_urdf, locked_joints_message, shared_arm
 #: A URDF named "example-robot-data:ur5" is that robot of the example-robot-data package
 #: (adparm.example_robot_urdf).
 EXAMPLE_ROBOT_PREFIX = "example-robot-data:"
+
+#: The bounds of model.scale (the factor on the believed two-link model's p1 ... g2).
+MODEL_SCALE_BOUNDS = (0.1, 10.0)
 
 
 def urdf_path(value: Any, name: str) -> str:
@@ -337,12 +339,25 @@ class ModelConfig:
         "plant's number of free joints; only with ``plant.urdf``.",
         via="the believed URDF arm: model_urdf (translate.urdf_settings)",
     )
+    scale: float = setting(
+        1.0,
+        "A factor on the believed model's p1, p2, p3, g1 and g2 (each given or the plant's): its "
+        "M, C and G are those of the other keys times scale, the friction is left alone; 1: "
+        f"none; e.g. 0.7 for a model 30 % light. In [{MODEL_SCALE_BOUNDS[0]:g}, "
+        f"{MODEL_SCALE_BOUNDS[1]:g}]; the two-link arm only (a URDF model: ``model.urdf``). The "
+        "one key a sweep over the model's error varies (:doc:`/guide/unknown-dynamics`).",
+        via="folded into model.p1 ... model.g2 by ModelConfig.resolve",
+    )
 
     def __post_init__(self) -> None:
         for key in TWO_LINK_KEYS:
             value = getattr(self, key)
             if value is not None:
                 object.__setattr__(self, key, scalar_value(value, f"model.{key}"))
+        scale = scalar_value(self.scale, "model.scale", minimum=MODEL_SCALE_BOUNDS[0])
+        if scale > MODEL_SCALE_BOUNDS[1]:
+            raise ValueError(f"model.scale: must be <= {MODEL_SCALE_BOUNDS[1]:g}, got {scale:g}")
+        object.__setattr__(self, "scale", scale)
         locked = locked_joints_value(self.locked_joints, "model.locked_joints")
         object.__setattr__(self, "locked_joints", locked)
         for key in ("coulomb", "viscous"):
@@ -356,11 +371,22 @@ class ModelConfig:
             object.__setattr__(self, "gravity", vector_value(self.gravity, "model.gravity", 3))
 
     def resolve(self, plant: PlantConfig) -> dict[str, Any]:
-        """The model's parameters with the plant's values filled in."""
-        return {
+        """The model's parameters with the plant's values filled in, p1 ... g2 times ``scale``."""
+        values = {
             key: getattr(plant, key) if getattr(self, key) is None else getattr(self, key)
             for key in ARM_KEYS
         }
+        if self.scale != 1.0:
+            values.update({key: self.scale * values[key] for key in TWO_LINK_KEYS})
+        return values
+
+    def differs(self, plant: PlantConfig) -> bool:
+        """Whether the believed arm differs from ``plant``: the two-link arm's parameters
+        (model.scale included), or a URDF arm's file, gravity, friction or locked joints."""
+        exact = ModelConfig()
+        if plant.urdf is not None:
+            return self.resolve_urdf(plant) != exact.resolve_urdf(plant)
+        return self.resolve(plant) != exact.resolve(plant)
 
     def resolve_urdf(self, plant: PlantConfig) -> dict[str, Any]:
         """The believed URDF arm: urdf, gravity, coulomb, viscous, locked_joints, each the
@@ -503,32 +529,6 @@ class SampledTrajectory:
 
 def is_empty(value: Any) -> bool:
     return isinstance(value, (tuple, list)) and len(value) == 0
-
-
-def read_samples(path: Path) -> tuple[Vector, Matrix]:
-    lines = read_text_file(path, "task.qd.file", MAX_SAMPLES_FILE_BYTES).splitlines()
-    rows = []
-    for number, line in enumerate(lines, start=1):
-        text = line.split("#", 1)[0].strip()
-        if not text:
-            continue
-        try:
-            rows.append([float(v) for v in text.split(",")])
-        except ValueError as error:
-            if rows:  # only a first line may be a header
-                raise ValueError(f"task.qd.file: {path}:{number}: not numbers: {line!r}") from error
-            continue
-        columns = len(rows[0])  # t, qd1, ..., qdn (n checked by Config)
-        if len(rows[-1]) != columns or columns < 2:
-            expected = "t, qd1, qd2" if columns == 3 else "t, qd1, ..., qdn"
-            raise ValueError(
-                f"task.qd.file: {path}:{number}: expected {max(columns, 2)} columns {expected}, "
-                f"got {line!r}"
-            )
-    if not rows:
-        raise ValueError(f"task.qd.file: {path} holds no samples")
-    array = np.array(rows)
-    return tuple(array[:, 0]), tuple(map(tuple, array[:, 1:]))
 
 
 TRAJECTORIES: dict[str, type] = {"sinusoid": SinusoidTrajectory, "samples": SampledTrajectory}

@@ -552,3 +552,31 @@ def deep_toml(text: str) -> str:
             key = line.split("=", 1)[0].strip() if "=" in line else "?"
             return f"line {number}, key {key_text(key)!r}: nested more than {MAX_DEPTH} levels deep"
     return f"nested more than {MAX_DEPTH} levels deep"
+
+
+def read_samples(path: Path) -> tuple[Vector, Matrix]:
+    """The samples of task.qd.file: rows t, qd1, ..., qdn (comma-separated, # comments, an
+    optional header line), as (t, q) tuples; a ValueError naming task.qd.file and the line."""
+    lines = read_text_file(path, "task.qd.file", MAX_SAMPLES_FILE_BYTES).splitlines()
+    rows = []
+    for number, line in enumerate(lines, start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        try:
+            rows.append([float(v) for v in text.split(",")])
+        except ValueError as error:
+            if rows:  # only a first line may be a header
+                raise ValueError(f"task.qd.file: {path}:{number}: not numbers: {line!r}") from error
+            continue
+        columns = len(rows[0])  # t, qd1, ..., qdn (n checked by Config)
+        if len(rows[-1]) != columns or columns < 2:
+            expected = "t, qd1, qd2" if columns == 3 else "t, qd1, ..., qdn"
+            raise ValueError(
+                f"task.qd.file: {path}:{number}: expected {max(columns, 2)} columns {expected}, "
+                f"got {line!r}"
+            )
+    if not rows:
+        raise ValueError(f"task.qd.file: {path} holds no samples")
+    array = np.array(rows)
+    return tuple(array[:, 0]), tuple(map(tuple, array[:, 1:]))

@@ -231,6 +231,11 @@ class ConfigSchema:
                     )
             check_urdf_arm(self.model, "model")
             return
+        if self.model.scale != 1.0:
+            raise ValueError(
+                "model.scale: the two-link arm only; a URDF arm's model error is another URDF "
+                "(model.urdf), gravity or friction"
+            )
         check_urdf_arm(dataclasses.replace(self.model, urdf=self.plant.urdf), "model")
         if self.model.urdf is not None or self.model.locked_joints is not None:
             believed = self.model.resolve_urdf(self.plant)

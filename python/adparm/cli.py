@@ -454,6 +454,10 @@ def _kinds(text: str) -> tuple[str, ...]:
     return tuple(kind.strip() for kind in text.split(",") if kind.strip())
 
 
+#: --identify's choices -> compare's identify.
+_IDENTIFY = {"auto": None, "yes": True, "no": False}
+
+
 def _compare(args: argparse.Namespace) -> int:
     command = "compare"
     names = ["compare.csv", "compare.json", "compare.md", "config.toml"]
@@ -464,7 +468,8 @@ def _compare(args: argparse.Namespace) -> int:
     def prepare() -> tuple[Config, tuple[str, ...]]:
         config = _config(args)
         kinds = _kinds(args.kinds)
-        runs = controller_configs(config, kinds)  # every check before the first run
+        identify = _IDENTIFY[args.identify]
+        runs = controller_configs(config, kinds, identify)  # every check before the first run
         folder.check()  # the folder stays locked to the command's end
         # every run is kept (adp twice: learning, then from the learned weights) for the table
         kept = [*runs.values(), *([runs["adp"]] if "adp" in runs else [])]
@@ -490,7 +495,9 @@ def _compare_checked(
     interrupt: SimulationInterrupted | None = None
     try:
         # a signal during J* (after the runs) keeps the runs: compare raises with all of them
-        comparison = compare(config, kinds, progress=not args.no_progress)
+        comparison = compare(
+            config, kinds, identify=_IDENTIFY[args.identify], progress=not args.no_progress
+        )
     except SimulationInterrupted as stopped:
         interrupt, comparison = stopped, stopped.result
     except ValueError as error:

@@ -109,8 +109,10 @@ def build_parser() -> argparse.ArgumentParser:
         "run the same arm, task and initial state under several controllers and tabulate "
         "cost, errors and torques",
         "Run adp (the learning run and a second run from its learned weights without "
-        "probing), rise, pd and optimal on the same arm, task and initial state; write "
-        "compare.md/csv/json, the figure compare.<format> and config.toml to --out.",
+        "probing; when the model differs from the plant, also the learning run that identifies "
+        "the plant's parameters online), rise, pd and optimal on the same arm, task and initial "
+        "state; write compare.md/csv/json, the figure compare.<format> and config.toml to "
+        "--out.",
     )
     comparison.add_argument(
         "config",
@@ -124,6 +126,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--kinds",
         default=",".join(DEFAULT_KINDS),
         help="controllers, comma-separated",
+    )
+    comparison.add_argument(
+        "--identify",
+        choices=("auto", "yes", "no"),
+        default="auto",
+        help="add the identifying controller, adp (identifying): the learning run with "
+        "identifier.enabled = true; auto: when the model differs from the plant",
     )
     sweeping = add(
         "sweep",

@@ -2,9 +2,11 @@
 
 :func:`compare` runs ``adp`` (the online learning run as configured), ``adp (learned)`` (a second
 run from the same initial state that starts from the learning run's final weights, with probing
-off), ``rise`` (RISE feedback alone, u = 0), ``pd`` and ``optimal`` (u* = -R^-1 e2, the exact
-optimal policy), and tabulates the accumulated cost of eq. (10), tracking errors and torques of each
-run.
+off), ``adp (identifying)`` (the learning run with ``identifier.enabled = true``, when the model
+differs from the plant), ``rise`` (RISE feedback alone, u = 0), ``pd`` and ``optimal``
+(u* = -R^-1 e2, the exact optimal policy), and tabulates the accumulated cost of eq. (10),
+tracking errors and torques of each run, and of the learning runs the critic's final error against
+the plant's W* and the believed parameters' error against the plant's.
 
 Every row's cost J = int_0^T x^T Q x + u^T R u charges the input the error system receives,
 u = h + tau_d - tau (eq. 4, h of the plant; :func:`applied_input`): with tau = h_hat + mu - u_c
@@ -29,6 +31,13 @@ import numpy as np
 from ._fields import check_known
 from ._files import write_text
 from ._sections import CONTROLLER_KINDS
+from .against_plant import (
+    applied_cost,
+    applied_input,
+    believed_parameter_error,
+    plant_critic_error,
+    run_optimal_cost,
+)
 from .config import Config
 from .result import post_run_failure, presenter
 from .simulation import (
@@ -46,12 +55,16 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "COMPARE_COLUMNS",
     "DEFAULT_KINDS",
+    "IDENTIFYING_LABEL",
     "J_STAR_INTERRUPTED",
     "LEARNED_LABEL",
     "Comparison",
     "applied_cost",
     "applied_input",
+    "believed_parameter_error",
     "compare",
+    "model_differs",
+    "plant_critic_error",
     "run_optimal_cost",
 ]
 
@@ -60,6 +73,9 @@ DEFAULT_KINDS = ("adp", "rise", "pd", "optimal")
 
 #: Label of the second adp run (final weights of the learning run, no probing, still learning).
 LEARNED_LABEL = "adp (learned)"
+
+#: Label of the identifying controller: the learning run with identifier.enabled = true.
+IDENTIFYING_LABEL = "adp (identifying)"
 
 #: The post_run_errors line of a comparison whose J* a signal (Ctrl-C, SIGTERM) stopped.
 J_STAR_INTERRUPTED = (
@@ -75,6 +91,8 @@ COMPARE_COLUMNS = (
     "rms_e1",
     "final_e1",
     "peak_torque",
+    "critic_relative_error_plant",
+    "parameter_relative_error",
     "t_end",
     "wall_time",
     "status",
@@ -89,6 +107,8 @@ _MARKDOWN = {
     "rms_e1": ("e1 RMS (rad)", "{:.3g}"),
     "final_e1": ("e1 final (rad)", "{:.3g}"),
     "peak_torque": ("tau peak (N m)", "{:.4g}"),
+    "critic_relative_error_plant": ("critic vs plant's W*", "{:.3g}"),
+    "parameter_relative_error": ("beta_hat vs beta", "{:.3g}"),
     "t_end": ("t end (s)", "{:g}"),
     "wall_time": ("wall time (s)", "{:.3g}"),
     "status": ("status", "{}"),
@@ -126,22 +146,75 @@ def _check_kinds(kinds: str | Iterable[str]) -> tuple[str, ...]:
     return kinds
 
 
+def model_differs(config: Config) -> bool:
+    """Whether the arm the controller believes ([model], with model.scale) differs from the
+    plant: the two-link arm's parameters, or a URDF arm's file, gravity, friction or locked
+    joints (``ModelConfig.differs``)."""
+    return config.model.differs(config.plant)
+
+
+def _identifying_config(config: Config, identify: bool | None, kinds: tuple[str, ...]) -> Any:
+    """The identifying run's config (kind adp, identifier.enabled = true), or why there is none
+    (a str): ``identify`` None adds it when the model differs from the plant, True always, False
+    never. ValueError, naming ``identify``, when True cannot be done."""
+    if identify is not None and not isinstance(identify, bool):
+        raise TypeError(f"identify: expected True, False or None, got {identify!r}")
+    if identify is False:
+        return "identify = False"
+    forced = identify is True
+    reason = None
+    if "adp" not in kinds:
+        reason = "'adp' is not among the kinds"
+    elif config.identifier.enabled:
+        reason = "the config sets identifier.enabled = true: every row identifies as configured"
+    elif not forced and not model_differs(config):
+        reason = "the model is the plant (the identifier would start at the truth)"
+    if reason is not None:
+        if forced:
+            raise ValueError(f"identify: no identifying run to add: {reason}")
+        return reason
+    try:
+        return config.updated({"controller": {"kind": "adp"}, "identifier": {"enabled": True}})
+    except ValueError as error:  # e.g. an arm the identifier does not support yet
+        if forced:
+            raise ValueError(f"identify: {error}") from error
+        return f"identification is not available here ({error})"
+
+
 def controller_configs(
-    config: Config, kinds: str | Iterable[str] = DEFAULT_KINDS
+    config: Config, kinds: str | Iterable[str] = DEFAULT_KINDS, identify: bool | None = False
 ) -> dict[str, Config]:
-    """The config of each kind (controller.kind replaced), checked before anything runs.
-    ValueError/TypeError for bad kinds or a kind the config cannot run."""
+    """The config of each kind (controller.kind replaced), and with ``identify`` (as
+    :func:`compare`'s) the identifying run's under :data:`IDENTIFYING_LABEL`, checked before
+    anything runs. ValueError/TypeError for bad kinds or a kind the config cannot run."""
+    return _run_configs(config, kinds, identify)[0]
+
+
+def _run_configs(
+    config: Config, kinds: str | Iterable[str], identify: bool | None
+) -> tuple[dict[str, Config], str | None]:
+    """controller_configs, and why there is no identifying run (None when there is one)."""
     if not isinstance(config, Config):
         raise TypeError(f"config: expected adparm.Config, got {type(config).__name__}")
     configs = {}
-    for kind in _check_kinds(kinds):
+    kinds = _check_kinds(kinds)
+    for kind in kinds:
         if kind == "rise" and not config.controller.rise:
             raise ValueError(
                 "kinds: 'rise' is the RISE feedback alone and needs controller.rise = true, but "
                 "this configuration sets it false; leave 'rise' out of kinds"
             )
         configs[kind] = config.updated({"controller": {"kind": kind}})
-    return configs
+    identifying = _identifying_config(config, identify, kinds)
+    if isinstance(identifying, str):
+        return configs, identifying
+    # after adp (and its learned run), before the controllers that do not learn
+    ordered = {}
+    for kind, kind_config in configs.items():
+        ordered[kind] = kind_config
+        if kind == "adp":
+            ordered[IDENTIFYING_LABEL] = identifying
+    return ordered, None
 
 
 def _learned_config(config: Config, learning: SimulationResult) -> Config:
@@ -171,103 +244,14 @@ def _rms_norm(t: np.ndarray, values: np.ndarray) -> float:
     return float(np.sqrt(integral / span))
 
 
-def applied_input(result: SimulationResult) -> np.ndarray:
-    """The input u = h + tau_d - tau (eq. 4, h of the plant) the error system received at each
-    recorded row, (rows, n): M de2 = -C e2 + u along the run. With tau = h_hat + mu - u_c it is
-    u_c - mu + tau_d + (h - h_hat): the controller's input u_c less the RISE term mu, plus the
-    disturbance tau_d = [d1 sin t, d2 cos t, d3 sin t, ...] and the error of the believed
-    feedforward h_hat (zero for an exact model)."""
-    t = result.t
-    amplitude = np.array(result.config.plant.disturbance, dtype=float)
-    waves = np.where(np.arange(amplitude.size) % 2 == 0, np.sin(t)[:, None], np.cos(t)[:, None])
-    u = result.u - result.mu + amplitude * waves
-    from .config import ModelConfig
-
-    if result.config.model != ModelConfig() and t.size:  # h - h_hat: the model's error
-        u = u + _feedforward(result, model=False) - _feedforward(result, model=True)
-    return u
-
-
-def _feedforward(result: SimulationResult, *, model: bool) -> np.ndarray:
-    """h = M (ddqd + alpha1 de1) + C (dqd + alpha1 e1) + G + F with de1 = dqd - dq (eq. 5 in
-    full) of the plant (or, ``model``, the believed arm) at the recorded rows."""
-    from .desired import desired_state
-    from .optimal import arm_terms
-    from .urdf import config_arm
-
-    config = result.config
-    alpha1 = np.array(config.control.alpha1)
-    desired = desired_state(config, result.t)
-    if config.plant.urdf is not None:  # read the URDF once
-        terms = config_arm(config, model=model).terms
-    else:
-
-        def terms(q: np.ndarray, dq: np.ndarray) -> dict[str, np.ndarray]:
-            return arm_terms(config, q, dq, model=model)
-
-    h = np.empty_like(result.q)
-    for i, (q, dq, e1, (_, dqd, ddqd)) in enumerate(
-        zip(result.q, result.dq, result.e1, desired, strict=True)
-    ):
-        T = terms(q, dq)
-        M, C = np.asarray(T["M"]), np.asarray(T["C"])
-        h[i] = M @ (ddqd + alpha1 @ (dqd - dq)) + C @ (dqd + alpha1 @ e1) + T["G"] + T["F"]
-    return h
-
-
-def _simpson(values: np.ndarray, t: np.ndarray) -> float:
-    from scipy.integrate import simpson
-
-    if t.size < 2:
-        return 0.0
-    return float(simpson(values, x=t))
-
-
-def applied_cost(result: SimulationResult) -> tuple[float, float]:
-    """J = int_0^T x^T Q x + u^T R u dt with u = :func:`applied_input`, and its estimated relative
-    quadrature error.
-
-    ``result.cost`` (RK4 with the state) charges the controller's input u_c; the difference
-    u^T R u - u_c^T R u_c is integrated over the recorded rows by Simpson's rule. With
-    ``cost.input_bound`` (or the ln cosh e2 cost) ``result.cost`` charges those costs, so the
-    whole quadratic integrand is integrated over the recorded rows by Simpson's rule. The error
-    estimate is the change of that integral from every other row to every row, relative to J
-    (0 when u = u_c: no RISE, no disturbance, an exact model)."""
-    t = result.t
-    if t.size == 0:
-        return math.nan, math.nan
-    R = np.array(result.config.cost.R)
-    u, u_c = applied_input(result), result.u
-    cost_section = result.config.cost
-    if cost_section.input_bound is not None or cost_section.e2_cost != "quadratic":
-        # result.cost charges the bounded input cost U(u_c) (and the ln cosh e2 cost): J is
-        # then the quadratic cost of the recorded rows alone, by Simpson's rule
-        x = np.hstack([result.e1, result.e2])
-        whole = np.einsum("ri,ij,rj->r", x, np.array(cost_section.Q), x)
-        whole += np.einsum("ri,ij,rj->r", u, R, u)
-        cost = _simpson(whole, t)
-        every_other = np.unique(np.r_[np.arange(0, t.size, 2), t.size - 1])
-        if every_other.size < 3:
-            return cost, math.nan
-        change = abs(cost - _simpson(whole[every_other], t[every_other]))
-        return cost, change / abs(cost) if cost else math.nan
-    extra = np.einsum("ri,ij,rj->r", u, R, u) - np.einsum("ri,ij,rj->r", u_c, R, u_c)
-    cost = float(result.cost[-1] - result.cost[0]) + _simpson(extra, t)
-    if not np.any(extra):
-        return cost, 0.0
-    every_other = np.unique(np.r_[np.arange(0, t.size, 2), t.size - 1])
-    if every_other.size < 3:
-        return cost, math.nan
-    change = abs(_simpson(extra, t) - _simpson(extra[every_other], t[every_other]))
-    return cost, change / abs(cost) if cost else math.nan
-
-
 def _row(
     label: str,
     result: SimulationResult,
     cost: float,
     optimal_cost: float | None,
     best_cost: float | None = None,
+    critic_error: float | None = None,
+    parameter_error: float | None = None,
 ) -> dict[str, Any]:
     empty = result.t.size == 0
     return {
@@ -284,6 +268,8 @@ def _row(
         "rms_e1": _rms_norm(result.t, result.e1),
         "final_e1": math.nan if empty else float(np.linalg.norm(result.e1[-1])),
         "peak_torque": math.nan if empty else float(np.abs(result.tau).max()),
+        "critic_relative_error_plant": critic_error,
+        "parameter_relative_error": parameter_error,
         "t_end": math.nan if empty else float(result.t[-1]),
         "wall_time": float(result.wall_time),
         "status": result.status,
@@ -294,8 +280,9 @@ def _row(
 class Comparison:
     """Runs of the same arm, task and initial state under several controllers.
 
-    ``results``: label -> SimulationResult (labels: the kinds, plus ``"adp (learned)"`` after
-    ``"adp"``). ``rows``: one dict per label, keys :data:`COMPARE_COLUMNS`:
+    ``results``: label -> SimulationResult (labels: the kinds, plus ``"adp (learned)"`` and,
+    when the model differs from the plant, ``"adp (identifying)"`` after ``"adp"``). ``rows``:
+    one dict per label, keys :data:`COMPARE_COLUMNS`:
 
     - accumulated_cost: J of eq. (10) on the applied input u = h + tau_d - tau
       (:func:`applied_cost`: the controller's input less the RISE term, plus the disturbance
@@ -313,8 +300,17 @@ class Comparison:
     - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
     - final_e1: ``|e1|`` at the last row, rad;
     - peak_torque: max ``|tau|`` over both joints and all rows, N m;
+    - critic_relative_error_plant: ||Wc(T) - W*|| / ||W*|| with the *plant's* W*
+      (:func:`plant_critic_error`; the learning runs only, None where W* is not known): a run
+      that believes a wrong model ends at the model's W*, an identifying one at the plant's;
+    - parameter_relative_error: the largest relative error of the believed base parameters at
+      the end against the plant's (:func:`believed_parameter_error`): beta_hat(T) of the
+      identifying run, the model's of every other run (0 for an exact model);
     - t_end: the last recorded time (earlier than sim.T for a diverged run), s;
-    - wall_time (s) and status (finished, diverged or interrupted) of the run."""
+    - wall_time (s) and status (finished, diverged or interrupted) of the run.
+
+    ``identifying_note``: why there is no ``"adp (identifying)"`` row (None when there is one,
+    or when :func:`compare` was not asked for it)."""
 
     results: dict[str, SimulationResult]
     rows: list[dict[str, Any]]
@@ -323,6 +319,8 @@ class Comparison:
     post_run_errors: tuple[str, ...] = ()
     #: The largest estimated relative quadrature error of a row's J (applied_cost).
     quadrature_error: float = 0.0
+    #: Why compare added no identifying run (None: it did, or identify = False).
+    identifying_note: str | None = None
 
     @property
     def diverged(self) -> list[str]:
@@ -369,10 +367,22 @@ class Comparison:
             )
             if rise:
                 text += "RISE adds mu to every controller's input, so even optimal is above J*. "
-        return text + (
+        text += (
             "e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, tau peak = max |tau_j| "
-            "over both joints."
+            "over both joints. critic vs plant's W* = ||Wc(T) - W*|| / ||W*|| with the plant's "
+            "W* (learning runs); beta_hat vs beta = the largest relative error of the believed "
+            "base parameters at the end against the plant's (the model's, or the identifying "
+            "run's estimate)."
         )
+        if IDENTIFYING_LABEL in self.results:
+            text += (
+                f" {IDENTIFYING_LABEL} is the adp learning run with identifier.enabled = true: it "
+                "identifies the plant's parameters online and uses the estimate in place of the "
+                "model."
+            )
+        elif self.identifying_note:
+            text += f" No identifying run: {self.identifying_note}."
+        return text
 
     def table_markdown(self) -> str:
         """The rows as a Markdown table (``-`` for a missing value), with a note on the cost."""
@@ -401,6 +411,7 @@ class Comparison:
             "quadrature_error": plain(self.quadrature_error),
             "optimal_cost": None if best is None else plain(_optimal_cost_json(best)),
             "post_run_errors": list(self.post_run_errors),
+            "identifying_note": self.identifying_note,
         }
 
     def save(self, directory: str | Path) -> list[Path]:
@@ -427,6 +438,7 @@ def compare(
     config: Config,
     kinds: str | Sequence[str] = DEFAULT_KINDS,
     *,
+    identify: bool | None = None,
     progress: bool = False,
 ) -> Comparison:
     """Run ``config`` under several controllers on the same arm, task and initial state.
@@ -444,6 +456,15 @@ def compare(
         (probing included), and ``"adp (learned)"``, a second run from the same initial state
         whose critic and actor start at the learning run's final weights, with probing off and
         learning still on.
+    identify : bool or None, optional
+        The identifying controller, ``"adp (identifying)"``: the learning run with
+        ``identifier.enabled = true`` (:doc:`/guide/unknown-dynamics`), which starts from the
+        model and identifies the plant's parameters online. None (default): added when ``adp``
+        is among the kinds and the model differs from the plant (``[model]``, ``model.scale``;
+        with an exact model it would start at the truth: one more run for the same row), unless
+        the config already identifies (then every row does, as configured); the table's note
+        says why it was not added. True: added whenever ``adp`` runs (ValueError, naming
+        ``identify``, when it cannot be). False: never.
     progress : bool, optional
         Show a progress bar.
 
@@ -456,14 +477,15 @@ def compare(
     Raises
     ------
     ValueError
-        For an unknown or repeated kind (with a "did you mean" hint), or for ``rise`` when
-        ``controller.rise`` is false.
+        For an unknown or repeated kind (with a "did you mean" hint), for ``rise`` when
+        ``controller.rise`` is false, or for ``identify=True`` when there can be no identifying
+        run.
     SimulationInterrupted
         On Ctrl-C; ``.result`` is the Comparison of the runs so far (the one interrupted with
         status "interrupted"), or, during J* after the runs, of every run, with
         :data:`J_STAR_INTERRUPTED` in its ``post_run_errors``.
     """
-    configs = controller_configs(config, kinds)
+    configs, note = _run_configs(config, kinds, identify)
     check_steps(list(configs.values()))  # every run's step, before the first one runs
     results: dict[str, SimulationResult] = {}
     label = ""
@@ -482,7 +504,7 @@ def compare(
         raise SimulationInterrupted(
             f"comparison interrupted during the {label!r} run; the runs so far are in the "
             "exception's .result",
-            _comparison(results),
+            dataclasses.replace(_comparison(results), identifying_note=note),
         ) from None
     # after the runs: a failure of J* loses no run (post_run_errors), nor does Ctrl-C, which
     # raises SimulationInterrupted with every run and says that J* was interrupted
@@ -491,13 +513,13 @@ def compare(
     except KeyboardInterrupt:
         stopped = _comparison(results)
         problems = (*stopped.post_run_errors, J_STAR_INTERRUPTED)
-        stopped = dataclasses.replace(stopped, post_run_errors=problems)
+        stopped = dataclasses.replace(stopped, post_run_errors=problems, identifying_note=note)
         raise SimulationInterrupted(
             "comparison interrupted during J* (adparm.optimal_cost), after the runs; every run "
             "is complete, in the exception's .result",
             stopped,
         ) from None
-    comparison = _comparison(results, best)
+    comparison = dataclasses.replace(_comparison(results, best), identifying_note=note)
     if problem is not None:
         problems = (*comparison.post_run_errors, problem)
         comparison = dataclasses.replace(comparison, post_run_errors=problems)
@@ -518,39 +540,6 @@ def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
     return run_optimal_cost(config)
 
 
-def run_optimal_cost(config: Config, **options: Any) -> tuple[float | None, str | None]:
-    """J* on the same footing as :func:`applied_cost`'s J of a run of ``config`` (compare's
-    J / J* - 1, a sweep's with ``optimal_cost``): adparm.optimal_cost on the plant's error
-    system (model=False), over sim.T without a terminal cost when sim.T is shorter than its
-    default horizon (else to infinity: beyond that horizon the rest is below 1e-9 of J*), with
-    the config's torque limits widened by the disturbance's amplitude and the quadratic cost J
-    charges (a controller's bounded input cost is not charged); ``options`` go to
-    adparm.optimal_cost (e.g. ``intervals``, ``max_intervals``, ``rtol``). Returns J*, or None
-    where it does not apply (a moving qd) or fails (e.g. a URDF arm with locked joints), and the
-    failure (one line) or None."""
-    from .truth import optimal_cost  # the module's attribute: tests replace it
-    from .yardstick import default_horizon, plant_config
-
-    if not config.task.is_set_point:
-        return None, None
-    # J charges x^T Q x + u^T R u (applied_cost), so J* does too, whatever the controller's cost
-    quadratic = dataclasses.replace(config.cost, input_bound=None, e2_cost="quadratic")
-    config = dataclasses.replace(config, cost=quadratic)
-    limits = config.plant.limit_vector(config.dof)
-    options = {**options, "model": False}
-    if limits.size:
-        # a run's applied input u = h + tau_d - tau keeps |h - u| <= limit + |d| (tau_d_i is
-        # d_i sin t or d_i cos t): J* over these relaxed limits bounds every row's J
-        disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
-        options["torque_limits"] = np.asarray(limits, dtype=float) + disturbance
-    try:
-        if config.sim.T < default_horizon(plant_config(config)):
-            return optimal_cost(config, horizon=config.sim.T, terminal=False, **options), None
-        return optimal_cost(config, **options), None
-    except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
-        return None, post_run_failure("J* (adparm.optimal_cost)", error)
-
-
 def _run(config: Config, progress: bool) -> SimulationResult:
     return simulate_keeping_divergence(config, progress)[0]
 
@@ -558,6 +547,7 @@ def _run(config: Config, progress: bool) -> SimulationResult:
 def _comparison(results: dict[str, SimulationResult], best: float | None = None) -> Comparison:
 
     costs: dict[str, tuple[float, float]] = {}
+    learned: dict[str, tuple[float | None, float | None]] = {}  # critic and parameter errors
     problems: list[str] = []
     for label, result in results.items():
         try:
@@ -565,13 +555,18 @@ def _comparison(results: dict[str, SimulationResult], best: float | None = None)
         except Exception as error:  # noqa: BLE001 - the run is kept, its J is not known
             costs[label] = (math.nan, math.nan)
             problems.append(post_run_failure(f"J of {label!r} (applied_cost)", error))
+        try:
+            learned[label] = (plant_critic_error(result), believed_parameter_error(result))
+        except Exception as error:  # noqa: BLE001 - the run is kept, its errors are not known
+            learned[label] = (None, None)
+            problems.append(post_run_failure(f"the errors against the plant of {label!r}", error))
     optimal = results.get("optimal")
     optimal_cost = None
     if optimal is not None and optimal.status == "finished" and costs["optimal"][0] > 0.0:
         optimal_cost = costs["optimal"][0]
     best = best if best is not None and best > 0.0 else None
     rows = [
-        _row(label, result, costs[label][0], optimal_cost, best)
+        _row(label, result, costs[label][0], optimal_cost, best, *learned[label])
         for label, result in results.items()
     ]
     # rows too short for an estimate (fewer than 3 rows every other row) give none

@@ -302,6 +302,13 @@ CONTROLLER_STYLES = {
 }
 _LEARNING_STYLE = {"color": OKABE_ITO[0], "ls": "-", "lw": 0.7}
 
+#: The learning runs of a comparison (the left-hand column) and their styles: the run as
+#: configured, and the identifying controller (identifier.enabled = true, adparm.compare).
+LEARNING_STYLES = {
+    "adp": _LEARNING_STYLE,
+    "adp (identifying)": {"color": OKABE_ITO[3], "ls": (0, (5, 2)), "lw": 0.9, "zorder": 3},
+}
+
 
 def _compare_panels(joints: int) -> list[tuple[str, int, str]]:
     """(result attribute, joint, y label) of each row: e1 of every joint, then tau."""
@@ -339,8 +346,10 @@ def plot_comparison(
 ) -> Figure:
     """Controllers side by side (:func:`adparm.compare`): e1 and tau of each joint.
 
-    The learning run (``adp``, with its probing) has its own column on the left, on a linear
-    time axis with the end of probing marked; the controllers that do not learn during the run
+    The learning runs (``adp`` and, when compared, the identifying ``adp (identifying)``, with
+    their probing) have their own column on the left, on a linear time axis with the end of
+    probing marked, each in its style (:data:`LEARNING_STYLES`); the controllers that do not
+    learn during the run
     (``adp (learned)``, ``rise``, ``pd``, ``optimal``) share the right-hand column, each in its
     own colour and line style (:data:`CONTROLLER_STYLES`). Without an ``adp`` row the figure has
     the right-hand column only. With ``plant.torque_limits`` each tau panel draws its joint's
@@ -372,8 +381,8 @@ def plot_comparison(
     if ax is not None and fig is not None:
         raise ValueError("ax, fig: give at most one of them")
     results = comparison.results
-    learning = {label: r for label, r in results.items() if label == "adp"}
-    others = {label: r for label, r in results.items() if label != "adp"}
+    learning = {label: r for label, r in results.items() if label in LEARNING_STYLES}
+    others = {label: r for label, r in results.items() if label not in LEARNING_STYLES}
     groups = [g for g in (learning, others) if g]
     joints = next(iter(results.values())).q.shape[1] if results else 2
     panels = _compare_panels(joints)
@@ -402,7 +411,8 @@ def plot_comparison(
             for row, (name, joint, ylabel) in enumerate(panels):
                 axes = grid[row, column]
                 for label, result in group.items():
-                    style = _LEARNING_STYLE if is_learning else CONTROLLER_STYLES.get(label, {})
+                    styles = LEARNING_STYLES if is_learning else CONTROLLER_STYLES
+                    style = styles.get(label, {})
                     suffix = "" if result.status == "finished" else f" ({result.status})"
                     axes.plot(
                         result.t,
@@ -413,7 +423,7 @@ def plot_comparison(
                 if name == "tau":  # the plant's torque limit of this joint
                     _draw_compare_limit(axes, group, joint)
                 if is_learning:
-                    mark_probe_end(axes, group["adp"], label=row == 0)
+                    mark_probe_end(axes, next(iter(group.values())), label=row == 0)
                 if column == 0:
                     axes.set_ylabel(ylabel)
                 if row < rows - 1:
@@ -432,7 +442,11 @@ def plot_comparison(
                 note = ", linear to 1 s, then logarithmic" if time_scale == "symlog" else ""
                 bottom.set_xlabel(f"time t (s{note})")
             top.legend(
-                title="learning run (with probing)"
+                title=(
+                    "learning runs (with probing)"
+                    if len(group) > 1
+                    else "learning run (with probing)"
+                )
                 if is_learning
                 else "learned and fixed controllers",
                 loc="lower center",

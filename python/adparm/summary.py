@@ -13,6 +13,7 @@ import numpy as np
 
 from ._sections import SECTIONS
 from .config import Config, paper_config
+from .identification import judged_config
 from .optimal import basis_names, optimal_weights
 from .result import SimulationResult, post_run_failure, register, stop_time
 from .truth import diagnose
@@ -239,7 +240,7 @@ def _cost_against_optimum(
     result: SimulationResult, options: Any, post_run_errors: list[str]
 ) -> dict[str, Any]:
     """applied_cost, optimal_cost and cost_vs_optimal_cost of summarize's ``optimal_cost``."""
-    from .comparison import applied_cost, run_optimal_cost
+    from .against_plant import applied_cost, run_optimal_cost
 
     if options is True:
         options = {}
@@ -262,6 +263,32 @@ def _cost_against_optimum(
         out["optimal_cost"] = _number(float(best))
         if best > 0.0 and result.status == "finished" and math.isfinite(cost):
             out["cost_vs_optimal_cost"] = _number(cost / float(best) - 1.0)
+    return out
+
+
+def _against_the_plant(
+    result: SimulationResult, diagnostics: dict[str, Any], post_run_errors: list[str]
+) -> dict[str, Any]:
+    """The run against the plant, whatever the controller believed (a sweep over model errors
+    tabulates them): critic_relative_error_plant (||Wc(T) - W*|| / ||W*||, the plant's W*),
+    parameter_relative_error (the believed base parameters' largest relative error at the end:
+    beta_hat of an identifying run, else the model's) and stack_informative (whether the
+    identifier's history stack ever became informative; None without identification)."""
+    from .against_plant import believed_parameter_error, plant_critic_error
+
+    identifier = diagnostics.get("identifier")
+    out: dict[str, Any] = {
+        "critic_relative_error_plant": None,
+        "parameter_relative_error": None,
+        "stack_informative": None if not identifier else identifier["ever_informative"],
+    }
+    try:
+        out["critic_relative_error_plant"] = _number(plant_critic_error(result))
+        out["parameter_relative_error"] = _number(believed_parameter_error(result))
+    except Exception as error:  # noqa: BLE001 - any failure after the run is reported
+        post_run_errors.append(
+            post_run_failure("the run against the plant (critic, parameters)", error)
+        )
     return out
 
 
@@ -288,7 +315,8 @@ def summarize(
     # the run: a failure of one is reported in "post_run_errors" and the rest is summarised.
     post_run_errors: list[str] = []
     try:
-        target = optimal_weights(result.config)
+        # an identifying run's critic is judged against the plant's W* (as its diagnosis)
+        target = optimal_weights(judged_config(result.config))
     except ValueError as error:
         target, no_target = None, str(error)
     except Exception as error:  # noqa: BLE001 - any failure after the run is reported
@@ -337,6 +365,7 @@ def summarize(
     out["hjb_residual_explored"] = diagnostics.get("hjb_residual_explored")
     out["diagnostics"] = diagnostics
     out["post_run_errors"] = post_run_errors
+    out.update(_against_the_plant(result, diagnostics, post_run_errors))
     if optimal_cost is not None and optimal_cost is not False:
         out.update(_cost_against_optimum(result, optimal_cost, post_run_errors))
     if target is None:
@@ -472,6 +501,19 @@ def summary_markdown(summary: dict[str, Any]) -> str:
         f"probe, {_fmt(summary['accumulated_cost_without_probe'])} with the actor's u_hat alone",
         f"- covariance resets: {summary['covariance_resets']}",
     ]
+    parameter_error = summary.get("parameter_relative_error")
+    if summary.get("stack_informative") is not None or parameter_error:
+        believed = (
+            "beta_hat at the end (identified)"
+            if summary.get("stack_informative") is not None
+            else "the model's (not identified)"
+        )
+        lines.append(
+            f"- against the plant: the believed base parameters, {believed}, are "
+            f"{_fmt(parameter_error)} (largest relative error) from the plant's; the critic "
+            f"||Wc - W*|| / ||W*|| with the plant's W* = "
+            f"{_fmt(summary.get('critic_relative_error_plant'))}"
+        )
     limits = summary.get("torque_limits")
     if limits is not None:
         saturated = summary.get("saturated_time") or []

@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "SWEEP_METRICS",
+    "SWEEP_MODEL_METRICS",
     "SWEEP_OPTIMAL_METRICS",
     "SweepResult",
     "grid_points",
@@ -68,6 +69,17 @@ SWEEP_METRICS = (
     "e2_block_min_eigenvalue",
     "hjb_residual_explored",
     "wall_time",
+)
+
+#: The columns a sweep adds when a point's model differs from the plant or identifies
+#: (``[model]``, ``model.scale``, ``identifier.enabled``): the critic's final error against the
+#: plant's W*, the believed base parameters' final error against the plant's (beta_hat of an
+#: identifying run, else the model's) and whether the identifier's history stack ever became
+#: informative (None without identification).
+SWEEP_MODEL_METRICS = (
+    "critic_relative_error_plant",
+    "parameter_relative_error",
+    "stack_informative",
 )
 
 #: The columns a sweep adds with ``optimal_cost``: compare's J (the quadratic cost of the input
@@ -184,35 +196,54 @@ def _point_text(point: Mapping[str, Any]) -> str:
     return short.repr(dict(point))
 
 
-def _metric_names(optimal_cost: Any) -> tuple[str, ...]:
+def _metric_names(optimal_cost: Any, model: bool = False) -> tuple[str, ...]:
+    names = (*SWEEP_METRICS, *(SWEEP_MODEL_METRICS if model else ()))
     if optimal_cost is None or optimal_cost is False:
-        return SWEEP_METRICS
+        return names
     if optimal_cost is not True and not isinstance(optimal_cost, Mapping):
         raise TypeError(
             "optimal_cost: expected True, False or a dict of adparm.optimal_cost options (e.g. "
             f"{{'intervals': 40}}), got {type(optimal_cost).__name__}"
         )
-    return (*SWEEP_METRICS, *SWEEP_OPTIMAL_METRICS)
+    return (*names, *SWEEP_OPTIMAL_METRICS)
+
+
+def _model_metrics(configs: Sequence[Config]) -> bool:
+    """Whether a sweep's rows carry :data:`SWEEP_MODEL_METRICS`: some point's model differs from
+    the plant or identifies."""
+    return any(
+        config.identifier.enabled or config.model.differs(config.plant) for config in configs
+    )
 
 
 def _metrics(
-    result: SimulationResult, tolerance: float | None, optimal_cost: Any = None
+    result: SimulationResult,
+    tolerance: float | None,
+    optimal_cost: Any = None,
+    model: bool = False,
 ) -> dict[str, Any]:
     if isinstance(optimal_cost, Mapping):
         optimal_cost = dict(optimal_cost)
     elif optimal_cost is False:
         optimal_cost = None
     summary = result.summary(tolerance=tolerance, optimal_cost=optimal_cost)
-    return {name: summary.get(name) for name in _metric_names(optimal_cost)}
+    return {name: summary.get(name) for name in _metric_names(optimal_cost, model)}
 
 
 def sweep_row(
-    config: Config, tolerance: float | None = None, optimal_cost: Any = None
+    config: Config,
+    tolerance: float | None = None,
+    optimal_cost: Any = None,
+    model_metrics: bool | None = None,
 ) -> dict[str, Any]:
     """The metrics of one run of ``config`` (the task an executor runs; a diverged run gives its
-    partial result's metrics with status "diverged"); ``optimal_cost`` as :func:`sweep`'s."""
+    partial result's metrics with status "diverged"); ``optimal_cost`` as :func:`sweep`'s;
+    ``model_metrics`` adds :data:`SWEEP_MODEL_METRICS` (None: when this config's model differs
+    from the plant or identifies)."""
+    if model_metrics is None:
+        model_metrics = _model_metrics([config])
     result = simulate_batch([config], threads=1, on_divergence="keep")[0]
-    return _metrics(result, tolerance, optimal_cost)
+    return _metrics(result, tolerance, optimal_cost, model_metrics)
 
 
 @dataclass(frozen=True)
@@ -324,7 +355,11 @@ def sweep(
         One row per point: the point's values, then status, t_end, the critic's and actor's
         relative errors (at the end and at 110 s), the time from which each stays within
         ``tolerance``, final ``|e1|``, accumulated cost, covariance resets, saturated time
-        and wall time; with ``optimal_cost`` also J, J* and J / J* - 1.
+        and wall time; with ``optimal_cost`` also J, J* and J / J* - 1; when some point's
+        model differs from the plant or identifies (e.g. a grid over ``model.scale`` or
+        ``identifier.enabled``), also :data:`SWEEP_MODEL_METRICS`: the critic's error against
+        the plant's W*, the believed parameters' error against the plant's and whether the
+        identifier's stack became informative.
 
     Raises
     ------
@@ -337,9 +372,11 @@ def sweep(
     if tolerance is not None and not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
     workers = check_threads(threads)
-    metrics = _metric_names(optimal_cost)
+    _metric_names(optimal_cost)  # its check, before the points are built
     points = grid_points(grid)
     configs = [_point_config(base_config, point) for point in points]
+    model = _model_metrics(configs)
+    metrics = _metric_names(optimal_cost, model)
     parameters = tuple(points[0])
     if executor is not None and not callable(getattr(executor, "submit", None)):
         raise TypeError(
@@ -349,9 +386,9 @@ def sweep(
     done: dict[int, dict[str, Any]] = {}  # point index -> metrics, as the runs finish
     try:
         if executor is None:
-            rows = _run_in_process(configs, workers, tolerance, progress, optimal_cost)
+            rows = _run_in_process(configs, workers, tolerance, progress, optimal_cost, model)
         else:
-            rows = _run_on_executor(executor, configs, tolerance, progress, optimal_cost)
+            rows = _run_on_executor(executor, configs, tolerance, progress, optimal_cost, model)
         for index, row in rows:
             done[index] = row
     except KeyboardInterrupt:
@@ -375,7 +412,12 @@ def _table(
 
 
 def _run_in_process(
-    configs: list[Config], threads: int, tolerance: float, progress: bool, optimal_cost: Any
+    configs: list[Config],
+    threads: int,
+    tolerance: float,
+    progress: bool,
+    optimal_cost: Any,
+    model: bool = False,
 ) -> Iterator[tuple[int, dict[str, Any]]]:
     """(point index, metrics) of every run, as the runs end: one stream through the core's worker
     threads (no barrier between runs), each run summarised and freed as soon as it ends, so at
@@ -394,7 +436,7 @@ def _run_in_process(
         while ended:
             i, run = ended.popitem()
             result = make_result(run, configs[i], batch.seconds(i))
-            rows.append((i, _metrics(result, tolerance, optimal_cost)))
+            rows.append((i, _metrics(result, tolerance, optimal_cost, model)))
 
     def on_end(i: int, run: Any) -> None:  # summarised at once: the run is freed on return
         ended[i] = run
@@ -414,12 +456,17 @@ def _run_in_process(
 
 
 def _run_on_executor(
-    executor: Any, configs: list[Config], tolerance: float, progress: bool, optimal_cost: Any
+    executor: Any,
+    configs: list[Config],
+    tolerance: float,
+    progress: bool,
+    optimal_cost: Any,
+    model: bool = False,
 ) -> Iterator[tuple[int, dict[str, Any]]]:
     """(point index, metrics) of every task, in order; Ctrl-C cancels the tasks not started and
     keeps those that ended."""
     options = dict(optimal_cost) if isinstance(optimal_cost, Mapping) else optimal_cost
-    futures = [executor.submit(sweep_row, config, tolerance, options) for config in configs]
+    futures = [executor.submit(sweep_row, config, tolerance, options, model) for config in configs]
     waiting = 0  # the first task whose row has not been yielded
     try:
         for waiting, future in enumerate(tqdm(futures, disable=not progress, desc="sweep")):
