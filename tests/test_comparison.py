@@ -10,7 +10,13 @@ import pytest
 
 import adparm
 from adparm.cli import main
-from adparm.comparison import COMPARE_COLUMNS, LEARNED_LABEL, applied_cost, applied_input
+from adparm.comparison import (
+    COMPARE_COLUMNS,
+    IDENTIFYING_LABEL,
+    LEARNED_LABEL,
+    applied_cost,
+    applied_input,
+)
 from adparm.config import tomllib
 
 # short learning runs have not converged, and adparm.simulate says so (tests/test_truth.py)
@@ -407,3 +413,168 @@ def test_figure_draws_the_torque_limits() -> None:
         assert [t.get_text() for t in axes.get_legend().get_texts()] == ["limit $\\pm$60"]
     for axes in figure.axes[6:8]:  # tau_2: 400 N m is off scale, named over the panel
         assert "400 N m (off scale)" in axes.get_title(loc="right")
+
+
+# --- the identifying controller (issue 25): adp with identifier.enabled, next to the others ---
+
+#: The plant's W* of the structured basis, by hand: [K11, 2 K12, K22, p1, p2, p3] with
+#: K = -Q12 of the paper's cost (s = 1) and the plant's p1, p2, p3 = 5, 1, 1.
+PLANT_W_STAR = np.array([4.0, -8.0, 6.0, 5.0, 1.0, 1.0])
+#: A model 30 % off: every base parameter scaled by its own factor in [0.7, 1.3].
+MODEL_OFF = {
+    "p1": 5.0 * 0.78,
+    "p2": 1.0 * 1.27,
+    "p3": 1.0 * 0.71,
+    "g1": 11.76 * 1.3,
+    "g2": 9.8 * 0.8,
+}
+IDENTIFYING_LABELS = ["adp", LEARNED_LABEL, IDENTIFYING_LABEL, "rise", "pd", "optimal"]
+
+
+def _model_off(T: float = 20.0) -> adparm.Config:
+    return adparm.paper_config().updated(
+        {
+            "controller": {"basis": "structured"},
+            "plant": {"disturbance": [0.0, 0.0]},
+            "model": MODEL_OFF,
+            "extrapolation": {"points": 20, "mode": "fixed", "seed": 1},
+            "sim": {"T": T, "record_every": 20},
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def identifying_comparison() -> adparm.Comparison:
+    return adparm.compare(_model_off())
+
+
+def test_a_wrong_model_adds_the_identifying_controller(identifying_comparison) -> None:
+    c = identifying_comparison
+    assert list(c.results) == IDENTIFYING_LABELS
+    assert [row["controller"] for row in c.rows] == IDENTIFYING_LABELS
+    assert c.identifying_note is None
+    identifying = c.results[IDENTIFYING_LABEL]
+    assert identifying.config.identifier.enabled and identifying.config.controller.kind == "adp"
+    # the learning run exactly as configured, the identifying one with the identifier alone on
+    assert identifying.config == c.results["adp"].config.updated({"identifier": {"enabled": True}})
+    assert all(
+        not r.config.identifier.enabled
+        for label, r in c.results.items()
+        if label != IDENTIFYING_LABEL
+    )
+    assert all(row["status"] == "finished" for row in c.rows)
+    rows = {row["controller"]: row for row in c.rows}
+
+    # the critic against the plant's W*: the identifying run reaches it, the others stay at the
+    # model's (whose distance from the plant's is known by hand: p differs)
+    def plant_error(label: str) -> float:
+        weights = c.results[label].critic_weights[-1]
+        return float(np.linalg.norm(weights - PLANT_W_STAR) / np.linalg.norm(PLANT_W_STAR))
+
+    model_gap = np.linalg.norm([5.0 - 3.9, 1.0 - 1.27, 1.0 - 0.71]) / np.linalg.norm(PLANT_W_STAR)
+    assert rows[IDENTIFYING_LABEL]["critic_relative_error_plant"] < 0.01
+    assert rows["adp"]["critic_relative_error_plant"] == pytest.approx(model_gap, rel=0.01)
+    for label in ("adp", LEARNED_LABEL, IDENTIFYING_LABEL):
+        assert rows[label]["critic_relative_error_plant"] == pytest.approx(plant_error(label))
+    assert all(
+        rows[kind]["critic_relative_error_plant"] is None for kind in ("rise", "pd", "optimal")
+    )
+    # the believed parameters: beta_hat at the end, else the model's 30 % (g1 x 1.3)
+    assert rows[IDENTIFYING_LABEL]["parameter_relative_error"] < 0.01
+    for label in ("adp", LEARNED_LABEL, "rise", "pd", "optimal"):
+        assert rows[label]["parameter_relative_error"] == pytest.approx(0.3, rel=1e-12)
+    # J on the plant's error system: the identifying run's J / J* - 1 is known, and >= 0 less J*'s
+    # tolerance; its J charges the input the error system received (below)
+    assert c.optimal_cost is not None
+    assert rows[IDENTIFYING_LABEL]["cost_vs_optimal_cost"] > -1e-3
+    assert rows[IDENTIFYING_LABEL]["cost_vs_optimal_cost"] == pytest.approx(
+        rows[IDENTIFYING_LABEL]["accumulated_cost"] / float(c.optimal_cost) - 1.0
+    )
+    table = c.table_markdown()
+    assert f"| {IDENTIFYING_LABEL} |" in table and "critic vs plant's W*" in table
+    assert "identifier.enabled = true" in table
+    assert c.to_json()["identifying_note"] is None
+
+
+def test_the_identifying_runs_input_uses_its_estimate_not_the_model(identifying_comparison) -> None:
+    # u = h + tau_d - tau: h of the plant (NumPy, Section 4's formulas), tau the torque the
+    # controller commanded from its estimate beta_hat; applied_input computes it as
+    # u_c - mu + tau_d + h - h_hat with h_hat of beta_hat(t), and the model's h_hat would be
+    # tens of N m off
+    from numpy_reference import arm_terms as reference_terms
+    from numpy_reference import plant_parameters
+
+    result = identifying_comparison.results[IDENTIFYING_LABEL]
+    config = result.config
+    plant = plant_parameters(config)
+    alpha1 = np.array(config.control.alpha1)
+    u = np.empty_like(result.q)
+    for i, (q, dq, e1) in enumerate(zip(result.q, result.dq, result.e1, strict=True)):
+        M, C, G, F = reference_terms(plant, q, dq)  # qd = 0: dq_r = alpha1 e1, ddq_r = -alpha1 dq
+        u[i] = M @ (-alpha1 @ dq) + C @ (alpha1 @ e1) + G + F - result.tau_commanded[i]
+    np.testing.assert_allclose(applied_input(result), u, rtol=0, atol=1e-9 * np.abs(u).max())
+    assert np.abs(result.model_parameters[-1, :5] - list(MODEL_OFF.values())).max() > 1.0
+
+
+def test_the_identifying_controller_only_when_asked_or_the_model_is_off() -> None:
+    exact = adparm.paper_config().updated({"sim": {"T": 0.5}})
+    c = adparm.compare(exact, kinds=["adp", "pd"])
+    assert list(c.results) == ["adp", LEARNED_LABEL, "pd"]
+    assert "the model is the plant" in c.identifying_note
+    assert "No identifying run: the model is the plant" in c.table_markdown()
+    forced = adparm.compare(exact, kinds=["adp"], identify=True)
+    assert list(forced.results) == ["adp", LEARNED_LABEL, IDENTIFYING_LABEL]
+    # it starts at the truth (the gradient term moves it off before the stack is informative)
+    np.testing.assert_array_equal(
+        forced.results[IDENTIFYING_LABEL].model_parameters[0],
+        adparm.base_parameters(exact, "plant"),
+    )
+    assert forced.rows[0]["parameter_relative_error"] == 0.0
+    off = exact.updated({"model": {"scale": 0.7}})
+    assert list(adparm.compare(off, kinds=["adp"], identify=False).results) == [
+        "adp",
+        LEARNED_LABEL,
+    ]
+    assert IDENTIFYING_LABEL not in adparm.compare(off, kinds=["pd"]).results
+    with pytest.raises(ValueError, match="identify: no identifying run to add: 'adp' is not"):
+        adparm.compare(off, kinds=["pd"], identify=True)
+    with pytest.raises(ValueError, match="identify: .*identifier.enabled = true"):
+        adparm.compare(off.updated({"identifier": {"enabled": True}}), identify=True)
+    with pytest.raises(TypeError, match="identify: expected True, False or None"):
+        adparm.compare(off, identify="yes")
+    # a config that identifies already: every row runs as configured, no extra row
+    both = adparm.compare(off.updated({"identifier": {"enabled": True}}), kinds=["adp", "pd"])
+    assert list(both.results) == ["adp", LEARNED_LABEL, "pd"]
+    assert all(r.config.identifier.enabled for r in both.results.values())
+
+
+def test_the_figure_draws_the_identifying_run_beside_the_learning_run(
+    identifying_comparison,
+) -> None:
+    figure = identifying_comparison.plot()
+    labels = [line.get_label() for line in figure.axes[0].get_lines()]
+    assert labels == ["adp", IDENTIFYING_LABEL]
+    legend = figure.axes[0].get_legend()
+    assert legend.get_title().get_text() == "learning runs (with probing)"
+    others = [line.get_label() for line in figure.axes[1].get_lines()]
+    assert IDENTIFYING_LABEL not in others and LEARNED_LABEL in others
+
+
+def test_cli_compare_identify_option(tmp_path, capsys) -> None:
+    config = tmp_path / "off.toml"
+    config.write_text("[model]\nscale = 0.7\n[sim]\nT = 0.5\n")
+    out = tmp_path / "cmp"
+    common = [str(config), "--out", str(out), "--no-figures", "--no-progress"]
+    assert main(["compare", *common, "--kinds", "adp,pd"]) == 0
+    with open(out / "compare.csv", newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    assert [row["controller"] for row in rows] == ["adp", LEARNED_LABEL, IDENTIFYING_LABEL, "pd"]
+    assert float(rows[0]["parameter_relative_error"]) == pytest.approx(0.3)
+    assert f"| {IDENTIFYING_LABEL} |" in capsys.readouterr().out
+    assert main(["compare", *common, "--kinds", "adp,pd", "--identify", "no"]) == 0
+    data = json.loads((out / "compare.json").read_text())
+    assert [row["controller"] for row in data["rows"]] == ["adp", LEARNED_LABEL, "pd"]
+    assert data["identifying_note"] == "identify = False"
+    capsys.readouterr()
+    assert main(["compare", *common, "--kinds", "pd", "--identify", "yes"]) == 2
+    assert "identify: no identifying run to add" in capsys.readouterr().err

@@ -383,6 +383,8 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         if section == "model":
             return [[1.0, 1.0], 1.0]
         return ["x", -1.0, 0.0, NAN, True, [1.0, 2.0, 3.0], [1.0, -1.0], [[1.0, 1.0]]]
+    if section == "model" and key == "scale":  # in [0.1, 10]
+        return [*scalar_cases("pos", nullable=True), 0.05, 10.5, 1e300, "1"]
     if section in ("plant", "model") and key in ARM_KEYS:
         cases = scalar_cases("pos" if key == "p2" else "real", nullable=section == "model")
         if key == "p1":

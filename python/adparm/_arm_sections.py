@@ -43,9 +43,6 @@ from .urdf import example_robot_urdf, locked_joints_message, shared_arm
 #: (adparm.example_robot_urdf).
 EXAMPLE_ROBOT_PREFIX = "example-robot-data:"
 
-#: The bounds of model.scale (the factor on the believed two-link model's p1 ... g2).
-MODEL_SCALE_BOUNDS = (0.1, 10.0)
-
 
 def urdf_path(value: Any, name: str) -> str:
     """An absolute path of an existing URDF file (a relative one is taken from the current
@@ -339,13 +336,13 @@ class ModelConfig:
         "plant's number of free joints; only with ``plant.urdf``.",
         via="the believed URDF arm: model_urdf (translate.urdf_settings)",
     )
-    scale: float = setting(
-        1.0,
+    scale: float | None = setting(
+        None,
         "A factor on the believed model's p1, p2, p3, g1 and g2 (each given or the plant's): its "
-        "M, C and G are those of the other keys times scale, the friction is left alone; 1: "
-        f"none; e.g. 0.7 for a model 30 % light. In [{MODEL_SCALE_BOUNDS[0]:g}, "
-        f"{MODEL_SCALE_BOUNDS[1]:g}]; the two-link arm only (a URDF model: ``model.urdf``). The "
-        "one key a sweep over the model's error varies (:doc:`/guide/unknown-dynamics`).",
+        "M, C and G are those of the other keys times scale, the friction is left alone; left "
+        "out: 1; e.g. 0.7 for a model 30 % light. In [0.1, 10]; the two-link arm only (a URDF "
+        "model: ``model.urdf``). The one key a sweep over the model's error varies "
+        "(:doc:`/guide/unknown-dynamics`).",
         via="folded into model.p1 ... model.g2 by ModelConfig.resolve",
     )
 
@@ -354,10 +351,9 @@ class ModelConfig:
             value = getattr(self, key)
             if value is not None:
                 object.__setattr__(self, key, scalar_value(value, f"model.{key}"))
-        scale = scalar_value(self.scale, "model.scale", minimum=MODEL_SCALE_BOUNDS[0])
-        if scale > MODEL_SCALE_BOUNDS[1]:
-            raise ValueError(f"model.scale: must be <= {MODEL_SCALE_BOUNDS[1]:g}, got {scale:g}")
-        object.__setattr__(self, "scale", scale)
+        if self.scale is not None:
+            scale = scalar_value(self.scale, "model.scale", minimum=0.1, maximum=10.0)
+            object.__setattr__(self, "scale", scale)
         locked = locked_joints_value(self.locked_joints, "model.locked_joints")
         object.__setattr__(self, "locked_joints", locked)
         for key in ("coulomb", "viscous"):
@@ -376,7 +372,7 @@ class ModelConfig:
             key: getattr(plant, key) if getattr(self, key) is None else getattr(self, key)
             for key in ARM_KEYS
         }
-        if self.scale != 1.0:
+        if self.scale is not None and self.scale != 1.0:
             values.update({key: self.scale * values[key] for key in TWO_LINK_KEYS})
         return values
 

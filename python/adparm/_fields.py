@@ -62,7 +62,12 @@ def int_text(value: int) -> str:
 
 
 def scalar_value(
-    value: Any, name: str, *, minimum: float | None = None, strict: bool = False
+    value: Any,
+    name: str,
+    *,
+    minimum: float | None = None,
+    strict: bool = False,
+    maximum: float | None = None,
 ) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(
@@ -78,6 +83,8 @@ def scalar_value(
     if minimum is not None and (value <= minimum if strict else value < minimum):
         relation = ">" if strict else ">="
         raise ValueError(f"{name}: must be {relation} {minimum:g}, got {value:g}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name}: must be <= {maximum:g}, got {value:g}")
     return value
 
 

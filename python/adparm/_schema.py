@@ -231,7 +231,7 @@ class ConfigSchema:
                     )
             check_urdf_arm(self.model, "model")
             return
-        if self.model.scale != 1.0:
+        if self.model.scale is not None:
             raise ValueError(
                 "model.scale: the two-link arm only; a URDF arm's model error is another URDF "
                 "(model.urdf), gravity or friction"
