@@ -20,6 +20,7 @@ logger = logging.getLogger(__name__)
 #: Defaults that are None in the dataclasses, as the run resolves them.
 RESOLVED_DEFAULTS = {
     ("model", "*"): "the plant's value",
+    ("model", "scale"): "1 (the model's keys as they are)",
     ("plant", "urdf"): "none (the built-in two-link arm)",
     ("plant", "gravity"): "[0, 0, -9.81] (with ``urdf``)",
     ("plant", "locked_joints"): "none (every joint free)",
