@@ -83,7 +83,10 @@ def test_bad_model_scales_are_refused_naming_the_field(value, error, message) ->
 def test_model_scale_is_refused_on_a_urdf_arm() -> None:
     with pytest.raises(ValueError, match="model.scale: the two-link arm only"):
         adparm.Config.from_dict(
-            {"plant": {"urdf": adparm.example_path("arms/planar_3link.urdf")}, "model": {"scale": 0.9}}
+            {
+                "plant": {"urdf": adparm.example_path("arms/planar_3link.urdf")},
+                "model": {"scale": 0.9},
+            }
         )
 
 
