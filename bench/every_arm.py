@@ -246,8 +246,8 @@ def table(names: list[str], folder: Path, seed: int, T: float) -> list[dict[str,
     )
     print("|---|---|---|---|---|---|---|---|")
     rows = []
-    for index, name in enumerate(names):
-        rng = np.random.default_rng([seed, index])
+    for name in names:
+        rng = np.random.default_rng([seed, ARMS.index(name)])  # the row's cost: not the order
         row = measure(target_config(arm_plant(name, folder, seed), rng, T=T))
         rows.append(row)
         verdict = row["verdict"] if len(row["verdict"]) < 300 else row["verdict"][:300] + " ..."

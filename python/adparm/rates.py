@@ -13,9 +13,10 @@ closed loop of adparm has several fast terms, each a rate in 1/s:
   again (the average over the points): eta_c / nu (1 + [points > 0]).
 
 M is the plant's inertia (the policy's gain is computed from the believed model's, as the
-controller does), sampled at qd(0), q(0) and (with extrapolation) at the joint positions of the
-extrapolation box. :func:`closed_loop_rates` lists them, :func:`auto_step` picks
-sim.dt = "auto" and :func:`check_step` refuses an explicit sim.dt beyond the limit.
+controller does), sampled at qd(0), q(0) and (with extrapolation) at joint positions within
+max(1, 2 |e1(0)|) rad of qd(0) inside the extrapolation box (:func:`rate_positions`).
+:func:`closed_loop_rates` lists them, :func:`auto_step` picks sim.dt = "auto" and
+:func:`check_step` refuses an explicit sim.dt beyond the limit.
 
 :func:`urdf_defaults` derives the settings a URDF arm's config leaves out from the believed
 model's inertia over its joint-limit box (docs: URDF arms, "Defaults derived from the arm").
@@ -41,8 +42,10 @@ __all__ = [
     "auto_input_bound",
     "auto_step",
     "check_step",
+    "extrapolation_box",
     "closed_loop_rates",
     "inertia_range",
+    "rise_ks",
     "urdf_defaults",
 ]
 
@@ -58,6 +61,12 @@ AUTO_MAX_STEP = 1e-3
 #: paper's arm (lambda_min(M) = 0.39 kg m^2, ks = 10, R = 0.25 I) they are 28/s and 10/s.
 RISE_RATE = 30.0
 POLICY_RATE = 10.0
+#: RISE's rate (ks + 1) / lambda_min(M) is kept at or below this (1/s) where a gain ks + 1 = 1
+#: would be faster: then ks + 1 = RISE_RATE_MAX lambda_min < 1 (ks < 0, a deviation from the
+#: paper's ks >= 0). 1000/s is resolved by RK4 at dt = 1 ms with the margin of "auto"
+#: (0.6 * 2.785 / 1 ms = 1671/s), so RISE alone never forces a finer step; with ks >= 0 the
+#: SO-100/101 (lambda_min(M) = 1.3-1.6e-5 kg m^2) needed dt = 2e-5 s.
+RISE_RATE_MAX = 1000.0
 #: alpha1 of a URDF arm (1/s), as the n-joint default before.
 ALPHA1 = 2.0
 #: critic.epsilon_T of a URDF arm with Bellman-error extrapolation. Gamma is reset to gamma0 I
@@ -105,6 +114,16 @@ def _limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
     return low, np.maximum(high, low)
 
 
+def rise_ks(smallest: float) -> float:
+    """control.ks of a URDF arm whose lightest direction has inertia ``smallest`` (lambda_min(M),
+    kg m^2): the gain ks + 1 = max(RISE_RATE lambda_min, min(1, RISE_RATE_MAX lambda_min)).
+    RISE then acts at 30/s on a heavy arm (lambda_min > 1/30 kg m^2), with the paper's least
+    gain 1 (ks = 0) where that acts at 30-1000/s, and at 1000/s (0 < ks + 1 < 1) on lighter
+    arms, whose step 1 / lambda_min would otherwise set (rates.RISE_RATE_MAX)."""
+    gain = max(RISE_RATE * smallest, min(1.0, RISE_RATE_MAX * smallest))
+    return float(gain - 1.0)
+
+
 def inertia_range(urdf: str, locked_joints: dict[str, float] | None = None) -> tuple[float, float]:
     """(lambda_min, lambda_max) of M(q) of a URDF arm (with its locked joints held) over q at 0
     (clipped into the limits) and 64 seeded samples of its joint-limit box (limits clipped to
@@ -125,8 +144,9 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     - task: qd = 0 clipped into the joint limits, q0 = qd + 0.1 rad (- 0.1 at an upper limit),
       dq0 = 0; plant.disturbance 0.1 N m per joint; plant.torque_limits the URDF's
       ``<limit effort>`` (0 or none given: no limit on that joint);
-    - control.alpha1 = 2 I; control.ks = max(0, RISE_RATE lambda_min - 1), so that RISE's rate
-      (ks + 1) / lambda_min is RISE_RATE = 30/s, or 1 / lambda_min where ks = 0 is still faster;
+    - control.alpha1 = 2 I; control.ks = :func:`rise_ks`: RISE's rate (ks + 1) / lambda_min is
+      RISE_RATE = 30/s on heavy arms, 1 / lambda_min (ks = 0) up to 1000/s, and 1000/s with
+      -1 < ks < 0 on arms lighter still;
     - cost (when neither Q nor R is given): R = diag(1 / (POLICY_RATE M_ii(qd))) (the optimal
       policy u* = -R^-1 e2 then acts at about 10/s on every joint, heavy or light: with one r for
       all joints the heavy joints' policy is so slow that the scale of the inertia weights is
@@ -135,8 +155,9 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
       of the exact family, so W* is known. With R given, K = alpha / (2 r_max) I; with Q given
       and R left out, R = I (as before);
     - actor.e2_margin = lambda_min / 10 and actor.weight_bound = max(100, 10 ||W*||);
-    - learning: Bellman-error extrapolation at 2 K points (K basis functions) in a fixed box of
-      half-widths ``b1 = max(1, 2 max|e1(0)|)`` rad on e1 and alpha b1 rad/s on e2, no probing
+    - learning: Bellman-error extrapolation at 2 K points (K basis functions) in the box of
+      :func:`extrapolation_box` (e1: the joint's reach within its limits, capped at pi; e2:
+      alpha1 times that), no probing
       signal (probe.until = 0; the amplitude, if it is turned on, 0.1 (ks + 1 + 1 / r) N m per
       joint, which moves e2 by about 0.1 rad/s); critic.epsilon_T = EPSILON_T_URDF (1e-5; 1e-6
       without extrapolation points); actor.eta_a1 = 0 with extrapolation points (ETA_A1_PAPER
@@ -190,11 +211,17 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         )
     alpha1 = ALPHA1 * eye if "control.alpha1" not in explicit else np.array(config.control.alpha1)
     put("control.alpha1", tuple(map(tuple, alpha1)), "2 I: e1 decays at 2/s")
-    ks = max(0.0, RISE_RATE * smallest - 1.0)
+    ks = rise_ks(smallest)
     put(
         "control.ks",
         ks,
-        f"RISE acts at (ks + 1) / lambda_min(M) = {(ks + 1) / smallest:.3g}/s; {inertia}",
+        f"RISE acts at (ks + 1) / lambda_min(M) = {(ks + 1) / smallest:.3g}/s"
+        + (
+            " (ks < 0, below the paper's ks >= 0: a gain of 1 would act faster than 1000/s)"
+            if ks < 0.0
+            else ""
+        )
+        + f"; {inertia}",
     )
     from .optimal import inertia_matrices
 
@@ -273,12 +300,42 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         "a tenth of lambda_min(M): the e2 block of the learned V stays positive definite, "
         "well below the arm's own",
     )
-    e1_0 = float(np.abs(qd - q0).max())
-    b1 = max(1.0, 2.0 * e1_0)
-    b2 = float(np.abs(np.linalg.eigvals(alpha1)).max()) * b1
-    put("extrapolation.box", (b1,) * n + (b2,) * n, "2 |e1(0)| on e1, alpha1 times that on e2")
+    b1, b2 = extrapolation_box(qd, q0, low, high, alpha1)
+    put(
+        "extrapolation.box",
+        tuple(float(v) for v in np.concatenate([b1, b2])),
+        "e1: the joint's reach from qd(0) within its limits, capped at pi rad (at least "
+        "max(1, 2 |e1(0)|)); e2: alpha1 times that (rates.extrapolation_box)",
+    )
     put("sim.T", 10.0, "learning from extrapolation reaches W* within seconds")
     return values, reasons
+
+
+#: The e1 half-width of the derived extrapolation box is at most this (rad): M(q) of revolute
+#: joints repeats every 2 pi, so qd - e1 with |e1| <= pi reaches every joint position.
+BOX_REACH_CAP = math.pi
+
+
+def extrapolation_box(
+    qd: np.ndarray, q0: np.ndarray, low: np.ndarray, high: np.ndarray, alpha1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The derived extrapolation.box of a URDF arm: half-widths (b1 on e1 in rad, b2 on e2 in
+    rad/s), one per joint.
+
+    b1_i = max(1, 2 max|e1(0)|, min(pi, max(qd_i - low_i, high_i - qd_i))): the errors
+    e1 = qd - q the task can reach, q anywhere within joint i's limits (an unlimited joint: pi),
+    so the points visit the joint positions over the whole range of the arm, where the weights
+    of the structured basis' inertia block (M(q) in the e2 block of V*) are informed. A box of
+    1 rad around qd informed some of those weight directions so weakly that learning stalled
+    (random 5- and 7-joint chains ended 106 % and 4.3 % off W* after 10 s; with 3 rad / 9 rad/s
+    both within 1 %: bench/every_arm.py). b2 = |alpha1|_max b1: e2 = de1 + alpha1 e1 is about
+    alpha1 e1 along a trajectory that decays at alpha1."""
+    reach = np.maximum(qd - low, high - qd)
+    reach = np.where(np.isfinite(reach), reach, BOX_REACH_CAP)
+    floor = max(1.0, 2.0 * float(np.abs(qd - q0).max()))
+    b1 = np.maximum(floor, np.minimum(BOX_REACH_CAP, reach))
+    b2 = float(np.abs(np.linalg.eigvals(alpha1)).max()) * b1
+    return b1, b2
 
 
 # --- cost.input_bound = "auto" ------------------------------------------------------------
@@ -360,10 +417,9 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
 
 
 def check_positions(config: ConfigSchema) -> np.ndarray:
-    """The joint positions (S, n) of a run that matter before it starts: qd(0), q(0) and, with
-    extrapolation, qd(0) - e1 at 32 seeded samples of its e1 box. The rates are taken there, and
-    actor.positive_e2 keeps the structured basis' e2 block sum_b W_b M_b(q) of a URDF arm positive
-    definite there."""
+    """The joint positions (S, n) where actor.positive_e2 keeps the structured basis' e2 block
+    sum_b W_b M_b(q) of a URDF arm positive definite: qd(0), q(0) and, with extrapolation,
+    qd(0) - e1 at 32 seeded samples of its e1 box (the points are evaluated there)."""
     from .desired import desired_state
 
     n = config.dof
@@ -371,6 +427,28 @@ def check_positions(config: ConfigSchema) -> np.ndarray:
     rows = [qd, np.array(config.task.q0, dtype=float)]
     if config.extrapolation.points > 0:
         box = config.extrapolation.box_vector(n)[:n]
+        rng = np.random.default_rng(_SEED)
+        rows += list(qd - rng.uniform(-box, box, size=(32, n)))
+    return np.array(rows)
+
+
+def rate_positions(config: ConfigSchema) -> np.ndarray:
+    """The joint positions (S, n) where :func:`closed_loop_rates` takes M: qd(0), q(0) and, with
+    extrapolation, qd(0) - e1 at 32 seeded samples of the e1 box clipped to
+    max(1, 2 max|e1(0)|) rad: the positions the plant's set-point transient visits. The derived
+    box spans the joint range (:func:`extrapolation_box`), but its points are evaluated, not
+    integrated: only where the plant moves does a rate limit RK4's step (on the random 7-joint
+    chain the initial policy acts at 7,600/s somewhere in its joint range, at 3,300/s within
+    1 rad of qd)."""
+    from .desired import desired_state
+
+    n = config.dof
+    qd = desired_state(config, 0.0)[0]
+    q0 = np.array(config.task.q0, dtype=float)
+    rows = [qd, q0]
+    if config.extrapolation.points > 0:
+        reach = max(1.0, 2.0 * float(np.abs(qd - q0).max()))
+        box = np.minimum(config.extrapolation.box_vector(n)[:n], reach)
         rng = np.random.default_rng(_SEED)
         rows += list(qd - rng.uniform(-box, box, size=(32, n)))
     return np.array(rows)
@@ -428,7 +506,7 @@ def closed_loop_rates(config: ConfigSchema) -> list[dict[str, Any]]:
     eye = np.eye(n)
     alpha1 = np.array(config.control.alpha1, dtype=float)
     rise_gain = (config.control.ks + 1.0) if config.controller.rise else 0.0
-    positions = check_positions(config)
+    positions = rate_positions(config)
     # the controller computes its policy from the believed model; every torque acts through the
     # plant's M^-1, whose rates the step must resolve
     from .optimal import inertia_matrices
