@@ -61,11 +61,7 @@ AUTO_MAX_STEP = 1e-3
 #: paper's arm (lambda_min(M) = 0.39 kg m^2, ks = 10, R = 0.25 I) they are 28/s and 10/s.
 RISE_RATE = 30.0
 POLICY_RATE = 10.0
-#: RISE's rate (ks + 1) / lambda_min(M) is kept at or below this (1/s) where a gain ks + 1 = 1
-#: would be faster: then ks + 1 = RISE_RATE_MAX lambda_min < 1 (ks < 0, a deviation from the
-#: paper's ks >= 0). 1000/s is resolved by RK4 at dt = 1 ms with the margin of "auto"
-#: (0.6 * 2.785 / 1 ms = 1671/s), so RISE alone never forces a finer step; with ks >= 0 the
-#: SO-100/101 (lambda_min(M) = 1.3-1.6e-5 kg m^2) needed dt = 2e-5 s.
+#: RISE's rate cap (1/s) where a gain of 1 is faster (rise_ks); RK4 resolves it at 1 ms.
 RISE_RATE_MAX = 1000.0
 #: alpha1 of a URDF arm (1/s), as the n-joint default before.
 ALPHA1 = 2.0
@@ -83,11 +79,8 @@ EPSILON_T_URDF = 1e-5
 #: M^-1 and, on the Kinova (lambda_min(M) = 1.2e-4 kg m^2), holds actor and critic 7 % off W*
 #: from 1 s on; without it the actor follows the critic at eta_a2 and both reach W*.
 ETA_A1_PAPER = 0.01
-#: actor.eta_a2 of a URDF arm with Bellman-error extrapolation (the paper's: 1): the rate (1/s) at
-#: which the actor follows the critic. The critic evaluates the actor's policy, so the pair
-#: reaches W* about as fast as the slower of the two; with 1 a random 7-joint chain ended with
-#: its critic 8e-4 but its actor 1.7 % off W* after 10 s, with 5 both within 1e-9, within 1 % from
-#: 2.8 s (bench/every_arm.py). 5/s is far from stiff (RK4 at 1 ms resolves 2,785/s).
+#: actor.eta_a2 of a URDF arm with extrapolation (paper: 1), the rate at which the actor follows
+#: the critic (a 7-joint chain: with 1, actor 1.7 % off after 10 s; with 5, 1e-9; docs).
 ETA_A2_URDF = 5.0
 
 _SAMPLES = 64
@@ -121,11 +114,8 @@ def _limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rise_ks(smallest: float) -> float:
-    """control.ks of a URDF arm whose lightest direction has inertia ``smallest`` (lambda_min(M),
-    kg m^2): the gain ks + 1 = max(RISE_RATE lambda_min, min(1, RISE_RATE_MAX lambda_min)).
-    RISE then acts at 30/s on a heavy arm (lambda_min > 1/30 kg m^2), with the paper's least
-    gain 1 (ks = 0) where that acts at 30-1000/s, and at 1000/s (0 < ks + 1 < 1) on lighter
-    arms, whose step 1 / lambda_min would otherwise set (rates.RISE_RATE_MAX)."""
+    """control.ks for lambda_min(M) = ``smallest``: ks + 1 = max(30 lambda_min, min(1, 1000
+    lambda_min)); below 0 (the paper: ks >= 0) only where a gain of 1 acts beyond 1000/s."""
     gain = max(RISE_RATE * smallest, min(1.0, RISE_RATE_MAX * smallest))
     return float(gain - 1.0)
 
@@ -145,29 +135,13 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     """The settings of a URDF arm derived from its believed model (``[model]``, by default the
     plant), for the keys the config leaves out, and the reason for each (for the summary).
 
-    With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF:
-
-    - task: qd = 0 clipped into the joint limits, q0 = qd + 0.1 rad (- 0.1 at an upper limit),
-      dq0 = 0; plant.disturbance 0.1 N m per joint; plant.torque_limits the URDF's
-      ``<limit effort>`` (0 or none given: no limit on that joint);
-    - control.alpha1 = 2 I; control.ks = :func:`rise_ks`: RISE's rate (ks + 1) / lambda_min is
-      RISE_RATE = 30/s on heavy arms, 1 / lambda_min (ks = 0) up to 1000/s, and 1000/s with
-      -1 < ks < 0 on arms lighter still;
-    - cost (when neither Q nor R is given): R = diag(1 / (POLICY_RATE M_ii(qd))) (the optimal
-      policy u* = -R^-1 e2 then acts at about 10/s on every joint, heavy or light: with one r for
-      all joints the heavy joints' policy is so slow that the scale of the inertia weights is
-      barely informed and learning stalls), K = alpha / 2 R^-1 (the e1 and e2 costs balanced
-      where e2 ~ alpha1 e1; the cost is in units of energy) and Q = solvable_cost(K, alpha1, R):
-      of the exact family, so W* is known. With R given, K = alpha / (2 r_max) I; with Q given
-      and R left out, R = I (as before);
-    - actor.e2_margin = lambda_min / 10 and actor.weight_bound = max(100, 10 ||W*||);
-    - learning: Bellman-error extrapolation at 2 K points (K basis functions) in the box of
-      :func:`extrapolation_box` (e1: the joint's reach within its limits, capped at pi; e2:
-      alpha1 times that), no probing
-      signal (probe.until = 0; the amplitude, if it is turned on, 0.1 (ks + 1 + 1 / r) N m per
-      joint, which moves e2 by about 0.1 rad/s); critic.epsilon_T = EPSILON_T_URDF (1e-5; 1e-6
-      without extrapolation points); actor.eta_a1 = 0 and actor.eta_a2 = ETA_A2_URDF (5) with
-      extrapolation points (the paper's 0.01 and 1 without); sim.T = 10 s; sim.dt = "auto".
+    With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF (the rules and their
+    reasons: docs, URDF arms, "Defaults derived from the arm"): the task (qd = 0 within the
+    limits, q0 = qd + 0.1 rad), plant.disturbance, plant.torque_limits (``<limit effort>``),
+    control.alpha1 = 2 I, control.ks (:func:`rise_ks`), the cost (R = diag(1 / (POLICY_RATE
+    M_ii(qd))), Q = solvable_cost(alpha / 2 R^-1, alpha1, R)), actor.e2_margin, .weight_bound,
+    the learning (extrapolation points and :func:`extrapolation_box`, no probing, epsilon_T,
+    eta_a1, eta_a2), sim.T = 10 s and sim.dt = "auto".
     """
     from .optimal import solvable_cost
 
@@ -324,25 +298,18 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     return values, reasons
 
 
-#: The e1 half-width of the derived extrapolation box is at most this (rad): M(q) of revolute
-#: joints repeats every 2 pi, so qd - e1 with |e1| <= pi reaches every joint position.
+#: The derived box's e1 half-width cap (rad): M(q) of a revolute joint repeats every 2 pi.
 BOX_REACH_CAP = math.pi
 
 
 def extrapolation_box(
     qd: np.ndarray, q0: np.ndarray, low: np.ndarray, high: np.ndarray, alpha1: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The derived extrapolation.box of a URDF arm: half-widths (b1 on e1 in rad, b2 on e2 in
-    rad/s), one per joint.
-
-    b1_i = max(1, 2 max|e1(0)|, min(pi, max(qd_i - low_i, high_i - qd_i))): the errors
-    e1 = qd - q the task can reach, q anywhere within joint i's limits (an unlimited joint: pi),
-    so the points visit the joint positions over the whole range of the arm, where the weights
-    of the structured basis' inertia block (M(q) in the e2 block of V*) are informed. A box of
-    1 rad around qd informed some of those weight directions so weakly that learning stalled
-    (random 5- and 7-joint chains ended 106 % and 4.3 % off W* after 10 s; with 3 rad / 9 rad/s
-    both within 1 %: bench/every_arm.py). b2 = |alpha1|_max b1: e2 = de1 + alpha1 e1 is about
-    alpha1 e1 along a trajectory that decays at alpha1."""
+    """The derived extrapolation.box (b1 on e1, b2 on e2, per joint; docs: URDF arms):
+    b1_i = max(1, 2 max|e1(0)|, min(pi, max(qd_i - low_i, high_i - qd_i))), the errors that reach
+    every position of joint i within its limits, so the points inform the inertia block of the
+    weights over the whole joint range (a 1 rad box left 5- and 7-joint chains 106 % and 4.3 %
+    off W* after 10 s); b2 = |alpha1|_max b1 (e2 ~ alpha1 e1)."""
     reach = np.maximum(qd - low, high - qd)
     reach = np.where(np.isfinite(reach), reach, BOX_REACH_CAP)
     floor = max(1.0, 2.0 * float(np.abs(qd - q0).max()))
@@ -446,13 +413,10 @@ def check_positions(config: ConfigSchema) -> np.ndarray:
 
 
 def rate_positions(config: ConfigSchema) -> np.ndarray:
-    """The joint positions (S, n) where :func:`closed_loop_rates` takes M: qd(0), q(0) and, with
-    extrapolation, qd(0) - e1 at 32 seeded samples of the e1 box clipped to
-    max(1, 2 max|e1(0)|) rad: the positions the plant's set-point transient visits. The derived
-    box spans the joint range (:func:`extrapolation_box`), but its points are evaluated, not
-    integrated: only where the plant moves does a rate limit RK4's step (on the random 7-joint
-    chain the initial policy acts at 7,600/s somewhere in its joint range, at 3,300/s within
-    1 rad of qd)."""
+    """Where :func:`closed_loop_rates` takes M: qd(0), q(0) and, with extrapolation, qd(0) - e1 at
+    32 seeded samples of the e1 box clipped to max(1, 2 max|e1(0)|) rad, where the plant moves:
+    the points elsewhere are evaluated, not integrated (a 7-joint chain's initial policy: 7,600/s
+    over its joint range, 3,300/s within 1 rad of qd)."""
     from .desired import desired_state
 
     n = config.dof
