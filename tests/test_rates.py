@@ -289,7 +289,16 @@ def test_an_inadmissible_start_is_lifted_by_the_projection_or_named() -> None:
     config, rng = _random_exact_cost(PLANAR, 3)
     w_star = adparm.optimal_weights(config)
     start = (w_star * (1 + 0.2 * rng.choice([-1, 1], size=w_star.size))).tolist()
-    config = config.updated({"init": {"critic_weights": start, "actor_weights": start}})
+    # the learning of the former defaults (actor.eta_a2 = 1, a box of 1 rad on e1): with the
+    # derived ones (eta_a2 = 5, the box over the joint range) this run reaches W* even unprojected
+    alpha = float(np.abs(np.linalg.eigvals(np.array(config.control.alpha1))).max())
+    config = config.updated(
+        {
+            "init": {"critic_weights": start, "actor_weights": start},
+            "actor": {"eta_a2": 1.0},
+            "extrapolation": {"box": [1.0] * config.dof + [alpha] * config.dof},
+        }
+    )
     assert initial_actor_e2_block(config)["min_eigenvalue"] < 0.0
     assert adparm.simulate(config).diagnostics["verdict"] == "ok"
     unprojected = config.updated({"actor": {"positive_e2": False}})
