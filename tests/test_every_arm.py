@@ -107,8 +107,9 @@ def test_the_arm_learns_W_star_from_20_percent_off_in_10_s(folder: Path, name: s
 
 
 def test_a_run_stopped_before_W_star_says_so(folder: Path) -> None:
-    """The same run stopped at 1 s is outside 1 %, and its verdict says which parts are."""
-    config = _target("chain3", folder, every_arm.ARMS.index("chain3"), T=1.0)
+    """The same run stopped at 0.2 s (it is within 1 % from about 0.5 s) is outside 1 %, and its
+    verdict says which parts are."""
+    config = _target("chain3", folder, every_arm.ARMS.index("chain3"), T=0.2)
     row = every_arm.measure(config)
     assert row["status"] == "finished" and not row["ok"]
     assert row["verdict"].startswith("ended away from the known W* (tolerance 0.01)")
