@@ -1,11 +1,12 @@
 """Issue 21's targets, measured: every fixed-base arm of example-robot-data and random serial
 chains of 3-7 joints, each given only ``[plant] urdf`` (the Panda: and its fingers locked), a
 random cost of the exact family (so W* is known), initial critic and actor weights 20 % off W*
-and ``[sim] T = 10``. Prints per arm the verdict, the critic's and the policy's error at the end,
-the time from which critic and actor stay within 1 % of W*, and the computing time per simulated
-second. Then the second target: runs on a 3-joint arm and the UR5 from random initial positions
-(+-0.5 rad around the default) with random costs: how many end within 1 %, and whether every run
-outside 1 % says so in its verdict (none silent).
+and ``[sim] T = 10``. Prints per arm the derived RISE gain ks, the step, the verdict, the
+critic's and the policy's error at the end, the time from which critic and actor stay within 1 %
+of W*, and the computing time per simulated second. Then the second target: runs on a 3-joint
+arm and the UR5 from random initial positions (+-0.5 rad around the default) with random costs:
+how many end within 1 %, and whether every run outside 1 % says so in its verdict (none
+silent).
 
     python bench/every_arm.py [--arms ur3,chain4,...] [--seed 0] [--T 10] [--runs 20]
                               [--skip-table] [--skip-runs]
@@ -205,7 +206,12 @@ def time_within(result: adparm.SimulationResult, tolerance: float = TOLERANCE) -
 
 def measure(config: adparm.Config) -> dict[str, Any]:
     """Runs a config and returns the row of the table (the refusal or divergence as verdict)."""
-    row: dict[str, Any] = {"joints": config.dof, "dt": config.sim.dt, "T": config.sim.T}
+    row: dict[str, Any] = {
+        "joints": config.dof,
+        "dt": config.sim.dt,
+        "T": config.sim.T,
+        "ks": config.control.ks,
+    }
     start = time.perf_counter()
     try:
         with warnings.catch_warnings():
@@ -240,19 +246,19 @@ def _number(value: float | None, form: str = ".2g") -> str:
 
 def table(names: list[str], folder: Path, seed: int, T: float) -> list[dict[str, Any]]:
     print(
-        "| arm | joints | dt (s) | verdict | critic error | policy error | within 1 % from (s) | "
-        "compute per simulated s (s) |",
+        "| arm | joints | ks | dt (s) | verdict | critic error | policy error | "
+        "within 1 % from (s) | compute per simulated s (s) |",
         flush=True,
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     rows = []
-    for index, name in enumerate(names):
-        rng = np.random.default_rng([seed, index])
+    for name in names:
+        rng = np.random.default_rng([seed, ARMS.index(name)])  # the row's cost: not the order
         row = measure(target_config(arm_plant(name, folder, seed), rng, T=T))
         rows.append(row)
         verdict = row["verdict"] if len(row["verdict"]) < 300 else row["verdict"][:300] + " ..."
         print(
-            f"| {name} | {row['joints']} | {row['dt']:.2g} | {verdict} | "
+            f"| {name} | {row['joints']} | {row['ks']:.3g} | {row['dt']:.2g} | {verdict} | "
             f"{_number(row.get('critic'))} | {_number(row.get('policy'))} | "
             f"{_number(row.get('within'), '.2f')} | {_number(row.get('compute_per_second'))} |",
             flush=True,

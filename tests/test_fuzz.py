@@ -334,6 +334,8 @@ def scalar_cases(kind: str, nullable: bool = False) -> list[Any]:
         cases += NEGATIVE
     if kind == "pos":
         cases += [0.0, -0.0, 0]
+    if kind == "above_minus_one":  # control.ks: the gain ks + 1 > 0
+        cases += [-1.0, -1, -1.5, -1e300]
     return cases
 
 
@@ -470,7 +472,7 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         T = data["sim"]["T"]
         return scalar_cases("pos") + [2 * T, T * 1e-11]  # dt > T; more than 1e10 steps
     kinds = {
-        "ks": "nonneg",
+        "ks": "above_minus_one",
         "alpha2": "nonneg",
         "beta1": "nonneg",
         "eta_c": "nonneg",

@@ -49,7 +49,8 @@ def test_defaults_follow_the_rule_of_the_docs() -> None:
     config = _bare(PLANAR)
     smallest, _ = inertia_range(config.plant.urdf)
     n = config.dof
-    assert config.control.ks == pytest.approx(max(0.0, 30.0 * smallest - 1.0))
+    gain = max(30.0 * smallest, min(1.0, 1000.0 * smallest))
+    assert config.control.ks == pytest.approx(gain - 1.0)
     # no cost given: R = diag(1 / (10 M_ii(qd))), K = alpha / 2 R^-1, Q of the exact family
     M = adparm.optimal.inertia_matrices(config, [config.task.qd], model=True)[0]
     assert np.allclose(config.cost.R, np.diag(1.0 / (10.0 * np.diag(M))))
@@ -68,6 +69,73 @@ def test_defaults_follow_the_rule_of_the_docs() -> None:
     again = adparm.Config.from_dict(tomllib.loads(config.to_toml()))
     assert again == config
     assert "ks" in config.to_dict()["control"]
+
+
+def test_the_derived_box_spans_the_joint_range() -> None:
+    """extrapolation.box: per joint the reach of e1 = qd - q within the limits, capped at pi, at
+    least max(1, 2 |e1(0)|); alpha1 times that on e2; derived again for a new alpha1; given: kept.
+    The rates are taken where the plant moves (within max(1, 2 |e1(0)|) of qd), not over the
+    whole box."""
+    from adparm.rates import extrapolation_box, rate_positions
+
+    config = _bare(PLANAR)
+    n = config.dof
+    limits = adparm.urdf.config_arm(config).limits
+    low, high = np.asarray(limits["lower"]), np.asarray(limits["upper"])
+    qd = np.asarray(config.task.qd, dtype=float)
+    reach = np.minimum(np.pi, np.maximum(qd - low, high - qd))
+    b1 = np.maximum(reach, 1.0)
+    box = config.extrapolation.box_vector(n)
+    assert np.allclose(box, np.concatenate([b1, 2.0 * b1]))  # alpha1 = 2 I
+    assert "extrapolation.box" in config.derived
+    assert "reach" in config.derived["extrapolation.box"]
+    faster = config.updated({"control": {"alpha1": (3.0 * np.eye(n)).tolist()}})
+    assert np.allclose(faster.extrapolation.box_vector(n)[n:], 3.0 * b1)
+    # a short joint range keeps the floor of 1 rad; an unlimited joint reaches pi
+    b1, b2 = extrapolation_box(
+        np.zeros(2),
+        np.full(2, 0.1),
+        np.array([-0.2, np.nan]),
+        np.array([0.3, np.nan]),
+        2.0 * np.eye(2),
+    )
+    assert np.allclose(b1, [1.0, np.pi]) and np.allclose(b2, [2.0, 2.0 * np.pi])
+    given = config.updated({"extrapolation": {"box": 0.5}})
+    assert np.allclose(given.extrapolation.box_vector(n), 0.5)
+    positions = rate_positions(config)
+    assert np.abs(positions - qd).max() <= max(1.0, 2 * np.abs(qd - config.task.q0).max())
+
+
+def test_ks_below_zero_only_for_arms_so_light_that_a_gain_of_1_is_stiff() -> None:
+    """control.ks = max(30 lambda_min, min(1, 1000 lambda_min)) - 1: the SO-101's wrist
+    (lambda_min ~ 1.3e-5 kg m^2) gets -1 < ks < 0 and RISE acting at 1000/s (the step 1 ms); an
+    arm with lambda_min >= 1e-3 keeps ks >= 0. ks > -1 is accepted by the schema and the core,
+    -1 refused by both, naming control.ks."""
+    from adparm.rates import rise_ks
+
+    assert rise_ks(1.0) == pytest.approx(29.0)
+    assert rise_ks(0.01) == 0.0 and rise_ks(1e-3) == 0.0
+    assert rise_ks(1e-5) == pytest.approx(-0.99)
+    so101 = _bare(_example("so101"))
+    smallest, _ = inertia_range(adparm.example_robot_urdf("so101"))
+    assert -1.0 < so101.control.ks < 0.0
+    assert (so101.control.ks + 1.0) / smallest == pytest.approx(1000.0)
+    assert "below the paper's ks >= 0" in so101.derived["control.ks"]
+    assert so101.sim.dt == 1e-3
+    brief = so101.updated({"sim": {"T": 0.2}})
+    assert adparm.simulate(brief, diagnose=False).status == "finished"
+    with pytest.raises(ValueError, match=r"^control\.ks: must be > -1"):
+        so101.updated({"control": {"ks": -1.0}})
+    from adparm.simulation import core_settings
+
+    settings = core_settings(brief)
+    control = settings.control  # pybind11 copies nested structs: change and assign back
+    rise = control.rise
+    rise.ks = -1.0
+    control.rise = rise
+    settings.control = control
+    with pytest.raises(ValueError, match=r"^control\.ks: must be a finite number > -1"):
+        adparm._core.Simulation(settings)
 
 
 def test_the_paper_keeps_its_values() -> None:
@@ -221,7 +289,16 @@ def test_an_inadmissible_start_is_lifted_by_the_projection_or_named() -> None:
     config, rng = _random_exact_cost(PLANAR, 3)
     w_star = adparm.optimal_weights(config)
     start = (w_star * (1 + 0.2 * rng.choice([-1, 1], size=w_star.size))).tolist()
-    config = config.updated({"init": {"critic_weights": start, "actor_weights": start}})
+    # the learning of the former defaults (actor.eta_a2 = 1, a box of 1 rad on e1): with the
+    # derived ones (eta_a2 = 5, the box over the joint range) this run reaches W* even unprojected
+    alpha = float(np.abs(np.linalg.eigvals(np.array(config.control.alpha1))).max())
+    config = config.updated(
+        {
+            "init": {"critic_weights": start, "actor_weights": start},
+            "actor": {"eta_a2": 1.0},
+            "extrapolation": {"box": [1.0] * config.dof + [alpha] * config.dof},
+        }
+    )
     assert initial_actor_e2_block(config)["min_eigenvalue"] < 0.0
     assert adparm.simulate(config).diagnostics["verdict"] == "ok"
     unprojected = config.updated({"actor": {"positive_e2": False}})

@@ -154,7 +154,11 @@ class ControlConfig:
         core="control.alpha1",
     )
     ks: float = setting(
-        10.0, "RISE gain (eqs. 27-28). Not printed in the paper.", core="control.rise.ks"
+        10.0,
+        "RISE gain (eqs. 27-28); the feedback acts with ks + 1, so ks > -1 (the paper's proofs "
+        "take ks >= 0: below 0 is a deviation, for arms so light that a gain of 1 is stiff; "
+        "see :doc:`/guide/urdf-arms`). Not printed in the paper.",
+        core="control.rise.ks",
     )
     alpha2: float = setting(1.0, "RISE gain. Not printed in the paper.", core="control.rise.alpha2")
     beta1: float = setting(
@@ -174,7 +178,11 @@ class ControlConfig:
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha1", square_matrix(self.alpha1, "control.alpha1"))
         check_hurwitz(self.alpha1, "control.alpha1")
-        for key in ("ks", "alpha2", "beta1"):
+        # ks > -1, not >= 0 as in the paper: only the gain ks + 1 (> 0) enters eqs. (27)-(28)
+        object.__setattr__(
+            self, "ks", scalar_value(self.ks, "control.ks", minimum=-1.0, strict=True)
+        )
+        for key in ("alpha2", "beta1"):
             object.__setattr__(
                 self, key, scalar_value(getattr(self, key), f"control.{key}", minimum=0.0)
             )
