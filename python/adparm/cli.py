@@ -490,7 +490,12 @@ def _compare_checked(
     interrupt: SimulationInterrupted | None = None
     try:
         # a signal during J* (after the runs) keeps the runs: compare raises with all of them
-        comparison = compare(config, kinds, progress=not args.no_progress)
+        comparison = compare(
+            config,
+            kinds,
+            progress=not args.no_progress,
+            optimal_cost=True if args.optimal_cost else None,
+        )
     except SimulationInterrupted as stopped:
         interrupt, comparison = stopped, stopped.result
     except ValueError as error:

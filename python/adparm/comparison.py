@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -95,8 +95,9 @@ _MARKDOWN = {
 }
 
 
-#: compare computes J* on URDF arms up to this many joints: the CasADi transcription of a 6-joint
-#: arm (the UR5) takes minutes per solve (adparm.optimal_cost computes it when asked).
+#: compare computes J* by default on URDF arms up to this many joints: the CasADi transcription of
+#: a 6-joint arm (the UR5) takes minutes per solve (compare(..., optimal_cost=True) or adparm
+#: compare --optimal-cost computes it on any arm).
 COMPARE_URDF_MAX_DOF = 3
 
 
@@ -351,7 +352,8 @@ class Comparison:
         if best is None:
             text += (
                 "J* = - (not computed: a moving qd, a URDF arm of more than "
-                f"{COMPARE_URDF_MAX_DOF} joints or a failed solve). "
+                f"{COMPARE_URDF_MAX_DOF} joints without optimal_cost=True (adparm compare "
+                "--optimal-cost), optimal_cost=False, or a failed solve). "
             )
         else:
             note = getattr(best, "note", "")
@@ -428,6 +430,7 @@ def compare(
     kinds: str | Sequence[str] = DEFAULT_KINDS,
     *,
     progress: bool = False,
+    optimal_cost: bool | Mapping[str, Any] | None = None,
 ) -> Comparison:
     """Run ``config`` under several controllers on the same arm, task and initial state.
 
@@ -446,6 +449,14 @@ def compare(
         learning still on.
     progress : bool, optional
         Show a progress bar.
+    optimal_cost : bool or dict, optional
+        J* of the J / J* - 1 column (adparm.optimal_cost on the plant's error system). None (the
+        default): computed, except on a URDF arm of more than COMPARE_URDF_MAX_DOF (3) joints,
+        whose solve takes minutes (the UR5: 9-23 s of CPU at 20-80 intervals over 5 s, where
+        J* still changes by 0.4 % from 40 to 80 intervals; the default refinement to 1e-4 takes
+        800 intervals or more). True: computed on any arm, with adparm.optimal_cost's defaults;
+        a dict: computed on any arm with these options (e.g. ``{"intervals": 40, "rtol":
+        1e-2}``: a coarser J*, whose stated error is in the table's note); False: not computed.
 
     Returns
     -------
@@ -463,6 +474,11 @@ def compare(
         status "interrupted"), or, during J* after the runs, of every run, with
         :data:`J_STAR_INTERRUPTED` in its ``post_run_errors``.
     """
+    if not (optimal_cost is None or isinstance(optimal_cost, (bool, Mapping))):
+        raise TypeError(
+            "optimal_cost: expected None, True, False or a dict of adparm.optimal_cost options, "
+            f"got {type(optimal_cost).__name__}"
+        )
     configs = controller_configs(config, kinds)
     check_steps(list(configs.values()))  # every run's step, before the first one runs
     results: dict[str, SimulationResult] = {}
@@ -487,7 +503,7 @@ def compare(
     # after the runs: a failure of J* loses no run (post_run_errors), nor does Ctrl-C, which
     # raises SimulationInterrupted with every run and says that J* was interrupted
     try:
-        best, problem = _optimal_cost(config)
+        best, problem = _optimal_cost(config, optimal_cost)
     except KeyboardInterrupt:
         stopped = _comparison(results)
         problems = (*stopped.post_run_errors, J_STAR_INTERRUPTED)
@@ -509,13 +525,19 @@ def _optimal_cost_json(best: float) -> dict[str, Any]:
     return {"value": float(best), **{key: getattr(best, key, None) for key in keys}}
 
 
-def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
-    """:func:`run_optimal_cost` with compare's cap: None on a URDF arm of more than
-    COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes (call
-    adparm.optimal_cost(config, model=False) for it)."""
-    if config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF:
+def _optimal_cost(
+    config: Config, wanted: bool | Mapping[str, Any] | None = None
+) -> tuple[float | None, str | None]:
+    """:func:`run_optimal_cost` as compare's ``optimal_cost`` asks: by default None on a URDF arm
+    of more than COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes; True or a dict of
+    options: on any arm; False: never."""
+    if wanted is False:
         return None, None
-    return run_optimal_cost(config)
+    if wanted is None:
+        if config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF:
+            return None, None
+        wanted = {}
+    return run_optimal_cost(config, **(dict(wanted) if isinstance(wanted, Mapping) else {}))
 
 
 def run_optimal_cost(config: Config, **options: Any) -> tuple[float | None, str | None]:
