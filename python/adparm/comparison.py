@@ -95,9 +95,8 @@ _MARKDOWN = {
 }
 
 
-#: compare computes J* by default on URDF arms up to this many joints: the CasADi transcription of
-#: a 6-joint arm (the UR5) takes minutes per solve (compare(..., optimal_cost=True) or adparm
-#: compare --optimal-cost computes it on any arm).
+#: compare computes J* by default on URDF arms up to this many joints (the UR5's solve takes
+#: minutes; compare(..., optimal_cost=True) computes it on any arm).
 COMPARE_URDF_MAX_DOF = 3
 
 
@@ -450,13 +449,10 @@ def compare(
     progress : bool, optional
         Show a progress bar.
     optimal_cost : bool or dict, optional
-        J* of the J / J* - 1 column (adparm.optimal_cost on the plant's error system). None (the
-        default): computed, except on a URDF arm of more than COMPARE_URDF_MAX_DOF (3) joints,
-        whose solve takes minutes (the UR5: 9-23 s of CPU at 20-80 intervals over 5 s, where
-        J* still changes by 0.4 % from 40 to 80 intervals; the default refinement to 1e-4 takes
-        800 intervals or more). True: computed on any arm, with adparm.optimal_cost's defaults;
-        a dict: computed on any arm with these options (e.g. ``{"intervals": 40, "rtol":
-        1e-2}``: a coarser J*, whose stated error is in the table's note); False: not computed.
+        J* of the J / J* - 1 column. None: computed, except on URDF arms of more than
+        COMPARE_URDF_MAX_DOF (3) joints (minutes per solve on the UR5); True, or a dict of
+        adparm.optimal_cost options (e.g. ``{"intervals": 40, "rtol": 1e-2}``, a coarser J*
+        whose error the note states): computed on any arm; False: not computed.
 
     Returns
     -------
@@ -475,10 +471,8 @@ def compare(
         :data:`J_STAR_INTERRUPTED` in its ``post_run_errors``.
     """
     if not (optimal_cost is None or isinstance(optimal_cost, (bool, Mapping))):
-        raise TypeError(
-            "optimal_cost: expected None, True, False or a dict of adparm.optimal_cost options, "
-            f"got {type(optimal_cost).__name__}"
-        )
+        wanted = "None, True, False or a dict of adparm.optimal_cost options"
+        raise TypeError(f"optimal_cost: expected {wanted}, got {type(optimal_cost).__name__}")
     configs = controller_configs(config, kinds)
     check_steps(list(configs.values()))  # every run's step, before the first one runs
     results: dict[str, SimulationResult] = {}
@@ -525,18 +519,11 @@ def _optimal_cost_json(best: float) -> dict[str, Any]:
     return {"value": float(best), **{key: getattr(best, key, None) for key in keys}}
 
 
-def _optimal_cost(
-    config: Config, wanted: bool | Mapping[str, Any] | None = None
-) -> tuple[float | None, str | None]:
-    """:func:`run_optimal_cost` as compare's ``optimal_cost`` asks: by default None on a URDF arm
-    of more than COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes; True or a dict of
-    options: on any arm; False: never."""
-    if wanted is False:
+def _optimal_cost(config: Config, wanted: Any = None) -> tuple[float | None, str | None]:
+    """:func:`run_optimal_cost` as compare's ``optimal_cost`` asks."""
+    large = config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF
+    if wanted is False or (wanted is None and large):
         return None, None
-    if wanted is None:
-        if config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF:
-            return None, None
-        wanted = {}
     return run_optimal_cost(config, **(dict(wanted) if isinstance(wanted, Mapping) else {}))
 
 
@@ -575,22 +562,7 @@ def run_optimal_cost(config: Config, **options: Any) -> tuple[float | None, str 
         except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
             return None, post_run_failure("J* (adparm.optimal_cost)", error)
 
-    return solve_once(_problem_key(config, options), solve)  # a sweep's cache: once per problem
-
-
-def _problem_key(config: Config, options: dict[str, Any]) -> str:
-    """What J* of :func:`run_optimal_cost` depends on, as text: the plant (arm, friction,
-    gravity, limits, disturbance), the task, the cost, alpha1, sim.T (the horizon) and the
-    options (the believed model is not used: model=False)."""
-    sections = config.to_dict()
-    problem = {name: sections[name] for name in ("plant", "task", "cost")}
-    problem["alpha1"] = sections["control"]["alpha1"]
-    problem["T"] = config.sim.T
-    problem["options"] = {
-        key: value.tolist() if hasattr(value, "tolist") else value
-        for key, value in sorted(options.items())
-    }
-    return json.dumps(problem, sort_keys=True, default=repr)
+    return solve_once(config, options, solve)  # within a sweep: once per problem
 
 
 def _run(config: Config, progress: bool) -> SimulationResult:

@@ -214,13 +214,14 @@ def optimal_cost_cache() -> Iterator[None]:
                 _optimal_costs = None
 
 
-def solve_once(key: str, solve: Callable[[], _Solved]) -> _Solved:
-    """``solve()``, or, within :func:`optimal_cost_cache`, its result for ``key`` from an earlier
-    call (``key`` names the problem completely: adparm.comparison.run_optimal_cost's); threads
-    asking for the same key at once wait for one solve."""
+def solve_once(config: Config, options: Mapping[str, Any], solve: Callable[[], _Solved]) -> _Solved:
+    """``solve()``: J* of ``config`` with adparm.optimal_cost ``options`` (adparm.comparison.
+    run_optimal_cost's), or, within :func:`optimal_cost_cache`, its result from an earlier call
+    on the same problem; threads asking for the same problem at once wait for one solve."""
     cache = _optimal_costs
     if cache is None:
         return solve()
+    key = _problem_key(config, options)
     with _optimal_costs_lock:
         entry = cache.setdefault(key, (threading.Lock(), []))
     lock, solved = entry
@@ -228,6 +229,21 @@ def solve_once(key: str, solve: Callable[[], _Solved]) -> _Solved:
         if not solved:
             solved.append(solve())
         return solved[0]
+
+
+def _problem_key(config: Config, options: Mapping[str, Any]) -> str:
+    """What J* on the plant's error system (model=False: the believed model is not used)
+    depends on, as text: the plant (arm, friction, gravity, limits, disturbance), the task, the
+    cost, alpha1, sim.T (its horizon) and the options."""
+    sections = config.to_dict()
+    problem: dict[str, Any] = {name: sections[name] for name in ("plant", "task", "cost")}
+    problem["alpha1"] = sections["control"]["alpha1"]
+    problem["T"] = config.sim.T
+    problem["options"] = {
+        key: value.tolist() if hasattr(value, "tolist") else value
+        for key, value in sorted(options.items())
+    }
+    return json.dumps(problem, sort_keys=True, default=repr)
 
 
 def _metric_names(optimal_cost: Any) -> tuple[str, ...]:
