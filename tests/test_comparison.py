@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,7 @@ from adparm.config import tomllib
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 
 LABELS = ["adp", LEARNED_LABEL, "rise", "pd", "optimal"]
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -381,6 +383,31 @@ def test_optimal_cost_is_left_out_on_a_six_joint_urdf_arm(monkeypatch) -> None:
     assert comparison._optimal_cost(config) == (None, None)
     note = adparm.Comparison(results={}, rows=[]).cost_note()
     assert f"more than {comparison.COMPARE_URDF_MAX_DOF} joints" in note
+
+
+def test_optimal_cost_on_request_on_a_six_joint_urdf_arm(monkeypatch) -> None:
+    """compare(..., optimal_cost=True or a dict of options) computes J* on any arm (on the UR5
+    with a 0.2 s horizon and 20 intervals here: a few seconds), the same as run_optimal_cost
+    with those options; optimal_cost=False leaves it out on any arm; another value is refused."""
+    from adparm import comparison, truth
+
+    real, seen = truth.optimal_cost, []
+
+    def noting(config, **options):
+        seen.append(options)
+        return real(config, **options)
+
+    monkeypatch.setattr(truth, "optimal_cost", noting)
+    config = adparm.load_config(ROOT / "examples" / "ur5.toml").updated({"sim": {"T": 0.2}})
+    options = {"intervals": 20, "max_intervals": 20}
+    best, problem = comparison._optimal_cost(config, options)
+    assert problem is None and best > 0.0 and best.intervals == 20
+    assert seen[0]["intervals"] == 20 and seen[0]["model"] is False
+    assert float(best) == pytest.approx(float(comparison.run_optimal_cost(config, **options)[0]))
+    monkeypatch.setattr(truth, "optimal_cost", lambda *a, **k: pytest.fail("solve started"))
+    assert comparison._optimal_cost(adparm.paper_config(), False) == (None, None)
+    with pytest.raises(TypeError, match="optimal_cost: expected None, True, False or a dict"):
+        adparm.compare(adparm.paper_config(), "pd", optimal_cost="yes")
 
 
 def test_applied_cost_charges_the_quadratic_cost_with_an_input_bound() -> None:

@@ -297,3 +297,40 @@ def test_a_lambda_sweep_on_the_ur5_carries_saturation_and_J_over_J_star() -> Non
         assert len(row["saturated_time"]) == n
         assert row["optimal_cost"] > 0.0
         assert 0.0 <= row["cost_vs_optimal_cost"] < 10.0
+
+
+def test_a_sweep_solves_each_J_star_problem_once(monkeypatch) -> None:
+    """Rows that differ only in settings J* does not depend on (a learning gain, cost.input_bound:
+    J charges the quadratic cost) share one IPOPT solve, with equal J*; rows with another x(0)
+    solve their own; outside a sweep every call solves (no cache)."""
+    import adparm.truth as truth
+    from adparm.comparison import run_optimal_cost
+
+    real, calls = truth.optimal_cost, []
+
+    def counting(config, **options):
+        calls.append(tuple(config.task.q0))
+        return real(config, **options)
+
+    monkeypatch.setattr(truth, "optimal_cost", counting)
+    base = adparm.paper_config().updated({"sim": {"T": 0.3}, "probe": {"until": 0.0}})
+    options = {"intervals": 20, "max_intervals": 20}
+    grid = {"actor.eta_a2": [0.5, 1.0], "cost.input_bound": [5.0, 20.0]}
+    table = adparm.sweep(base, grid, optimal_cost=options, threads=2)
+    assert len(table) == 4 and len(calls) == 1
+    assert len({row["optimal_cost"] for row in table}) == 1
+    assert table.rows[0]["optimal_cost"] == pytest.approx(run_optimal_cost(base, **options)[0])
+    calls.clear()
+    with ThreadPoolExecutor(2) as executor:  # a thread executor shares the sweep's cache
+        table = adparm.sweep(base, grid, optimal_cost=options, executor=executor)
+    assert len(calls) == 1
+    calls.clear()
+    q0 = [[0.3, 0.5], [0.2, 0.4]]
+    table = adparm.sweep(
+        base, {"task.q0": q0, "critic.eta_c": [100.0, 800.0]}, optimal_cost=options
+    )
+    assert len(calls) == 2 and len({row["optimal_cost"] for row in table}) == 2
+    calls.clear()
+    run_optimal_cost(base, **options)
+    run_optimal_cost(base, **options)
+    assert len(calls) == 2

@@ -214,6 +214,7 @@ def run_optimal_cost(config: Config, **options: Any) -> tuple[float | None, str 
     adparm.optimal_cost (e.g. ``intervals``, ``max_intervals``, ``rtol``). Returns J*, or None
     where it does not apply (a moving qd) or fails (e.g. a URDF arm with locked joints), and the
     failure (one line) or None."""
+    from .sweep import solve_once
     from .truth import optimal_cost  # the module's attribute: tests replace it
     from .yardstick import default_horizon, plant_config
 
@@ -229,9 +230,13 @@ def run_optimal_cost(config: Config, **options: Any) -> tuple[float | None, str 
         # d_i sin t or d_i cos t): J* over these relaxed limits bounds every row's J
         disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
         options["torque_limits"] = np.asarray(limits, dtype=float) + disturbance
-    try:
-        if config.sim.T < default_horizon(plant_config(config)):
-            return optimal_cost(config, horizon=config.sim.T, terminal=False, **options), None
-        return optimal_cost(config, **options), None
-    except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
-        return None, post_run_failure("J* (adparm.optimal_cost)", error)
+
+    def solve() -> tuple[float | None, str | None]:
+        try:
+            if config.sim.T < default_horizon(plant_config(config)):
+                return optimal_cost(config, horizon=config.sim.T, terminal=False, **options), None
+            return optimal_cost(config, **options), None
+        except Exception as error:  # noqa: BLE001 - IPOPT or a yardstick failed: no run is lost
+            return None, post_run_failure("J* (adparm.optimal_cost)", error)
+
+    return solve_once(config, options, solve)  # within a sweep: once per problem

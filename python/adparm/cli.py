@@ -496,7 +496,11 @@ def _compare_checked(
     try:
         # a signal during J* (after the runs) keeps the runs: compare raises with all of them
         comparison = compare(
-            config, kinds, identify=_IDENTIFY[args.identify], progress=not args.no_progress
+            config,
+            kinds,
+            identify=_IDENTIFY[args.identify],
+            progress=not args.no_progress,
+            optimal_cost=True if args.optimal_cost else None,
         )
     except SimulationInterrupted as stopped:
         interrupt, comparison = stopped, stopped.result

@@ -123,6 +123,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     common(comparison, "compare")
     comparison.add_argument(
+        "--optimal-cost",
+        action="store_true",
+        help="compute J* (the J / J* - 1 column) on any arm: by default it is left out on URDF "
+        "arms of more than 3 joints, whose IPOPT solve takes minutes",
+    )
+    comparison.add_argument(
         "--kinds",
         default=",".join(DEFAULT_KINDS),
         help="controllers, comma-separated",
@@ -165,8 +171,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweeping.add_argument(
         "--optimal-cost",
         action="store_true",
-        help="add each row's J, J* and J / J* - 1 (as compare's; one IPOPT solve per row: about "
-        "a second on the paper's arm, minutes on a 6-joint arm)",
+        help="add each row's J, J* and J / J* - 1 (as compare's; one IPOPT solve per distinct "
+        "problem, shared by rows that differ only in settings J* does not depend on: about a "
+        "second on the paper's arm, minutes on a 6-joint arm)",
     )
     horizon_options(sweeping)
     return parser

@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -115,8 +115,8 @@ _MARKDOWN = {
 }
 
 
-#: compare computes J* on URDF arms up to this many joints: the CasADi transcription of a 6-joint
-#: arm (the UR5) takes minutes per solve (adparm.optimal_cost computes it when asked).
+#: compare computes J* by default on URDF arms up to this many joints (the UR5's solve takes
+#: minutes; compare(..., optimal_cost=True) computes it on any arm).
 COMPARE_URDF_MAX_DOF = 3
 
 
@@ -349,7 +349,8 @@ class Comparison:
         if best is None:
             text += (
                 "J* = - (not computed: a moving qd, a URDF arm of more than "
-                f"{COMPARE_URDF_MAX_DOF} joints or a failed solve). "
+                f"{COMPARE_URDF_MAX_DOF} joints without optimal_cost=True (adparm compare "
+                "--optimal-cost), optimal_cost=False, or a failed solve). "
             )
         else:
             note = getattr(best, "note", "")
@@ -440,6 +441,7 @@ def compare(
     *,
     identify: bool | None = None,
     progress: bool = False,
+    optimal_cost: bool | Mapping[str, Any] | None = None,
 ) -> Comparison:
     """Run ``config`` under several controllers on the same arm, task and initial state.
 
@@ -467,6 +469,11 @@ def compare(
         ``identify``, when it cannot be). False: never.
     progress : bool, optional
         Show a progress bar.
+    optimal_cost : bool or dict, optional
+        J* of the J / J* - 1 column. None: computed, except on URDF arms of more than
+        COMPARE_URDF_MAX_DOF (3) joints (minutes per solve on the UR5); True, or a dict of
+        adparm.optimal_cost options (e.g. ``{"intervals": 40, "rtol": 1e-2}``, a coarser J*
+        whose error the note states): computed on any arm; False: not computed.
 
     Returns
     -------
@@ -485,6 +492,9 @@ def compare(
         status "interrupted"), or, during J* after the runs, of every run, with
         :data:`J_STAR_INTERRUPTED` in its ``post_run_errors``.
     """
+    if not (optimal_cost is None or isinstance(optimal_cost, (bool, Mapping))):
+        wanted = "None, True, False or a dict of adparm.optimal_cost options"
+        raise TypeError(f"optimal_cost: expected {wanted}, got {type(optimal_cost).__name__}")
     configs, note = _run_configs(config, kinds, identify)
     check_steps(list(configs.values()))  # every run's step, before the first one runs
     results: dict[str, SimulationResult] = {}
@@ -509,7 +519,7 @@ def compare(
     # after the runs: a failure of J* loses no run (post_run_errors), nor does Ctrl-C, which
     # raises SimulationInterrupted with every run and says that J* was interrupted
     try:
-        best, problem = _optimal_cost(config)
+        best, problem = _optimal_cost(config, optimal_cost)
     except KeyboardInterrupt:
         stopped = _comparison(results)
         problems = (*stopped.post_run_errors, J_STAR_INTERRUPTED)
@@ -531,13 +541,12 @@ def _optimal_cost_json(best: float) -> dict[str, Any]:
     return {"value": float(best), **{key: getattr(best, key, None) for key in keys}}
 
 
-def _optimal_cost(config: Config) -> tuple[float | None, str | None]:
-    """:func:`run_optimal_cost` with compare's cap: None on a URDF arm of more than
-    COMPARE_URDF_MAX_DOF joints, whose IPOPT solve takes minutes (call
-    adparm.optimal_cost(config, model=False) for it)."""
-    if config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF:
+def _optimal_cost(config: Config, wanted: Any = None) -> tuple[float | None, str | None]:
+    """:func:`run_optimal_cost` as compare's ``optimal_cost`` asks."""
+    large = config.plant.urdf is not None and config.dof > COMPARE_URDF_MAX_DOF
+    if wanted is False or (wanted is None and large):
         return None, None
-    return run_optimal_cost(config)
+    return run_optimal_cost(config, **(dict(wanted) if isinstance(wanted, Mapping) else {}))
 
 
 def _run(config: Config, progress: bool) -> SimulationResult:

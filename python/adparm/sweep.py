@@ -15,10 +15,12 @@ import dataclasses
 import itertools
 import json
 import reprlib
-from collections.abc import Iterator, Mapping, Sequence
+import threading
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -194,6 +196,66 @@ def _point_text(point: Mapping[str, Any]) -> str:
     short = reprlib.Repr()
     short.maxlevel, short.maxlist, short.maxdict, short.maxstring = 4, 6, 8, 60
     return short.repr(dict(point))
+
+
+_Solved = TypeVar("_Solved")
+
+# The per-sweep J* cache (optimal_cost_cache): problem key -> (its lock, [J* and its failure] once
+# solved), or None when no sweep is running in this process.
+_optimal_costs: dict[str, Any] | None = None
+_optimal_costs_lock = threading.Lock()
+
+
+@contextmanager
+def optimal_cost_cache() -> Iterator[None]:
+    """Within, :func:`solve_once` solves each distinct J* problem once: a sweep's rows that differ
+    only in settings J* does not depend on (the controller's gains, the learning, the
+    extrapolation, ``cost.input_bound``: J charges the quadratic cost) share one IPOPT solve. The
+    sweep holds it over its runs (in this process; an executor's worker processes solve their
+    own); nested uses share the outer cache."""
+    global _optimal_costs
+    with _optimal_costs_lock:
+        outer = _optimal_costs
+        if outer is None:
+            _optimal_costs = {}
+    try:
+        yield
+    finally:
+        if outer is None:
+            with _optimal_costs_lock:
+                _optimal_costs = None
+
+
+def solve_once(config: Config, options: Mapping[str, Any], solve: Callable[[], _Solved]) -> _Solved:
+    """``solve()``: J* of ``config`` with adparm.optimal_cost ``options`` (adparm.comparison.
+    run_optimal_cost's), or, within :func:`optimal_cost_cache`, its result from an earlier call
+    on the same problem; threads asking for the same problem at once wait for one solve."""
+    cache = _optimal_costs
+    if cache is None:
+        return solve()
+    key = _problem_key(config, options)
+    with _optimal_costs_lock:
+        entry = cache.setdefault(key, (threading.Lock(), []))
+    lock, solved = entry
+    with lock:
+        if not solved:
+            solved.append(solve())
+        return solved[0]
+
+
+def _problem_key(config: Config, options: Mapping[str, Any]) -> str:
+    """What J* on the plant's error system (model=False: the believed model is not used)
+    depends on, as text: the plant (arm, friction, gravity, limits, disturbance), the task, the
+    cost, alpha1, sim.T (its horizon) and the options."""
+    sections = config.to_dict()
+    problem: dict[str, Any] = {name: sections[name] for name in ("plant", "task", "cost")}
+    problem["alpha1"] = sections["control"]["alpha1"]
+    problem["T"] = config.sim.T
+    problem["options"] = {
+        key: value.tolist() if hasattr(value, "tolist") else value
+        for key, value in sorted(options.items())
+    }
+    return json.dumps(problem, sort_keys=True, default=repr)
 
 
 def _metric_names(optimal_cost: Any, model: bool = False) -> tuple[str, ...]:
@@ -385,12 +447,13 @@ def sweep(
         )
     done: dict[int, dict[str, Any]] = {}  # point index -> metrics, as the runs finish
     try:
-        if executor is None:
-            rows = _run_in_process(configs, workers, tolerance, progress, optimal_cost, model)
-        else:
-            rows = _run_on_executor(executor, configs, tolerance, progress, optimal_cost, model)
-        for index, row in rows:
-            done[index] = row
+        with optimal_cost_cache():  # one J* per distinct problem (with optimal_cost)
+            if executor is None:
+                rows = _run_in_process(configs, workers, tolerance, progress, optimal_cost, model)
+            else:
+                rows = _run_on_executor(executor, configs, tolerance, progress, optimal_cost, model)
+            for index, row in rows:
+                done[index] = row
     except KeyboardInterrupt:
         table = _table(parameters, points, done, metrics)
         raise SimulationInterrupted(
