@@ -34,7 +34,9 @@
 //     a set-point and N fixed extrapolation points (urdf_settings below): the planar 3-link arm
 //     and the UR5, N = 0 and 50, over min(simulated_seconds, 2 s); a run that does not finish or
 //     allocates in its steps fails the bench. bench/urdf_speed.py times the same 3-link cases in
-//     NumPy + Pinocchio's Python bindings against these lines.
+//     NumPy + Pinocchio's Python bindings against these lines. Before them
+//   bench=dense_kernels name=avx512|avx2|portable
+//     the critic's dense kernels these loops run (dense_kernels.hpp; ADPARM_KERNELS chooses).
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (bench/heap_counter.hpp: glibc's
 // malloc interposed, or AddressSanitizer's allocation hook; -1 elsewhere).
@@ -69,6 +71,7 @@
 
 #include "adparm/any_simulation.hpp"
 #include "adparm/batch.hpp"
+#include "adparm/dense_kernels.hpp"
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/urdf_loop_arm.hpp"
@@ -368,6 +371,8 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
     std::printf("bench=urdf_loop arm=ur5 skipped=example-robot-data_not_found\n");
   else
     arms.emplace_back("ur5", robots + "/ur_description/urdf/ur5_robot.urdf");
+  std::printf("bench=dense_kernels name=%s\n",
+              adparm::dense_kernels_name(adparm::select_dense_kernels()));
   bool ok = true;
   for (const auto& [name, path] : arms) {
     const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),

@@ -438,8 +438,15 @@ class ClosedLoop {
                                  Weights& actor_gradient, Data& data) const {
     const Eigen::Index n = dof();
     const Eigen::MatrixXd& stacked = extrapolation_.stacked_input_gradients();
-    data.point_products.col(0).noalias() = stacked.transpose() * actor_weights;
-    data.point_products.col(1).noalias() = stacked.transpose() * difference;
+    const DenseKernels* kernels = critic_.kernels();  // nullptr: Eigen's (dense_kernels.hpp)
+    if (kernels != nullptr)
+      kernels->transposed_products(
+          stacked.rows(), stacked.cols(), stacked.data(), stacked.rows(), actor_weights.data(),
+          difference.data(), data.point_products.col(0).data(), data.point_products.col(1).data());
+    else {
+      data.point_products.col(0).noalias() = stacked.transpose() * actor_weights;
+      data.point_products.col(1).noalias() = stacked.transpose() * difference;
+    }
     const double weight = 1.0 / static_cast<double>(extrapolation_.size());
     Evaluation e;
     for (long i = 0; i < extrapolation_.size(); ++i) {
@@ -451,7 +458,12 @@ class ClosedLoop {
       data.point_coefficients.segment(i * n, n) = actor_.gradient_coefficients(
           times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
     }
-    actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
+    if (kernels != nullptr)  // (26), all points
+      kernels->product(stacked.rows(), 1, stacked.cols(), stacked.data(), stacked.rows(),
+                       data.point_coefficients.data(), 1, 1, actor_gradient.data(),
+                       actor_gradient.size(), true);
+    else
+      actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
   }
 
   template <class Local>

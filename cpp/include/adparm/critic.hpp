@@ -10,12 +10,15 @@
 // Dynamic sizes (K = Eigen::Dynamic, the URDF arms) gather the samples (trajectory and points) in
 // blocks (gather/flush): Gamma [omega_1 ... omega_s] is then one matrix product and the s rank-one
 // terms of dGamma one rank-s product, instead of s matrix-vector and s outer products (the same
-// sums up to round-off; the fixed-size path keeps add_rates).
+// sums up to round-off; the fixed-size path keeps add_rates). Those products run in the dense
+// kernels chosen at run time for the CPU (dense_kernels.hpp: AVX2 or AVX-512), or, with
+// ADPARM_KERNELS=portable or on a CPU without them, in Eigen's portable products.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
+#include "adparm/dense_kernels.hpp"
 #include "adparm/types.hpp"
 
 namespace adparm {
@@ -57,7 +60,11 @@ class Critic {
 
   Critic() = default;
   // `size`: the basis size K (== kSize when it is fixed).
-  Critic(const CriticSettings& settings, Eigen::Index size) : settings_(settings), size_(size) {
+  // The dense kernels are chosen here, once (ADPARM_KERNELS, dense_kernels.hpp; checked for
+  // every loop, used by the dynamic sizes' gather/flush).
+  Critic(const CriticSettings& settings, Eigen::Index size)
+      : settings_(settings), size_(size), kernels_(select_dense_kernels()) {
+    if constexpr (kSize != Dynamic) kernels_ = nullptr;  // add_rates: no kernels
     check_non_negative(settings.eta_c, "critic.eta_c");
     check_non_negative(settings.nu, "critic.nu");
     check_positive(settings.gamma0, "critic.gamma0");
@@ -67,6 +74,8 @@ class Critic {
   }
 
   const CriticSettings& settings() const { return settings_; }
+  // The dense kernels of gather/flush (nullptr: Eigen's portable products).
+  const DenseKernels* kernels() const { return kernels_; }
 
   Workspace workspace() const {
     Workspace w;
@@ -249,12 +258,27 @@ class Critic {
     const auto omegas = w.omegas.leftCols(s);
     auto gamma_omegas = w.gamma_omegas.leftCols(s);
     auto scaled = w.scaled.leftCols(s);
-    gamma_omegas.noalias() = gamma * omegas;
+    const Eigen::Index k = gamma.rows();
+    if (kernels_ != nullptr)
+      kernels_->product(k, s, k, gamma.data(), gamma.outerStride(), omegas.data(),
+                        omegas.innerStride(), omegas.outerStride(), gamma_omegas.data(),
+                        gamma_omegas.outerStride(), false);
+    else
+      gamma_omegas.noalias() = gamma * omegas;
     for (Eigen::Index i = 0; i < s; ++i) {
       const double gain = w.weights[i] * settings_.eta_c /
                           (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
       w.coefficients[i] *= gain;
       scaled.col(i) = gain * gamma_omegas.col(i);
+    }
+    if (kernels_ != nullptr) {  // the same products in the dispatched kernels
+      kernels_->product(k, 1, s, gamma_omegas.data(), gamma_omegas.outerStride(),
+                        w.coefficients.data(), 1, s, weight_rate.data(), k, true);
+      kernels_->rank_update(k, s, scaled.data(), scaled.outerStride(), gamma_omegas.data(),
+                            gamma_omegas.outerStride(), gamma_rate.data(), gamma_rate.outerStride(),
+                            s > 1);
+      w.lower_only = w.lower_only || s > 1;
+      return;
     }
     weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
     if (s == 1) {  // an outer product, whole (no GEMM for one column; cheaper than a mirror)
@@ -267,6 +291,7 @@ class Critic {
 
   CriticSettings settings_{};
   Eigen::Index size_ = kSize == Dynamic ? 0 : kSize;
+  const DenseKernels* kernels_ = nullptr;  // fixed sizes: none (add_rates)
 };
 
 }  // namespace adparm

@@ -1,0 +1,149 @@
+// The dense kernels of dense_kernels.hpp, written once over an instruction set's vector type:
+// included by each ISA's translation unit (dense_kernels_avx2.cpp, dense_kernels_avx512.cpp)
+// inside an anonymous namespace, after it defines `Isa`:
+//   V, Mask, kWidth (doubles per V), kRowVectors and kColumns (a register block of C: rows in
+//   vectors, columns),
+//   zero(), load(p), load(p, mask) (zero-filled), store(p, v), store(p, v, mask),
+//   broadcast(p), fma(a, b, c) = a b + c, subtract(a, b) = a - b, mask(count), sum(v).
+// Nothing here has external linkage and no standard header is included: every function compiled
+// with the wider instruction set stays in its unit, so the linker can never hand it to a caller
+// built for the portable one.
+//
+// Register blocks: C's rows in kRowVectors vectors (then 1, then a masked one) x kColumns columns
+// (a single column: 4 vectors, four independent sums), each entry's products summed in the order
+// of the depth index from zero, then stored (C = sum) or subtracted (C -= sum): a fixed order,
+// the same result on every call.
+
+template <int kRowVectors, int kColumnCount, bool kSubtract, bool kMasked>
+inline void block(long depth, const double* a, long lda, const double* b, long b_depth_stride,
+                  long b_column_stride, double* c, long ldc, Isa::Mask mask) {
+  constexpr long w = Isa::kWidth;
+  Isa::V sums[kRowVectors][kColumnCount];
+  for (int r = 0; r < kRowVectors; ++r)
+    for (int j = 0; j < kColumnCount; ++j) sums[r][j] = Isa::zero();
+  for (long p = 0; p < depth; ++p) {
+    const double* a_column = a + p * lda;
+    Isa::V a_values[kRowVectors];
+    for (int r = 0; r < kRowVectors; ++r)
+      a_values[r] = kMasked ? Isa::load(a_column + r * w, mask) : Isa::load(a_column + r * w);
+    const double* b_row = b + p * b_depth_stride;
+    for (int j = 0; j < kColumnCount; ++j) {
+      const Isa::V b_value = Isa::broadcast(b_row + j * b_column_stride);
+      for (int r = 0; r < kRowVectors; ++r) sums[r][j] = Isa::fma(a_values[r], b_value, sums[r][j]);
+    }
+  }
+  for (int j = 0; j < kColumnCount; ++j) {
+    for (int r = 0; r < kRowVectors; ++r) {
+      double* out = c + j * ldc + r * w;
+      if (kMasked) {
+        const Isa::V value =
+            kSubtract ? Isa::subtract(Isa::load(out, mask), sums[r][j]) : sums[r][j];
+        Isa::store(out, value, mask);
+      } else {
+        Isa::store(out, kSubtract ? Isa::subtract(Isa::load(out), sums[r][j]) : sums[r][j]);
+      }
+    }
+  }
+}
+
+// kColumnCount columns of C, rows row_begin ... m - 1.
+template <int kColumnCount, bool kSubtract>
+inline void column_block(long m, long row_begin, long depth, const double* a, long lda,
+                         const double* b, long b_depth_stride, long b_column_stride, double* c,
+                         long ldc) {
+  constexpr long w = Isa::kWidth;
+  constexpr int rows = kColumnCount == 1 ? 4 : Isa::kRowVectors;  // vectors per block
+  long i = row_begin;
+  for (; i + rows * w <= m; i += rows * w)
+    block<rows, kColumnCount, kSubtract, false>(depth, a + i, lda, b, b_depth_stride,
+                                                b_column_stride, c + i, ldc, Isa::Mask());
+  for (; i + w <= m; i += w)
+    block<1, kColumnCount, kSubtract, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                             c + i, ldc, Isa::Mask());
+  if (i < m)
+    block<1, kColumnCount, kSubtract, true>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                            c + i, ldc, Isa::mask(m - i));
+}
+
+// The last n < kColumns columns: column_block<n>.
+template <int kColumnCount, bool kSubtract>
+inline void last_columns(long n, long m, long row_begin, long depth, const double* a, long lda,
+                         const double* b, long b_depth_stride, long b_column_stride, double* c,
+                         long ldc) {
+  if constexpr (kColumnCount > 0) {
+    if (n == kColumnCount)
+      column_block<kColumnCount, kSubtract>(m, row_begin, depth, a, lda, b, b_depth_stride,
+                                            b_column_stride, c, ldc);
+    else
+      last_columns<kColumnCount - 1, kSubtract>(n, m, row_begin, depth, a, lda, b, b_depth_stride,
+                                                b_column_stride, c, ldc);
+  }
+}
+
+// C (m x n) = or -= A (m x depth) B (depth x n); lower: column j's rows from j's column block on.
+template <bool kSubtract>
+void blocked_product(long m, long n, long depth, const double* a, long lda, const double* b,
+                     long b_depth_stride, long b_column_stride, double* c, long ldc, bool lower) {
+  long j = 0;
+  for (; j + Isa::kColumns <= n; j += Isa::kColumns) {
+    const long row_begin = lower ? j : 0;
+    column_block<Isa::kColumns, kSubtract>(m, row_begin, depth, a, lda, b + j * b_column_stride,
+                                           b_depth_stride, b_column_stride, c + j * ldc, ldc);
+  }
+  if (j < n)
+    last_columns<Isa::kColumns - 1, kSubtract>(n - j, m, lower ? j : 0, depth, a, lda,
+                                               b + j * b_column_stride, b_depth_stride,
+                                               b_column_stride, c + j * ldc, ldc);
+}
+
+void product(long m, long n, long depth, const double* a, long lda, const double* b,
+             long b_depth_stride, long b_column_stride, double* c, long ldc, bool subtract) {
+  if (subtract)
+    blocked_product<true>(m, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc, false);
+  else
+    blocked_product<false>(m, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc, false);
+}
+
+// C -= A B^T: B^T's entry (p, j) is b[j + p * ldb].
+void rank_update(long n, long depth, const double* a, long lda, const double* b, long ldb,
+                 double* c, long ldc, bool lower) {
+  blocked_product<true>(n, n, depth, a, lda, b, ldb, 1, c, ldc, lower);
+}
+
+// y0[j] = A(:, j) . x0, y1[j] = A(:, j) . x1, four columns at a time.
+template <int kColumnCount>
+inline void transposed_block(long m, const double* a, long lda, const double* x0, const double* x1,
+                             double* y0, double* y1, Isa::Mask tail) {
+  constexpr long w = Isa::kWidth;
+  Isa::V sums0[kColumnCount], sums1[kColumnCount];
+  for (int j = 0; j < kColumnCount; ++j) sums0[j] = sums1[j] = Isa::zero();
+  long i = 0;
+  for (; i + w <= m; i += w) {
+    const Isa::V v0 = Isa::load(x0 + i), v1 = Isa::load(x1 + i);
+    for (int j = 0; j < kColumnCount; ++j) {
+      const Isa::V column = Isa::load(a + j * lda + i);
+      sums0[j] = Isa::fma(column, v0, sums0[j]);
+      sums1[j] = Isa::fma(column, v1, sums1[j]);
+    }
+  }
+  if (i < m) {
+    const Isa::V v0 = Isa::load(x0 + i, tail), v1 = Isa::load(x1 + i, tail);
+    for (int j = 0; j < kColumnCount; ++j) {
+      const Isa::V column = Isa::load(a + j * lda + i, tail);
+      sums0[j] = Isa::fma(column, v0, sums0[j]);
+      sums1[j] = Isa::fma(column, v1, sums1[j]);
+    }
+  }
+  for (int j = 0; j < kColumnCount; ++j) {
+    y0[j] = Isa::sum(sums0[j]);
+    y1[j] = Isa::sum(sums1[j]);
+  }
+}
+
+void transposed_products(long m, long n, const double* a, long lda, const double* x0,
+                         const double* x1, double* y0, double* y1) {
+  const Isa::Mask tail = Isa::mask(m % Isa::kWidth);
+  long j = 0;
+  for (; j + 4 <= n; j += 4) transposed_block<4>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
+  for (; j < n; ++j) transposed_block<1>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
+}
