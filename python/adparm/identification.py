@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 
 from .config import Config, ModelConfig
-from .optimal import base_parameter_names, base_parameters
+from .dynamics import base_parameter_groups
+from .optimal import base_parameters
 from .result import SimulationResult
 
 __all__ = [
@@ -39,11 +40,10 @@ def identified_parameters(config: Config) -> list[int]:
     """The indices (in the order of base_parameter_names) of the parameters the identifier
     estimates: identifier.inertia, .gravity and .friction say which groups; the others stay at
     the model's values."""
-    groups = {"p1": "inertia", "p2": "inertia", "p3": "inertia", "g1": "gravity", "g2": "gravity"}
     return [
         i
-        for i, name in enumerate(base_parameter_names(config))
-        if getattr(config.identifier, groups.get(name, "friction"))
+        for i, group in enumerate(base_parameter_groups(config))
+        if getattr(config.identifier, group)
     ]
 
 
