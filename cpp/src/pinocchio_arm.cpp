@@ -482,12 +482,39 @@ PinocchioArm::Terms PinocchioArm::make_terms() const {
   return terms;
 }
 
+void PinocchioArm::EstimateDeleter::operator()(EstimateData* estimate) const { delete estimate; }
+
+PinocchioArm::Estimate PinocchioArm::make_estimate() const {
+  Estimate estimate(new EstimateData{impl_->model, impl_->coulomb, impl_->viscous});
+  return estimate;
+}
+
+bool PinocchioArm::set_estimate(const Eigen::Ref<const Eigen::VectorXd>& pi,
+                                const Eigen::Ref<const Eigen::VectorXd>& coulomb,
+                                const Eigen::Ref<const Eigen::VectorXd>& viscous,
+                                EstimateData& estimate) const {
+  check_size(pi, parameter_count(), 1, "pi");
+  check_size(coulomb, dof_, 1, "coulomb");
+  check_size(viscous, dof_, 1, "viscous");
+  for (int i = 0; i < dof_; ++i)
+    if (!(pi[10 * i] > 0.0) || !std::isfinite(pi[10 * i])) return false;
+  for (int i = 0; i < dof_; ++i)
+    estimate.model.inertias[static_cast<pinocchio::JointIndex>(i + 1)] =
+        pinocchio::Inertia::FromDynamicParameters(pi.segment<10>(10 * i));
+  estimate.coulomb = coulomb;
+  estimate.viscous = viscous;
+  return true;
+}
+
 void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
-                           const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms) const {
+                           const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms,
+                           const EstimateData* estimate) const {
   check_size(q, dof_, 1, "q");
   check_size(dq, dof_, 1, "dq");
   const Impl& s = *impl_;
-  const pinocchio::Model& model = s.model;
+  const pinocchio::Model& model = estimate != nullptr ? estimate->model : s.model;
+  const Eigen::VectorXd& coulomb = estimate != nullptr ? estimate->coulomb : s.coulomb;
+  const Eigen::VectorXd& viscous = estimate != nullptr ? estimate->viscous : s.viscous;
   WorkspaceData& w = *terms.workspace;
   pinocchio::Data& data = w.data;
   s.set_configuration(q, w.configuration);
@@ -514,7 +541,7 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   }
   for (Eigen::Index i = 0; i < dof_; ++i)
     terms.friction[i] =
-        s.coulomb[i] * static_cast<double>((dq[i] > 0.0) - (dq[i] < 0.0)) + s.viscous[i] * dq[i];
+        coulomb[i] * static_cast<double>((dq[i] > 0.0) - (dq[i] < 0.0)) + viscous[i] * dq[i];
 }
 
 Eigen::VectorXd PinocchioArm::inertial_parameters() const {

@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/multibody/data.hpp>
@@ -63,5 +64,70 @@ struct PinocchioArm::WorkspaceData {
         unit_acceleration(Eigen::VectorXd::Zero(model.nv)),
         mass_factor(model.nv) {}
 };
+
+// SplitMix64: a fixed generator, so that the sampled poses (and the base parameters) are the same
+// with every standard library.
+struct SplitMix64 {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+};
+
+// An estimate of the arm (PinocchioArm::Estimate): the model with other inertias, and friction.
+struct PinocchioArm::EstimateData {
+  pinocchio::Model model;
+  Eigen::VectorXd coulomb, viscous;
+};
+
+// The gradient g of 2 T_k with respect to a body's local spatial velocity (v, w), for its
+// parameter k (0..9, Pinocchio's order: m, m c, I about the joint frame's origin); since T_k is a
+// quadratic form, 2 T_k = g . (v, w) / 2 (Pinocchio's computeKineticEnergyRegressor).
+//   m:     T = 1/2 |v|^2
+//   mc_a:  T = (v x w)_a, with d/dv = w x e_a and d/dw = e_a x v
+//   I_ab:  T = 1/2 w_a^2 (a = b) or w_a w_b (a != b)
+inline Eigen::Matrix<double, 1, 6> energy_gradient(int k, const Eigen::Vector3d& v,
+                                                   const Eigen::Vector3d& w) {
+  Eigen::Matrix<double, 1, 6> g = Eigen::Matrix<double, 1, 6>::Zero();
+  switch (k) {
+    case 0:  // 2 T = |v|^2
+      g.head<3>() = 2.0 * v.transpose();
+      break;
+    case 1:
+    case 2:
+    case 3: {  // 2 T = 2 (v x w)_a
+      const Eigen::Vector3d e = Eigen::Vector3d::Unit(k - 1);
+      g.head<3>() = 2.0 * w.cross(e).transpose();
+      g.tail<3>() = 2.0 * e.cross(v).transpose();
+      break;
+    }
+    case 4:  // 2 T = w_x^2
+      g[3] = 2.0 * w[0];
+      break;
+    case 5:  // 2 T = 2 w_x w_y
+      g[3] = 2.0 * w[1];
+      g[4] = 2.0 * w[0];
+      break;
+    case 6:  // 2 T = w_y^2
+      g[4] = 2.0 * w[1];
+      break;
+    case 7:  // 2 T = 2 w_x w_z
+      g[3] = 2.0 * w[2];
+      g[5] = 2.0 * w[0];
+      break;
+    case 8:  // 2 T = 2 w_y w_z
+      g[4] = 2.0 * w[2];
+      g[5] = 2.0 * w[1];
+      break;
+    default:  // 2 T = w_z^2
+      g[5] = 2.0 * w[2];
+      break;
+  }
+  return g;
+}
 
 }  // namespace adparm

@@ -22,19 +22,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// SplitMix64: a fixed generator, so that the sampled poses (and the base parameters) are the same
-// with every standard library.
-struct SplitMix64 {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
-};
-
 const char* const kParameterNames[10] = {"m",    "mc_x", "mc_y", "mc_z", "I_xx",
                                          "I_xy", "I_yy", "I_xz", "I_yz", "I_zz"};
 
@@ -44,51 +31,6 @@ std::string body_name(const pinocchio::Model& model, pinocchio::JointIndex joint
   for (const auto& frame : model.frames)
     if (frame.type == pinocchio::BODY && frame.parentJoint == joint) return frame.name;
   return model.names[joint];
-}
-
-// The gradient g of 2 T_k with respect to the body's local spatial velocity (v, w), for its
-// parameter k (0..9, Pinocchio's order); 2 T_k = g . (v, w) / 2, since T_k is a quadratic form.
-//   m:     T = 1/2 |v|^2
-//   mc_a:  T = (v x w)_a, with d/dv = w x e_a and d/dw = e_a x v
-//   I_ab:  T = 1/2 w_a^2 (a = b) or w_a w_b (a != b)
-Eigen::Matrix<double, 1, 6> energy_gradient(int k, const Eigen::Vector3d& v,
-                                            const Eigen::Vector3d& w) {
-  Eigen::Matrix<double, 1, 6> g = Eigen::Matrix<double, 1, 6>::Zero();
-  switch (k) {
-    case 0:  // 2 T = |v|^2
-      g.head<3>() = 2.0 * v.transpose();
-      break;
-    case 1:
-    case 2:
-    case 3: {  // 2 T = 2 (v x w)_a
-      const Eigen::Vector3d e = Eigen::Vector3d::Unit(k - 1);
-      g.head<3>() = 2.0 * w.cross(e).transpose();
-      g.tail<3>() = 2.0 * e.cross(v).transpose();
-      break;
-    }
-    case 4:  // 2 T = w_x^2
-      g[3] = 2.0 * w[0];
-      break;
-    case 5:  // 2 T = 2 w_x w_y
-      g[3] = 2.0 * w[1];
-      g[4] = 2.0 * w[0];
-      break;
-    case 6:  // 2 T = w_y^2
-      g[4] = 2.0 * w[1];
-      break;
-    case 7:  // 2 T = 2 w_x w_z
-      g[3] = 2.0 * w[2];
-      g[5] = 2.0 * w[0];
-      break;
-    case 8:  // 2 T = 2 w_y w_z
-      g[4] = 2.0 * w[2];
-      g[5] = 2.0 * w[1];
-      break;
-    default:  // 2 T = w_z^2
-      g[5] = 2.0 * w[2];
-      break;
-  }
-  return g;
 }
 
 }  // namespace

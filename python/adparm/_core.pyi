@@ -778,6 +778,14 @@ class UrdfArm:
         """
         (values (r,), columns (r,), combination (r, 10 n)): the base inertial parameters (pinocchio_structured_basis.hpp).
         """
+    def identifier_parameters(self) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], list[str], list[str]]:
+        """
+        (values (P,), names, groups): the online identifier's base parameters beta = [kinetic (the structured basis'); gravity's beyond them; coulomb; viscous] (urdf_regressor.hpp), each group 'inertia', 'gravity' or 'friction'.
+        """
+    def identifier_regressors(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], ddq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], dq_r: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], ddq_r: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> dict:
+        """
+        The online identifier's regressors (n, P) in identifier_parameters()' beta (urdf_regressor.hpp): Y (M ddq + C dq + G + F), Y_r (M ddq_r + C(q, dq) dq_r + G + F), Y_M (M dq) and Y_N (G + F - C^T dq).
+        """
     def mass_regressor(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
         """
         M_k(q) for the inertial parameters, side by side: (n, n * 10 n), M_k in columns [k n, (k + 1) n).

@@ -94,10 +94,11 @@ class ExtrapolationConfig:
 
 @dataclass(frozen=True)
 class IdentifierConfig:
-    """The online identifier of the arm's base inertial parameters beta (issue 25, stage 1; not in
-    the paper; :doc:`/guide/unknown-dynamics`). The believed model (``[model]``) is the initial
-    estimate beta_hat(0); the controller then uses beta_hat wherever the model appears. Stage 1:
-    the two-link arm's fixed-size loop; URDF arms are refused (the next stage)."""
+    """The online identifier of the arm's base inertial parameters beta (issue 25; not in the
+    paper; :doc:`/guide/unknown-dynamics`). The believed model (``[model]``) is the initial
+    estimate beta_hat(0); the controller then uses beta_hat wherever the model appears. Runs on
+    the two-link arm's fixed-size loop and on URDF arms with the structured basis; expression
+    bases are refused."""
 
     enabled: bool = setting(
         False,
@@ -137,14 +138,21 @@ class IdentifierConfig:
         core="identifier.singular_value_threshold",
     )
     inertia: bool = setting(
-        True, "Identify the inertial parameters (two-link: p1, p2, p3).", core="identifier.inertia"
+        True,
+        "Identify the inertial parameters (two-link: p1, p2, p3; URDF: the kinetic energy's base "
+        "parameters, those of the structured basis).",
+        core="identifier.inertia",
     )
     gravity: bool = setting(
-        True, "Identify the gravity coefficients (two-link: g1, g2).", core="identifier.gravity"
+        True,
+        "Identify the gravity coefficients (two-link: g1, g2; URDF: the parameters gravity sees "
+        "beyond the kinetic energy's, if any).",
+        core="identifier.gravity",
     )
     friction: bool = setting(
         False,
-        "Identify the friction coefficients (two-link: coulomb, viscous); false: the model's.",
+        "Identify the friction coefficients (two-link: coulomb, viscous; URDF: both per "
+        "joint); false: the model's.",
         core="identifier.friction",
     )
 

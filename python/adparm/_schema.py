@@ -124,15 +124,19 @@ class ConfigSchema:
         """The initial weights and the basis against the arm (adparm.Config)."""
 
     def _check_identifier(self) -> None:
-        """The online identifier runs on the two-link arm's fixed-size loop (stage 1 of issue
-        25): a URDF arm or an expression basis with identifier.enabled is refused."""
+        """The online identifier runs on the two-link arm's fixed-size loop and on URDF arms
+        with the structured basis (issue 25): an expression basis with identifier.enabled is
+        refused."""
         if not self.identifier.enabled:
             return
         if self.plant.urdf is not None:
-            raise ValueError(
-                "identifier.enabled: the online identifier covers the two-link arm in this "
-                "version; URDF arms (plant.urdf) are its next stage (guide: Unknown dynamics)"
-            )
+            if self.controller.basis != "structured":
+                raise ValueError(
+                    "identifier.enabled: on a URDF arm the online identifier runs with the "
+                    f"structured basis, not controller.basis = {self.controller.basis!r} (the "
+                    "expression bases are its next stage; guide: Unknown dynamics)"
+                )
+            return
         if self.controller.basis not in BASIS_KINDS:
             raise ValueError(
                 "identifier.enabled: the online identifier runs with the two-link arm's bases "

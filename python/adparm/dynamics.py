@@ -20,6 +20,7 @@ from .urdf import config_arm
 
 __all__ = [
     "arm_terms",
+    "base_parameter_groups",
     "base_parameter_names",
     "base_parameters",
     "check_config",
@@ -100,8 +101,10 @@ def base_parameters(config: ConfigSchema, which: str = "plant") -> np.ndarray:
 
     Two-link arm: (p1, p2, p3, g1, g2, coulomb, viscous), in which M ddq + C dq + G + F =
     Y(q, dq, ddq) beta (the online identifier's parameters; ``result.model_parameters`` holds its
-    estimate). URDF arm: the base inertial parameters of the kinetic energy
-    (``UrdfArm.base_parameters``, those of the structured basis' W*).
+    estimate). URDF arm (``UrdfArm.identifier_parameters``): the base inertial parameters of the
+    kinetic energy first (``UrdfArm.base_parameters``, those of the structured basis' W*), then
+    the parameters gravity sees beyond them, then the Coulomb and the viscous coefficient of
+    each joint.
 
     Examples
     --------
@@ -113,7 +116,7 @@ def base_parameters(config: ConfigSchema, which: str = "plant") -> np.ndarray:
     if which not in ("plant", "model"):
         raise ValueError(f'which: expected "plant" or "model", got {which!r}')
     if config.plant.urdf is not None:
-        values = config_arm(config, model=which == "model").base_parameters()[0]
+        values = config_arm(config, model=which == "model").identifier_parameters()[0]
         return np.array(values, dtype=float)
     values = (
         config.model.resolve(config.plant)
@@ -126,14 +129,26 @@ def base_parameters(config: ConfigSchema, which: str = "plant") -> np.ndarray:
 def base_parameter_names(config: ConfigSchema) -> tuple[str, ...]:
     """Names of :func:`base_parameters`: ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous") for
     the two-link arm; for a URDF arm the inertial parameter each base parameter is named by
-    ("m link2", ..., as in the structured basis' names)."""
+    ("m link2", ..., as in the structured basis' names), then "coulomb <joint>" and
+    "viscous <joint>"."""
     check_config(config)
     if config.plant.urdf is None:
         return TWO_LINK_BASE_PARAMETERS
-    arm = config_arm(config)
-    r = len(arm.base_parameters()[0])
-    names = arm.structured_names()[-r:]
-    return tuple(name.removeprefix("e2'M_b e2 (").removesuffix(")") for name in names)
+    return tuple(config_arm(config).identifier_parameters()[1])
+
+
+#: The group ("inertia", "gravity", "friction") of each two-link base parameter.
+TWO_LINK_PARAMETER_GROUPS = ("inertia",) * 3 + ("gravity",) * 2 + ("friction",) * 2
+
+
+def base_parameter_groups(config: ConfigSchema) -> tuple[str, ...]:
+    """The group of each of :func:`base_parameters` ("inertia", "gravity" or "friction"): what
+    identifier.inertia, .gravity and .friction select. A URDF arm's come from the core
+    (``UrdfArm.identifier_parameters``)."""
+    check_config(config)
+    if config.plant.urdf is None:
+        return TWO_LINK_PARAMETER_GROUPS
+    return tuple(config_arm(config).identifier_parameters()[2])
 
 
 def inertia_matrices(config: ConfigSchema, positions: Any, *, model: bool = False) -> np.ndarray:

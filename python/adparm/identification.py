@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 
 from .config import Config, ModelConfig
-from .optimal import base_parameter_names, base_parameters
+from .dynamics import base_parameter_groups
+from .optimal import base_parameters
 from .result import SimulationResult
 
 __all__ = [
@@ -39,12 +40,21 @@ def identified_parameters(config: Config) -> list[int]:
     """The indices (in the order of base_parameter_names) of the parameters the identifier
     estimates: identifier.inertia, .gravity and .friction say which groups; the others stay at
     the model's values."""
-    groups = {"p1": "inertia", "p2": "inertia", "p3": "inertia", "g1": "gravity", "g2": "gravity"}
     return [
         i
-        for i, name in enumerate(base_parameter_names(config))
-        if getattr(config.identifier, groups.get(name, "friction"))
+        for i, group in enumerate(base_parameter_groups(config))
+        if getattr(config.identifier, group)
     ]
+
+
+def _scale(beta: np.ndarray, i: int) -> float:
+    """What beta_i's error is relative to: |beta_i|, or for a parameter that is zero (to 1e-9 of
+    the largest: a URDF arm's base parameter can vanish on the plant, e.g. a planar arm's) the
+    largest |beta_j|, or 1."""
+    largest = float(np.max(np.abs(beta))) if beta.size else 0.0
+    if abs(beta[i]) > 1e-9 * largest:
+        return float(abs(beta[i]))
+    return largest if largest > 0.0 else 1.0
 
 
 def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
@@ -54,7 +64,7 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
 
     - beta_plant, beta_hat: lists in the order of base_parameter_names;
     - parameter_relative_error: max over the identified parameters of |beta_hat - beta| / |beta|
-      (parameters with beta = 0: the absolute error);
+      (a parameter with beta = 0, to 1e-9 of the largest: relative to the largest |beta|);
     - ever_informative, informative_time (s, the first recorded row at the threshold, or None),
       max_singular_value (the largest minimum singular value recorded);
     - text: what the verdict says."""
@@ -64,10 +74,7 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     beta = base_parameters(config, "plant")
     beta_hat = np.asarray(result.model_parameters[-1], dtype=float)
     identified = identified_parameters(config)
-    errors = [
-        abs(beta_hat[i] - beta[i]) / abs(beta[i]) if beta[i] != 0.0 else abs(beta_hat[i])
-        for i in identified
-    ]
+    errors = [abs(beta_hat[i] - beta[i]) / _scale(beta, i) for i in identified]
     error = float(max(errors)) if errors else 0.0
     sigma = np.asarray(result.stack_singular_value, dtype=float)
     threshold = config.identifier.singular_value_threshold

@@ -183,8 +183,8 @@ def _recording_bytes(config: Config) -> int:
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
     width = len(ARRAYS_1) + config.dof * len(ARRAYS_2) + config.basis_size * len(ARRAYS_N)
-    if config.identifier.enabled:  # the two-link arm's 7 parameters and sigma_min
-        width += 8
+    if config.identifier.enabled:  # beta_hat (7 on the two-link arm) and sigma_min
+        width += 8 if config.plant.urdf is None else 10 * config.dof + 2 * config.dof + 1
     return 8 * rows * width
 
 

@@ -331,6 +331,32 @@ class UrdfArm:
         )
         return values, np.asarray(columns, dtype=np.intp), combination
 
+    def identifier_parameters(self) -> tuple[NDArray[np.float64], list[str], list[str]]:
+        """The online identifier's base parameters of this arm (issue 25; guide: Unknown
+        dynamics): (values, names, groups), beta = [the kinetic energy's base parameters
+        (``base_parameters()``, group "inertia"); the parameters gravity sees beyond them
+        ("gravity"); coulomb per joint; viscous per joint ("friction")], in which M ddq + C dq +
+        G + F = Y beta (``identifier_regressors``). Computed by the C++ core
+        (urdf_regressor.hpp)."""
+        values, names, groups = self._arm.identifier_parameters()
+        return np.asarray(values, dtype=float), list(names), list(groups)
+
+    def identifier_regressors(
+        self, q: ArrayLike, dq: ArrayLike, ddq: ArrayLike, dq_r: ArrayLike, ddq_r: ArrayLike
+    ) -> dict[str, NDArray[np.float64]]:
+        """The online identifier's regressors (n, P) in ``identifier_parameters()``' beta: Y
+        (M ddq + C dq + G + F), Y_r (M ddq_r + C(q, dq) dq_r + G + F(dq)), Y_M (M dq) and Y_N
+        (G + F - C^T dq)."""
+        n = self.dof
+        out = self._arm.identifier_regressors(
+            _vector(q, n, "q"),
+            _vector(dq, n, "dq"),
+            _vector(ddq, n, "ddq"),
+            _vector(dq_r, n, "dq_r"),
+            _vector(ddq_r, n, "ddq_r"),
+        )
+        return {key: np.asarray(value) for key, value in out.items()}
+
     def _structured(self) -> _core.UrdfStructuredBasis:
         basis = getattr(self, "_structured_basis", None)
         if basis is None:

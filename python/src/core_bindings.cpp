@@ -420,7 +420,53 @@ void bind_urdf_arm(py::module_& m) {
           },
           py::arg("samples") = 100, py::arg("seed") = 0, py::arg("tolerance") = 1e-9,
           "(values (r,), columns (r,), combination (r, 10 n)): the base inertial parameters "
-          "(pinocchio_structured_basis.hpp).");
+          "(pinocchio_structured_basis.hpp).")
+      .def(
+          "identifier_parameters",
+          [](const PinocchioArm& arm) {
+            const PinocchioRegressor regressor(arm);
+            std::vector<std::string> groups;
+            for (int i = 0; i < regressor.parameters(); ++i) {
+              const ParameterGroup g = regressor.group(i);
+              groups.push_back(g == ParameterGroup::inertia   ? "inertia"
+                               : g == ParameterGroup::gravity ? "gravity"
+                                                              : "friction");
+            }
+            return py::make_tuple(regressor.beta_of(arm), regressor.names(), groups);
+          },
+          "(values (P,), names, groups): the online identifier's base parameters beta = "
+          "[kinetic (the structured basis'); gravity's beyond them; coulomb; viscous] "
+          "(urdf_regressor.hpp), each group 'inertia', 'gravity' or 'friction'.")
+      .def(
+          "identifier_regressors",
+          [](const PinocchioArm& arm, const Vector& q, const Vector& dq, const Vector& ddq,
+             const Vector& dq_r, const Vector& ddq_r) {
+            const Eigen::Index n = arm.dof();
+            check_size(q, n, 1, "q");
+            check_size(dq, n, 1, "dq");
+            check_size(ddq, n, 1, "ddq");
+            check_size(dq_r, n, 1, "dq_r");
+            check_size(ddq_r, n, 1, "ddq_r");
+            const PinocchioRegressor regressor(arm);
+            using R = PinocchioRegressor;
+            R::Workspace workspace = regressor.make_workspace(regressor.beta(UrdfLoopArm(arm)));
+            const R::Joint qj = q, dqj = dq, ddqj = ddq, vj = dq_r, aj = ddq_r;
+            R::Matrix Y, Y_r, Y_M, Y_N;
+            regressor.regressor(qj, dqj, ddqj, Y, workspace);
+            regressor.reference_regressor(qj, dqj, vj, aj, Y_r, workspace);
+            regressor.momentum_regressor(qj, dqj, Y_M, workspace);
+            regressor.momentum_rate_regressor(qj, dqj, Y_N, workspace);
+            py::dict out;
+            out["Y"] = Eigen::MatrixXd(Y);
+            out["Y_r"] = Eigen::MatrixXd(Y_r);
+            out["Y_M"] = Eigen::MatrixXd(Y_M);
+            out["Y_N"] = Eigen::MatrixXd(Y_N);
+            return out;
+          },
+          py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("dq_r"), py::arg("ddq_r"),
+          "The online identifier's regressors (n, P) in identifier_parameters()' beta "
+          "(urdf_regressor.hpp): Y (M ddq + C dq + G + F), Y_r (M ddq_r + C(q, dq) dq_r + G + "
+          "F), Y_M (M dq) and Y_N (G + F - C^T dq).");
 }
 
 void bind_urdf_structured_basis(py::module_& m) {

@@ -40,6 +40,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <limits>
+#include <optional>
 #include <string>
 #include <type_traits>
 
@@ -132,7 +133,8 @@ class ClosedLoop {
     // With identification: beta_hat and the history stack, and the error system of the arm of
     // beta_hat (the believed model during the current step).
     typename IdentifierType::Data identifier;
-    std::conditional_t<kIdentifies, ErrorSystem<Arm>, NoTerms> believed;
+    // (optional: a URDF arm has no default)
+    std::conditional_t<kIdentifies, std::optional<ErrorSystem<Arm>>, NoTerms> believed;
   };
 
   struct Outputs {
@@ -223,8 +225,7 @@ class ClosedLoop {
     if constexpr (kIdentifies) {
       if (identifies_) {
         data.identifier = identifier_.make_data();
-        data.believed =
-            ErrorSystem<Arm>(IdentifierType::arm(data.identifier), error_system_.alpha1());
+        data.believed = ErrorSystem<Arm>(identifier_.arm(data.identifier), error_system_.alpha1());
       }
     }
     return data;
@@ -232,7 +233,7 @@ class ClosedLoop {
   // Whether the loop identifies the model online (Settings::identifier.enabled).
   bool identifies() const { return identifies_; }
   // The identified parameters' count (the recorded beta_hat's width): 0 without identification.
-  Eigen::Index parameter_count() const { return identifies_ ? IdentifierType::kParameters : 0; }
+  Eigen::Index parameter_count() const { return identifies_ ? identifier_.parameters() : 0; }
   const IdentifierType& identifier() const { return identifier_; }
 
   // After a step from (t, state), whose first stage gave `outputs` (the applied torque): the
@@ -248,7 +249,7 @@ class ClosedLoop {
       const Joint dq_r = desired.dq + alpha1 * outputs.errors.e1;    // dqd + alpha1 e1
       const Joint ddq_r = desired.ddq + alpha1 * (desired.dq - dq);  // ddqd + alpha1 de1
       identifier_.update(t, q, dq, outputs.tau, dq_r, ddq_r, outputs.errors.e2, h, data.identifier);
-      data.believed = ErrorSystem<Arm>(IdentifierType::arm(data.identifier), alpha1);
+      data.believed = ErrorSystem<Arm>(identifier_.arm(data.identifier), alpha1);
     }
   }
   const Arm& plant() const { return plant_; }
@@ -476,7 +477,7 @@ class ClosedLoop {
 
   const ErrorSystem<Arm>& believed_system(const Data& data) const {
     if constexpr (kIdentifies) {
-      if (identifies_) return data.believed;
+      if (identifies_) return *data.believed;
     }
     return error_system_;
   }
@@ -484,15 +485,20 @@ class ClosedLoop {
   static IdentifierType make_identifier(const Settings& settings, const Arm& model) {
     if constexpr (kIdentifies) {
       if (!settings.identifier.enabled) return IdentifierType();
+      if (settings.basis == BasisKind::expression)
+        throw std::invalid_argument(
+            "identifier.enabled: the online identifier runs with the structured basis on URDF "
+            "arms (and the paper, augmented and structured bases on the two-link arm), not an "
+            "expression basis (controller.basis)");
       using Regressor = typename IdentifierType::RegressorType;
-      return IdentifierType(settings.identifier, Regressor::beta(Regressor::arm_parameters(model)),
-                            settings.sim.dt);
+      return IdentifierType(settings.identifier, Regressor::of(model), model, settings.sim.dt);
     } else {
       if (settings.identifier.enabled)
         throw std::invalid_argument(
             "identifier.enabled: the online identifier runs on the two-link arm's fixed-size "
-            "loop (the paper, augmented and structured bases, sim.dynamic_sizes off); URDF arms, "
-            "expression bases and the dynamic-size loop are its next stage");
+            "loop (the paper, augmented and structured bases, sim.dynamic_sizes off) and on URDF "
+            "arms with the structured basis; not on the two-link arm's dynamic-size loop or "
+            "with expression bases");
       return IdentifierType();
     }
   }

@@ -29,11 +29,14 @@
 // the stack are the identifier's evolving state, in its Data; the Identifier holds the fixed
 // parameters. Nothing allocates after make_data().
 //
-// A Regressor (the arm's, e.g. TwoLinkRegressor below) gives, for its arm: kDof, kParameters,
-// beta of the arm's parameters and back, whether a beta is physical, the group of each
-// parameter (inertia, gravity, friction) and the four regressors Y, Y_r, Y_M, Y_N. A URDF arm's
-// identifier is its own Regressor (Pinocchio's computeJointTorqueRegressor, in cpp/src) and one
-// IdentifierOf entry; in this stage a loop whose arm has none refuses identifier.enabled.
+// A Regressor (the arm's: TwoLinkRegressor below, PinocchioRegressor in urdf_regressor.hpp)
+// gives, for its arm: kDof, kParameters (or Dynamic, bounded by kMaxParameters), its Workspace
+// (the evolving scratch its regressors need, in the identifier's Data), beta of an arm, the
+// group of each parameter (inertia, gravity, friction), the regressors Y_r, Y_M, Y_N written
+// into the caller's matrix, accept(beta, q) (whether an update is taken, and for an arm that
+// keeps one, its estimated model written) and the arm of an estimate. A new arm's identifier is
+// its Regressor and one IdentifierOf entry; a loop whose arm has none refuses
+// identifier.enabled.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -41,6 +44,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "adparm/arm_model.hpp"
@@ -66,9 +70,34 @@ enum class ParameterGroup { inertia, gravity, friction };
 struct TwoLinkRegressor {
   static constexpr int kDof = 2;
   static constexpr int kParameters = 7;
+  static constexpr int kMaxParameters = 7;
   using Arm = TwoLinkArm;
   using Parameters = Eigen::Matrix<double, kParameters, 1>;
   using Matrix = Eigen::Matrix<double, kDof, kParameters>;
+  struct Workspace {};  // the regressors are closed-form
+
+  // The Regressor concept (header comment), over the static functions below.
+  static TwoLinkRegressor of(const TwoLinkArm& /*model*/) { return {}; }
+  static Parameters beta(const TwoLinkArm& arm) { return beta(arm.parameters()); }
+  int parameters() const { return kParameters; }
+  Workspace make_workspace(const Parameters& /*initial*/) const { return {}; }
+  void reference_regressor(const Vec2& q, const Vec2& dq, const Vec2& v, const Vec2& a, Matrix& out,
+                           Workspace& /*workspace*/) const {
+    out = reference_regressor(q, dq, v, a);
+  }
+  void momentum_regressor(const Vec2& q, const Vec2& dq, Matrix& out, Workspace&) const {
+    out = momentum_regressor(q, dq);
+  }
+  void momentum_rate_regressor(const Vec2& q, const Vec2& dq, Matrix& out, Workspace&) const {
+    out = momentum_rate_regressor(q, dq);
+  }
+  // M(q) positive definite for every q2 (physical).
+  bool accept(const Parameters& next, const Vec2& /*q*/, Workspace& /*workspace*/) const {
+    return physical(next);
+  }
+  Arm arm(const Parameters& estimate, const Workspace& /*workspace*/) const {
+    return Arm::unchecked(arm_parameters(estimate));
+  }
 
   static Parameters beta(const TwoLinkArmParameters& p) {
     Parameters b;
@@ -140,6 +169,7 @@ struct NoIdentifier {
   static constexpr int kParameters = 0;
   struct Data {};
   bool enabled() const { return false; }
+  Eigen::Index parameters() const { return 0; }
 };
 
 template <class Regressor>
@@ -148,24 +178,29 @@ class Identifier {
   using RegressorType = Regressor;
   static constexpr bool kAvailable = true;
   static constexpr int kDof = Regressor::kDof;
-  static constexpr int kParameters = Regressor::kParameters;
+  static constexpr int kParameters = Regressor::kParameters;  // or Dynamic
+  static constexpr int kMaxParameters = Regressor::kMaxParameters;
   using Parameters = typename Regressor::Parameters;
   using Matrix = typename Regressor::Matrix;
   using Joint = JointVector<kDof>;
-  using ParameterMatrix = Eigen::Matrix<double, kParameters, kParameters>;
+  // P x P, bounded (no heap) for a dynamic count
+  using ParameterMatrix =
+      Eigen::Matrix<double, kParameters, kParameters, 0, kMaxParameters, kMaxParameters>;
   using Arm = typename Regressor::Arm;
+  using Workspace = typename Regressor::Workspace;
 
   struct Sample {  // one window of (I1): Y_j beta = b_j
-    Matrix regressor = Matrix::Zero();
-    Joint torque = Joint::Zero();
+    Matrix regressor;
+    Joint torque;
   };
 
-  // beta_hat, the stack and the open window: the identifier's evolving state.
+  // beta_hat, the stack and the open window: the identifier's evolving state (sized by
+  // make_data).
   struct Data {
-    Parameters estimate = Parameters::Zero();                     // beta_hat
+    Parameters estimate;                                          // beta_hat
     std::vector<Sample, Eigen::aligned_allocator<Sample>> stack;  // capacity history_size
-    ParameterMatrix information = ParameterMatrix::Zero();        // S = sum Y_j^T Y_j
-    Parameters projection = Parameters::Zero();                   // sum Y_j^T b_j
+    ParameterMatrix information;                                  // S = sum Y_j^T Y_j
+    Parameters projection;                                        // sum Y_j^T b_j
     double min_singular_value = 0.0;  // sigma_min of the stack (identified parameters)
     bool informative = false;         // sigma_min >= threshold now
     bool ever_informative = false;
@@ -177,19 +212,21 @@ class Identifier {
     // the open window
     long window_samples = 0;  // samples taken in it (0: none yet)
     double previous_time = 0.0;
-    Matrix momentum_start = Matrix::Zero();
-    Matrix rate_integral = Matrix::Zero();
-    Joint torque_integral = Joint::Zero();
-    Matrix previous_rate = Matrix::Zero();
-    Joint previous_torque = Joint::Zero();
+    Matrix momentum_start;
+    Matrix rate_integral;
+    Joint torque_integral;
+    Matrix previous_rate;
+    Joint previous_torque;
+    Matrix scratch;       // a regressor being computed
+    Workspace workspace;  // the regressor's (e.g. Pinocchio's data and the estimated model)
   };
 
   Identifier() = default;
 
-  // `initial`: beta_hat(0), the believed model's parameters; `dt`: the loop's step (the window
-  // holds round(window / dt) steps).
-  Identifier(const IdentifierSettings& settings, const Parameters& initial, double dt)
-      : settings_(settings), initial_(initial) {
+  // `regressor`: the believed model's (its beta, beta_hat(0)); `dt`: the loop's step (the
+  // window holds round(window / dt) steps).
+  Identifier(const IdentifierSettings& settings, Regressor regressor, const Arm& model, double dt)
+      : settings_(settings), regressor_(std::move(regressor)), initial_(regressor_.beta(model)) {
     if (!settings.enabled) return;
     check_positive(settings.gain, "identifier.gain");
     if (!(settings.concurrent_gain >= 0.0) || !std::isfinite(settings.concurrent_gain))
@@ -204,69 +241,95 @@ class Identifier {
       throw std::invalid_argument(
           "identifier.inertia, gravity, friction: at least one group must be identified");
     window_steps_ = std::max(1L, std::lround(settings.window / dt));
-    for (int i = 0; i < kParameters; ++i) {
-      const ParameterGroup g = Regressor::group(i);
+    for (int i = 0; i < parameters(); ++i) {
+      const ParameterGroup g = regressor_.group(i);
       selected_[i] = (g == ParameterGroup::inertia && settings.inertia) ||
                      (g == ParameterGroup::gravity && settings.gravity) ||
                      (g == ParameterGroup::friction && settings.friction);
       if (selected_[i]) index_[identified_++] = i;
     }
+    if (identified_ == 0)
+      throw std::invalid_argument(
+          "identifier.inertia, gravity, friction: the arm has no parameter in the groups "
+          "identified");
   }
 
   bool enabled() const { return settings_.enabled; }
   const IdentifierSettings& settings() const { return settings_; }
+  const Regressor& regressor() const { return regressor_; }
+  // P, the base parameters' count (the recorded beta_hat's width).
+  Eigen::Index parameters() const { return regressor_.parameters(); }
 
   Data make_data() const {
+    const Eigen::Index p = parameters(), n = initial_dof();
     Data data;
     data.estimate = initial_;
     data.stack.reserve(static_cast<std::size_t>(std::max(1L, settings_.history_size)));
+    data.information.setZero(p, p);
+    data.projection.setZero(p);
+    data.implicit = Eigen::LLT<ParameterMatrix>(p);
+    data.momentum_start.setZero(n, p);
+    data.rate_integral.setZero(n, p);
+    data.torque_integral.setZero(n);
+    data.previous_rate.setZero(n, p);
+    data.previous_torque.setZero(n);
+    data.scratch.setZero(n, p);
+    data.workspace = regressor_.make_workspace(initial_);
     return data;
   }
 
-  // The arm of the estimate (unchecked: update() keeps the estimate physical).
-  static Arm arm(const Data& data) {
-    return Arm::unchecked(Regressor::arm_parameters(data.estimate));
-  }
+  // The arm of the estimate (update() keeps the estimate physical as the Regressor judges).
+  Arm arm(const Data& data) const { return regressor_.arm(data.estimate, data.workspace); }
 
   // After a step: the sample at its start t (q, dq, the applied tau), the reference dq_r, ddq_r
   // and e2 there; h the step's length. Closes a window when due, then updates beta_hat (I2).
   void update(double t, const Joint& q, const Joint& dq, const Joint& tau, const Joint& dq_r,
               const Joint& ddq_r, const Joint& e2, double h, Data& data) const {
     sample(t, q, dq, tau, data);
-    const Parameters gradient = Regressor::reference_regressor(q, dq, dq_r, ddq_r).transpose() * e2;
+    regressor_.reference_regressor(q, dq, dq_r, ddq_r, data.scratch, data.workspace);
+    const Parameters gradient = data.scratch.transpose() * e2;
     const double gain = settings_.gain;
+    const Eigen::Index p = parameters();
     Parameters next = data.estimate;
     if (data.informative) {  // implicit step of the concurrent-learning term
       const double k = h * gain * settings_.concurrent_gain;
       if (!(data.implicit_step == h)) {
-        ParameterMatrix A = ParameterMatrix::Identity();
-        for (int i = 0; i < kParameters; ++i)
-          for (int j = 0; j < kParameters; ++j)
+        ParameterMatrix A = ParameterMatrix::Identity(p, p);
+        for (Eigen::Index i = 0; i < p; ++i)
+          for (Eigen::Index j = 0; j < p; ++j)
             if (selected_[i] && selected_[j]) A(i, j) += k * data.information(i, j);
         data.implicit.compute(A);
         data.implicit_step = h;
       }
       Parameters rhs = data.estimate;
-      for (int i = 0; i < kParameters; ++i) {
+      for (Eigen::Index i = 0; i < p; ++i) {
         if (!selected_[i]) continue;
         rhs[i] += h * gain * gradient[i] + k * data.projection[i];
-        for (int j = 0; j < kParameters; ++j)
+        for (Eigen::Index j = 0; j < p; ++j)
           if (!selected_[j]) rhs[i] -= k * data.information(i, j) * data.estimate[j];
       }
       next = data.implicit.solve(rhs);
     } else {
-      for (int i = 0; i < kParameters; ++i)
+      for (Eigen::Index i = 0; i < p; ++i)
         if (selected_[i]) next[i] += h * gain * gradient[i];
     }
-    if (Regressor::physical(next)) data.estimate = next;
+    if (regressor_.accept(next, q, data.workspace)) data.estimate = next;
   }
 
  private:
+  Eigen::Index initial_dof() const {
+    if constexpr (kDof == Dynamic)
+      return regressor_.dof();
+    else
+      return kDof;
+  }
+
   // Trapezoidal integrals of (I1) over the open window; closes it after window_steps_ steps.
   void sample(double t, const Joint& q, const Joint& dq, const Joint& tau, Data& data) const {
-    const Matrix rate = Regressor::momentum_rate_regressor(q, dq);
+    regressor_.momentum_rate_regressor(q, dq, data.scratch, data.workspace);
+    const Matrix& rate = data.scratch;
     if (data.window_samples == 0) {
-      open_window(t, q, dq, tau, rate, data);
+      open_window(t, q, dq, tau, data);
       return;
     }
     const double h = t - data.previous_time;
@@ -277,20 +340,21 @@ class Identifier {
     data.previous_rate = rate;
     if (++data.window_samples <= window_steps_) return;
     Sample closed;
-    closed.regressor =
-        Regressor::momentum_regressor(q, dq) - data.momentum_start + data.rate_integral;
+    regressor_.momentum_regressor(q, dq, data.scratch, data.workspace);
+    closed.regressor = data.scratch - data.momentum_start + data.rate_integral;
     closed.torque = data.torque_integral;
     add(closed, data);
-    open_window(t, q, dq, tau, rate, data);
+    regressor_.momentum_rate_regressor(q, dq, data.scratch, data.workspace);
+    open_window(t, q, dq, tau, data);
   }
 
-  static void open_window(double t, const Joint& q, const Joint& dq, const Joint& tau,
-                          const Matrix& rate, Data& data) {
+  // Opens a window at t; data.scratch holds Y_N there.
+  void open_window(double t, const Joint& q, const Joint& dq, const Joint& tau, Data& data) const {
     data.window_samples = 1;
     data.previous_time = t;
     data.previous_torque = tau;
-    data.previous_rate = rate;
-    data.momentum_start = Regressor::momentum_regressor(q, dq);
+    data.previous_rate = data.scratch;
+    regressor_.momentum_regressor(q, dq, data.momentum_start, data.workspace);
     data.rate_integral.setZero();
     data.torque_integral.setZero();
   }
@@ -298,10 +362,11 @@ class Identifier {
   // The swap-in rule (header comment), then S, sum Y^T b and sigma_min again.
   void add(const Sample& sample, Data& data) const {
     ++data.samples;
-    const ParameterMatrix own = sample.regressor.transpose() * sample.regressor;
+    const Eigen::Index p = parameters();
     if (static_cast<long>(data.stack.size()) < settings_.history_size) {
       data.stack.push_back(sample);  // within the capacity reserved by make_data
     } else {
+      const ParameterMatrix own = sample.regressor.transpose() * sample.regressor;
       double best = data.min_singular_value;
       long best_index = -1;
       for (std::size_t j = 0; j < data.stack.size(); ++j) {
@@ -315,8 +380,8 @@ class Identifier {
       if (best_index < 0) return;
       data.stack[static_cast<std::size_t>(best_index)] = sample;
     }
-    data.information.setZero();
-    data.projection.setZero();
+    data.information.setZero(p, p);
+    data.projection.setZero(p);
     for (const Sample& s : data.stack) {
       data.information.noalias() += s.regressor.transpose() * s.regressor;
       data.projection.noalias() += s.regressor.transpose() * s.torque;
@@ -331,7 +396,7 @@ class Identifier {
   // sqrt(lambda_min) of S's block of the identified parameters (a bounded matrix: no heap).
   double min_singular_value(const ParameterMatrix& S) const {
     using Block =
-        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kParameters, kParameters>;
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
     Block block(identified_, identified_);
     for (int a = 0; a < identified_; ++a)
       for (int b = 0; b < identified_; ++b) block(a, b) = S(index_[a], index_[b]);
@@ -340,10 +405,11 @@ class Identifier {
   }
 
   IdentifierSettings settings_{};
-  Parameters initial_ = Parameters::Zero();
+  Regressor regressor_{};
+  Parameters initial_{};
   long window_steps_ = 1;
-  bool selected_[kParameters] = {};
-  int index_[kParameters] = {};  // the identified parameters' indices, identified_ of them
+  bool selected_[kMaxParameters] = {};
+  int index_[kMaxParameters] = {};  // the identified parameters' indices, identified_ of them
   int identified_ = 0;
 };
 

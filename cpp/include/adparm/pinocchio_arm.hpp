@@ -138,10 +138,31 @@ class PinocchioArm {
 
   Terms make_terms() const;
 
+  // Other inertial parameters and friction on this arm's kinematics (the online identifier's
+  // estimate, urdf_regressor.hpp): a copy of the parsed model whose inertias set_estimate writes,
+  // and per-joint friction. Opaque (cpp/src/pinocchio_arm_impl.hpp); make_estimate allocates
+  // once, set_estimate and compute never.
+  struct EstimateData;
+  struct EstimateDeleter {
+    void operator()(EstimateData* estimate) const;
+  };
+  using Estimate = std::unique_ptr<EstimateData, EstimateDeleter>;
+  // An estimate equal to this arm (its inertias and friction).
+  Estimate make_estimate() const;
+  // Writes the inertial parameters pi (10 n, inertial_parameters()' order) and the friction (n
+  // each) into `estimate`; returns false, leaving it unchanged, when a body's mass is not > 0
+  // (Pinocchio's inertia holds the lever c = (m c) / m). Any other pi is taken: the algorithms
+  // are linear in pi, physical or not.
+  bool set_estimate(const Eigen::Ref<const Eigen::VectorXd>& pi,
+                    const Eigen::Ref<const Eigen::VectorXd>& coulomb,
+                    const Eigen::Ref<const Eigen::VectorXd>& viscous, EstimateData& estimate) const;
+
   // All terms at (q, dq), without heap allocation (terms from this arm's make_terms(), whose
-  // work space it uses). Throws std::invalid_argument for a q or dq that is not of size dof().
+  // work space it uses); with an estimate (make_estimate of this arm), the estimate's terms.
+  // Throws std::invalid_argument for a q or dq that is not of size dof().
   void compute(const Eigen::Ref<const Eigen::VectorXd>& q,
-               const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms) const;
+               const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms,
+               const EstimateData* estimate = nullptr) const;
 
   // Joint acceleration of eq. (1) for a given torque and disturbance, written into ddq (size
   // dof()); no heap allocation (terms.residual is its work space).

@@ -43,6 +43,12 @@ class UrdfLoopArm {
                                   std::to_string(kMaxDof));
   }
 
+  // The same arm with the inertias and friction of `estimate` (the online identifier's,
+  // urdf_regressor.hpp; made by arm.arm().make_estimate(), owned by the caller and outliving
+  // this arm): compute() gives the estimate's terms. No heap allocation.
+  UrdfLoopArm(const UrdfLoopArm& arm, const PinocchioArm::EstimateData* estimate)
+      : arm_(arm.arm_), estimate_(estimate) {}
+
   int dof() const { return arm_.dof(); }
   const PinocchioArm& arm() const { return arm_; }
 
@@ -53,7 +59,7 @@ class UrdfLoopArm {
 
   // No heap allocation: Pinocchio fills the terms' own buffers, copied into the bounded terms.
   void compute(const Joint& q, const Joint& dq, Terms& terms) const {
-    arm_.compute(q, dq, terms.pinocchio);
+    arm_.compute(q, dq, terms.pinocchio, estimate_);
     terms.mass = terms.pinocchio.mass;
     terms.mass_inverse = terms.pinocchio.mass_inverse;
     terms.coriolis = terms.pinocchio.coriolis;
@@ -69,6 +75,7 @@ class UrdfLoopArm {
 
  private:
   PinocchioArm arm_;
+  const PinocchioArm::EstimateData* estimate_ = nullptr;  // none: the arm's own inertias
 };
 
 // The URDF arms read for a set of runs (one loop's plant and model; every run of a Batch; the
@@ -145,3 +152,7 @@ class UrdfArmCache {
 };
 
 }  // namespace adparm
+
+// The URDF arm's Regressor for the online identifier and its IdentifierOf entry (after
+// UrdfLoopArm, which it needs).
+#include "adparm/urdf_regressor.hpp"
