@@ -137,6 +137,7 @@ def test_a_sweep_over_the_model_error_carries_the_identifier_columns(model_sweep
             assert row["stack_informative"] is True
             assert row["parameter_relative_error"] < 0.01
             assert row["critic_relative_error_plant"] < 0.01
+            assert "the model differs from the plant" not in row["verdict"]
         else:
             # not identified: the model's 30 % throughout, the critic at the model's W*
             assert row["stack_informative"] is None
@@ -145,6 +146,10 @@ def test_a_sweep_over_the_model_error_carries_the_identifier_columns(model_sweep
             assert row["critic_relative_error_plant"] == pytest.approx(
                 expected_gap(row["model.scale"]), rel=0.01
             )
+            # the verdict says what it was judged against, and how far the plant's W* is
+            gap = f"{row['critic_relative_error_plant']:.3g}"
+            assert row["verdict"].startswith("ok; the model differs from the plant: the critic")
+            assert f"ends {gap} (relative) from the plant's W*" in row["verdict"]
 
 
 def test_a_model_sweep_on_an_executor_gives_the_same_rows(model_sweep) -> None:

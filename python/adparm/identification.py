@@ -12,13 +12,14 @@ import numpy as np
 
 from .config import Config, ModelConfig
 from .dynamics import base_parameter_groups
-from .optimal import base_parameters
+from .optimal import base_parameters, optimal_weights
 from .result import SimulationResult
 
 __all__ = [
     "identified_parameters",
     "identifier_diagnosis",
     "judged_config",
+    "model_gap_text",
     "plant_model_config",
 ]
 
@@ -103,3 +104,28 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
         "max_singular_value": largest,
         "text": text,
     }
+
+
+def model_gap_text(result: SimulationResult, verdict: str) -> str | None:
+    """For a learning run that does not identify and believes a model other than the plant
+    (``[model]``): its critic is judged against the believed model's W*, the optimum it can
+    reach; say how far that lies from the plant's W* (||Wc(T) - W*_plant|| / ||W*_plant||).
+    None otherwise, or where the plant's W* is not known."""
+    config = result.config
+    if (
+        config.identifier.enabled
+        or config.controller.kind != "adp"
+        or result.t.size == 0
+        or verdict in ("not a learning run", "no rows")
+        or not config.model.differs(config.plant)
+    ):
+        return None
+    try:
+        target = optimal_weights(plant_model_config(config))
+    except ValueError:  # W* unknown for this cost, basis or task
+        return None
+    gap = float(np.linalg.norm(result.critic_weights[-1] - target) / np.linalg.norm(target))
+    return (
+        "the model differs from the plant: the critic is judged against the believed model's "
+        f"W*, and ends {gap:.3g} (relative) from the plant's W*"
+    )

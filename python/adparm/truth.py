@@ -31,7 +31,7 @@ from .divergence import (
     initial_actor_e2_block,
     structured_e2_block_min_eigenvalue,
 )
-from .identification import identifier_diagnosis, judged_config
+from .identification import identifier_diagnosis, judged_config, model_gap_text
 from .optimal import (
     basis,
     lqr_value,
@@ -298,6 +298,9 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
             out["verdict"] = identifier["text"]
         else:
             out["verdict"] += "; " + identifier["text"]
+    out["model_gap"] = model_gap_text(result, out["verdict"])
+    if out["model_gap"] is not None:
+        out["verdict"] += "; " + out["model_gap"]
     out["saturated_time"] = [float(v) for v in result.saturated_time]
     out["saturation"] = saturation_text(result)
     if out["saturation"] is not None:
