@@ -548,13 +548,16 @@ def simulate(config: Config, steps: int, *, redraw: bool = True):
     return np.array(states), np.array(resets)
 
 
-def pinocchio_terms(path, gravity, q: np.ndarray, dq: np.ndarray) -> dict:
+def pinocchio_model(path, gravity=(0.0, 0.0, -9.81)):
     # Pinocchio's Python bindings (the pin package, in the test extra): an independent caller
     import pinocchio
 
     model = pinocchio.buildModelFromUrdf(str(path))
     model.gravity.linear = np.asarray(gravity, dtype=float)
-    data = model.createData()
+    return model
+
+
+def pinocchio_configuration(model, q: np.ndarray) -> np.ndarray:
     config = np.zeros(model.nq)  # a continuous joint's q is (cos, sin) in Pinocchio
     for i in range(1, model.njoints):
         joint = model.joints[i]
@@ -562,6 +565,15 @@ def pinocchio_terms(path, gravity, q: np.ndarray, dq: np.ndarray) -> dict:
             config[joint.idx_q : joint.idx_q + 2] = np.cos(q[joint.idx_v]), np.sin(q[joint.idx_v])
         else:
             config[joint.idx_q] = q[joint.idx_v]
+    return config
+
+
+def pinocchio_terms(path, gravity, q: np.ndarray, dq: np.ndarray) -> dict:
+    import pinocchio
+
+    model = pinocchio_model(path, gravity)
+    data = model.createData()
+    config = pinocchio_configuration(model, q)
     M = np.triu(pinocchio.crba(model, data, config))
     Minv = np.triu(pinocchio.computeMinverse(model, data, config))
     return {

@@ -11,6 +11,7 @@ import adparm
 from adparm import _core
 
 from numpy_reference import arm_terms as reference_arm_terms
+from numpy_reference import pinocchio_configuration, pinocchio_model
 
 NAMES = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
 
@@ -401,25 +402,6 @@ def urdf_arm_paths() -> dict:
     }
     paths["ur5"] = adparm.example_robot_urdf("ur5")
     return paths
-
-
-def pinocchio_model(path, gravity=(0.0, 0.0, -9.81)):
-    import pinocchio
-
-    model = pinocchio.buildModelFromUrdf(str(path))
-    model.gravity.linear = np.asarray(gravity, dtype=float)
-    return model
-
-
-def pinocchio_configuration(model, q: np.ndarray) -> np.ndarray:
-    config = np.zeros(model.nq)  # a continuous joint's q is (cos, sin) in Pinocchio
-    for i in range(1, model.njoints):
-        joint = model.joints[i]
-        if joint.nq == 2:
-            config[joint.idx_q : joint.idx_q + 2] = np.cos(q[joint.idx_v]), np.sin(q[joint.idx_v])
-        else:
-            config[joint.idx_q] = q[joint.idx_v]
-    return config
 
 
 @pytest.mark.parametrize("name", ["planar_3link", "spatial_3dof", "ur5"])
