@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from .config import Config
+from .identification import plant_critic_error  # re-exported: compare's and the summary's column
 from .result import SimulationResult, post_run_failure
 
 __all__ = [
@@ -152,28 +153,6 @@ def applied_cost(result: SimulationResult) -> tuple[float, float]:
         return cost, math.nan
     change = abs(_simpson(extra, t) - _simpson(extra[every_other], t[every_other]))
     return cost, change / abs(cost) if cost else math.nan
-
-
-def plant_critic_error(result: SimulationResult) -> float | None:
-    """||Wc(T) - W*|| / ||W*|| with W* the *plant's* (the critic of the controller believing the
-    plant: the true optimum's weights), at the last recorded row; None for a run that does not
-    learn (kind other than adp), without rows, or where W* is not known (adparm.optimal_weights
-    refuses the cost or the basis). A run without identification and with a wrong model ends
-    at the model's W*, its distance from the plant's is this error; an identifying run's critic
-    should reach the plant's."""
-    from .identification import plant_model_config
-    from .optimal import optimal_weights
-
-    if result.config.controller.kind != "adp" or result.t.size == 0:
-        return None
-    try:
-        target = optimal_weights(plant_model_config(result.config))
-    except ValueError:  # W* unknown for this cost, basis or task
-        return None
-    norm = float(np.linalg.norm(target))
-    if norm == 0.0:  # pragma: no cover - W* holds K > 0
-        return None
-    return float(np.linalg.norm(result.critic_weights[-1] - target) / norm)
 
 
 def believed_parameter_error(result: SimulationResult) -> float | None:

@@ -20,6 +20,7 @@ __all__ = [
     "identifier_diagnosis",
     "judged_config",
     "model_gap_text",
+    "plant_critic_error",
     "plant_model_config",
 ]
 
@@ -106,25 +107,40 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     }
 
 
+def plant_critic_error(result: SimulationResult) -> float | None:
+    """||Wc(T) - W*|| / ||W*|| with W* the *plant's* (the critic of the controller believing the
+    plant: the true optimum's weights), at the last recorded row; None for a run that does not
+    learn (kind other than adp), without rows, or where W* is not known (adparm.optimal_weights
+    refuses the cost or the basis). A run without identification and with a wrong model ends
+    at the model's W*, its distance from the plant's is this error; an identifying run's critic
+    should reach the plant's."""
+    if result.config.controller.kind != "adp" or result.t.size == 0:
+        return None
+    try:
+        target = optimal_weights(plant_model_config(result.config))
+    except ValueError:  # W* unknown for this cost, basis or task
+        return None
+    norm = float(np.linalg.norm(target))
+    if norm == 0.0:  # pragma: no cover - W* holds K > 0
+        return None
+    return float(np.linalg.norm(result.critic_weights[-1] - target) / norm)
+
+
 def model_gap_text(result: SimulationResult, verdict: str) -> str | None:
     """For a learning run that does not identify and believes a model other than the plant
     (``[model]``): its critic is judged against the believed model's W*, the optimum it can
-    reach; say how far that lies from the plant's W* (||Wc(T) - W*_plant|| / ||W*_plant||).
-    None otherwise, or where the plant's W* is not known."""
+    reach; say how far that lies from the plant's W* (:func:`plant_critic_error`). None
+    otherwise, or where the plant's W* is not known."""
     config = result.config
     if (
         config.identifier.enabled
-        or config.controller.kind != "adp"
-        or result.t.size == 0
         or verdict in ("not a learning run", "no rows")
         or not config.model.differs(config.plant)
     ):
         return None
-    try:
-        target = optimal_weights(plant_model_config(config))
-    except ValueError:  # W* unknown for this cost, basis or task
+    gap = plant_critic_error(result)
+    if gap is None:
         return None
-    gap = float(np.linalg.norm(result.critic_weights[-1] - target) / np.linalg.norm(target))
     return (
         "the model differs from the plant: the critic is judged against the believed model's "
         f"W*, and ends {gap:.3g} (relative) from the plant's W*"
