@@ -112,7 +112,7 @@ def test_the_box_rule_stays_within_the_limits() -> None:
     # missing: the other's 1.5; a short range: the floor
     assert np.allclose(b1, [1.0, 1.5, 2.0, np.pi, 1.5, 1.0])
     assert np.allclose(b2, 3.0 * b1)
-    # the floor grows with the initial error: 2 max|qd - q0| = 1.6 rad
+    # the floor grows with the initial error: 2 max|qd - q0| = 2 x 0.9 = 1.8 rad
     b1, _ = extrapolation_box(qd, q0 + np.array([0.8, 0, 0, 0, 0, 0]), low, high, alpha1)
     assert np.allclose(b1, [1.8, 1.8, 2.0, np.pi, 1.8, 1.8])
     # far limits on both sides: capped at pi
