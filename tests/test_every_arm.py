@@ -90,20 +90,23 @@ def test_a_too_coarse_step_is_refused_on_every_arm_and_the_suggestions_run(
     assert _run_briefly(config, step) == "finished"
 
 
-#: The arms whose full target run is in the suite (the table in the docs has them all): light
-#: and quick ones; the 6- and 7-joint arms take 30-100 s each (bench/every_arm.py). The 5-joint
-#: chain ended 106 % off W* with the former extrapolation box of 1 rad (rates.extrapolation_box).
-REPRESENTATIVE = ["chain3", "chain4", "chain5", "finger_edu"]
+#: The arms whose full target run is in the suite (the table in the docs has them all), with the
+#: simulated time: light and quick ones at the target's 10 s; the 6- and 7-joint arms take
+#: 30-100 s each (bench/every_arm.py). The 5-joint chain ended 106 % off W* with the former
+#: extrapolation box of 1 rad, the Z1 5.2 % off with the box that reached past its joint limits
+#: (rates.extrapolation_box); the Z1 is within 1 % from 2.0 s, so 3 s prove it.
+REPRESENTATIVE = {"chain3": 10.0, "chain4": 10.0, "chain5": 10.0, "finger_edu": 10.0, "z1": 3.0}
 
 
 @pytest.mark.parametrize("name", REPRESENTATIVE)
-def test_the_arm_learns_W_star_from_20_percent_off_in_10_s(folder: Path, name: str) -> None:
-    config = _target(name, folder, every_arm.ARMS.index(name))
+def test_the_arm_learns_W_star_from_20_percent_off(folder: Path, name: str) -> None:
+    T = REPRESENTATIVE[name]
+    config = _target(name, folder, every_arm.ARMS.index(name), T=T)
     row = every_arm.measure(config)
     assert row["status"] == "finished", row["verdict"]
     assert row["verdict"] == "ok", row["verdict"]
     assert max(row["critic"], row["actor"], row["policy"]) < 0.01
-    assert row["within"] is not None and row["within"] < 10.0
+    assert row["within"] is not None and row["within"] < T
 
 
 def test_a_run_stopped_before_W_star_says_so(folder: Path) -> None:

@@ -72,38 +72,63 @@ def test_defaults_follow_the_rule_of_the_docs() -> None:
 
 
 def test_the_derived_box_spans_the_joint_range() -> None:
-    """extrapolation.box: per joint the reach of e1 = qd - q within the limits, capped at pi, at
-    least max(1, 2 |e1(0)|); alpha1 times that on e2; derived again for a new alpha1; given: kept.
-    The rates are taken where the plant moves (within max(1, 2 |e1(0)|) of qd), not over the
-    whole box."""
-    from adparm.rates import extrapolation_box, rate_positions
+    """extrapolation.box: per joint the distance from qd to the nearer limit (the box of e1 = qd - q
+    stays within the limits), capped at pi, at least max(1, 2 |e1(0)|); alpha1 times that on e2;
+    derived again for a new alpha1; given: kept. The rates are taken where the plant moves
+    (within max(1, 2 |e1(0)|) of qd), not over the whole box."""
+    from adparm.rates import rate_positions
 
     config = _bare(PLANAR)
     n = config.dof
     limits = adparm.urdf.config_arm(config).limits
     low, high = np.asarray(limits["lower"]), np.asarray(limits["upper"])
     qd = np.asarray(config.task.qd, dtype=float)
-    reach = np.minimum(np.pi, np.maximum(qd - low, high - qd))
+    reach = np.minimum(np.pi, np.minimum(qd - low, high - qd))
     b1 = np.maximum(reach, 1.0)
     box = config.extrapolation.box_vector(n)
     assert np.allclose(box, np.concatenate([b1, 2.0 * b1]))  # alpha1 = 2 I
     assert "extrapolation.box" in config.derived
-    assert "reach" in config.derived["extrapolation.box"]
+    assert "nearer limit" in config.derived["extrapolation.box"]
     faster = config.updated({"control": {"alpha1": (3.0 * np.eye(n)).tolist()}})
     assert np.allclose(faster.extrapolation.box_vector(n)[n:], 3.0 * b1)
-    # a short joint range keeps the floor of 1 rad; an unlimited joint reaches pi
-    b1, b2 = extrapolation_box(
-        np.zeros(2),
-        np.full(2, 0.1),
-        np.array([-0.2, np.nan]),
-        np.array([0.3, np.nan]),
-        2.0 * np.eye(2),
-    )
-    assert np.allclose(b1, [1.0, np.pi]) and np.allclose(b2, [2.0, 2.0 * np.pi])
     given = config.updated({"extrapolation": {"box": 0.5}})
     assert np.allclose(given.extrapolation.box_vector(n), 0.5)
     positions = rate_positions(config)
     assert np.abs(positions - qd).max() <= max(1.0, 2 * np.abs(qd - config.task.q0).max())
+
+
+def test_the_box_rule_stays_within_the_limits() -> None:
+    """rates.extrapolation_box: b1_i = max(1, 2 max|qd - q0|, min(pi, qd_i - low_i, high_i - qd_i))
+    (the nearer limit, not the farther: the Z1's qd sits on three limits), b2 = max|alpha1| b1."""
+    from adparm.rates import extrapolation_box
+
+    qd, q0 = np.array([0.0, 0.5, 0.0, 0.0, 0.0, 0.0]), np.array([0.1, 0.5, 0.0, 0.0, 0.0, 0.0])
+    low = np.array([0.0, -1.0, -2.0, -np.inf, np.nan, -0.2])
+    high = np.array([3.0, 2.0, 5.0, np.inf, 1.5, 0.3])
+    alpha1 = np.diag([2.0, 3.0, 1.0, 1.0, 1.0, 1.0])
+    b1, b2 = extrapolation_box(qd, q0, low, high, alpha1)
+    # qd on a limit: the floor 1 (not the 3 rad to the far limit); qd in the middle: 1.5 to
+    # either limit; 2 rad to the nearer of 2 and 5; unlimited (inf or nan): pi; one limit
+    # missing: the other's 1.5; a short range: the floor
+    assert np.allclose(b1, [1.0, 1.5, 2.0, np.pi, 1.5, 1.0])
+    assert np.allclose(b2, 3.0 * b1)
+    # the floor grows with the initial error: 2 max|qd - q0| = 2 x 0.9 = 1.8 rad
+    b1, _ = extrapolation_box(qd, q0 + np.array([0.8, 0, 0, 0, 0, 0]), low, high, alpha1)
+    assert np.allclose(b1, [1.8, 1.8, 2.0, np.pi, 1.8, 1.8])
+    # far limits on both sides: capped at pi
+    far = np.full(1, 9.0)
+    b1, _ = extrapolation_box(np.zeros(1), np.zeros(1), -far, far, np.eye(1))
+    assert np.allclose(b1, [np.pi])
+    # the Z1 (qd = 0 on the limit of three joints): its derived box stays within the limits,
+    # but on those three joints, which get the floor
+    z1 = _bare(_example("z1"))
+    limits = adparm.urdf.config_arm(z1).limits
+    low, high = np.asarray(limits["lower"]), np.asarray(limits["upper"])
+    qd, b1 = np.asarray(z1.task.qd, dtype=float), z1.extrapolation.box_vector(z1.dof)[: z1.dof]
+    on_a_limit = (qd == low) | (qd == high)
+    assert on_a_limit.sum() == 3 and np.all(b1[on_a_limit] == 1.0)
+    inside = (qd - b1 >= low - 1e-12) & (qd + b1 <= high + 1e-12)
+    assert np.all(inside[~on_a_limit])
 
 
 def test_ks_below_zero_only_for_arms_so_light_that_a_gain_of_1_is_stiff() -> None:
