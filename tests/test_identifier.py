@@ -214,6 +214,18 @@ def test_without_excitation_the_stack_never_becomes_informative() -> None:
     assert "never became informative" in diagnostics["verdict"]
 
 
+def test_without_extrapolation_points_the_probe_is_not_stopped() -> None:
+    # the probe is then the critic's only excitation: identifier.stop_probe leaves it on
+    config = model_off(
+        base(identifier={"enabled": True}, extrapolation={"points": 0}, sim={"T": 6.0})
+    )
+    result = adparm.simulate(config, diagnose=False)
+    assert result.status == "finished"
+    assert adparm.diagnose(result)["identifier"]["ever_informative"]
+    assert np.any(result.probe[result.t >= 5.0] != 0.0)
+    assert adparm.identification.identifier_diagnosis(result)["probe_stopped_time"] is None
+
+
 def test_identification_off_is_the_default_and_changes_nothing() -> None:
     config = adparm.paper_config().updated({"sim": {"T": 0.2}})
     assert config.identifier.enabled is False
@@ -241,6 +253,7 @@ def test_base_parameters_of_the_two_link_arm() -> None:
         ({"identifier": {"gain": 0.0}}, r"^identifier\.gain: must be > 0"),
         ({"identifier": {"window": -1.0}}, r"^identifier\.window: must be > 0"),
         ({"identifier": {"history_size": 0}}, r"^identifier\.history_size: "),
+        ({"identifier": {"tolerance": 0.0}}, r"^identifier\.tolerance: must be > 0"),
         (
             {"identifier": {"inertia": False, "gravity": False}},
             r"^identifier\.inertia, identifier\.gravity, identifier\.friction: at least one",
@@ -549,6 +562,14 @@ def test_urdf_identification_reaches_the_plant_from_a_model_off(tmp_path) -> Non
     W_model = adparm.optimal_weights(config)
     assert critic_error(result, W_plant) < 0.01, critic_error(result, W_plant)
     assert np.linalg.norm(W_model - W_plant) / np.linalg.norm(W_plant) > 0.02
+    # identifier.stop_probe: the probe stopped for good once beta_hat settled (the stack
+    # informative), and the critic still reached the plant's W*
+    diagnosis = adparm.identification.identifier_diagnosis(result)
+    stopped = diagnosis["probe_stopped_time"]
+    assert stopped is not None and diagnosis["informative_time"] < stopped < 8.0, diagnosis
+    assert np.all(result.probe[result.t >= stopped] == 0.0)
+    assert np.any(result.probe[result.t < stopped] != 0.0)
+    assert "the probe stopped at" in diagnosis["text"]
     # off: the same run ends at the model's W*, not the plant's
     plain = adparm.simulate(config.updated({"identifier": {"enabled": False}}), diagnose=False)
     assert critic_error(plain, W_model) < 0.01, critic_error(plain, W_model)
