@@ -9,7 +9,10 @@ identifies the arm's base parameters online (:doc:`/guide/unknown-dynamics`) fro
 m per joint, switches the probe off once the estimate has settled (``identifier.stop_probe``),
 and the critic then learns the plant's W*. (The guide's target arm, the UR5 with a 2 kg payload,
 takes minutes of computing for its 30 s: ``bench/identify_ur5_payload.py``; this 3-joint arm
-shows the same in seconds.)
+shows the same in seconds.) Measured (12 s): the stack is informative at 0.62 s, the probe
+stops at 7.62 s and the critic ends 0.17 % from the plant's W*; but on this arm beta_hat drifts
+once the probe is off (0.9 % from beta at 8 s, 1.5 % at 12 s), and the verdict says the policy is
+not yet within 1 % at 12 s: not understood yet (the guide's notes).
 """
 
 import tempfile
@@ -36,7 +39,7 @@ config = config.updated(
             "amplitude": [5.0] * config.dof,
             "phases": rng.uniform(0.0, 2.0 * np.pi, (config.dof, 4)).tolist(),
         },
-        "sim": {"T": 10.0, "record_every": 20},
+        "sim": {"T": 12.0, "record_every": 20},
     }
 )
 result = adparm.simulate(config)
@@ -50,7 +53,7 @@ print(
     "(relative) from the plant's"
 )
 print(f"the stack became informative at t = {identifier['informative_time']:.2f} s")
-print(f"the probe stopped at t = {identifier['probe_stopped_time']:.2f} s")
+print(f"the probe stopped at t = {identifier['probe_stopped_time']} s")
 print(f"beta_hat ends {identifier['parameter_relative_error']:.2g} from the plant's beta")
 print(f"verdict: {result.diagnostics['verdict']}")
 
@@ -67,7 +70,8 @@ axes.semilogy(result.t, distance(result), label="identifying")
 axes.semilogy(plain.t, distance(plain), label="believing the URDF")
 axes.axhline(np.linalg.norm(W_model - W_plant) / np.linalg.norm(W_plant), color="k", ls=":")
 axes.axhline(0.01, color="0.5", lw=0.8)
-axes.axvline(identifier["probe_stopped_time"], color="0.5", ls="--", lw=0.8)
+if identifier["probe_stopped_time"] is not None:
+    axes.axvline(identifier["probe_stopped_time"], color="0.5", ls="--", lw=0.8)
 axes.set(xlabel="t (s)", ylabel="||Wc - W*_plant|| / ||W*_plant||")
 axes.legend()
 
