@@ -170,6 +170,13 @@ def test_identification_reaches_the_plant_from_a_model_30_percent_off() -> None:
     assert diagnostics["identifier"]["ever_informative"]
     assert diagnostics["identifier"]["parameter_relative_error"] < 0.01
     assert "became informative" in diagnostics["verdict"]
+    # identifier.stop_probe: the probe stopped for good once beta_hat settled (the stack
+    # informative; measured 4.9 s), and the critic still reached the plant's W* (above)
+    stopped = diagnostics["identifier"]["probe_stopped_time"]
+    assert stopped is not None and diagnostics["identifier"]["informative_time"] < stopped < 10.0
+    assert np.all(result.probe[result.t >= stopped] == 0.0)
+    assert np.any(result.probe[result.t < stopped] != 0.0)
+    assert "the probe stopped at" in diagnostics["verdict"]
 
     # the same run without identification ends at the model's W*, not the plant's
     plain = adparm.simulate(config.updated({"identifier": {"enabled": False}}), diagnose=False)
@@ -214,6 +221,18 @@ def test_without_excitation_the_stack_never_becomes_informative() -> None:
     assert "never became informative" in diagnostics["verdict"]
 
 
+def test_without_extrapolation_points_the_probe_is_not_stopped() -> None:
+    # the probe is then the critic's only excitation: identifier.stop_probe leaves it on
+    config = model_off(
+        base(identifier={"enabled": True}, extrapolation={"points": 0}, sim={"T": 6.0})
+    )
+    result = adparm.simulate(config, diagnose=False)
+    assert result.status == "finished"
+    assert adparm.diagnose(result)["identifier"]["ever_informative"]
+    assert np.any(result.probe[result.t >= 5.0] != 0.0)
+    assert adparm.identification.identifier_diagnosis(result)["probe_stopped_time"] is None
+
+
 def test_identification_off_is_the_default_and_changes_nothing() -> None:
     config = adparm.paper_config().updated({"sim": {"T": 0.2}})
     assert config.identifier.enabled is False
@@ -241,6 +260,7 @@ def test_base_parameters_of_the_two_link_arm() -> None:
         ({"identifier": {"gain": 0.0}}, r"^identifier\.gain: must be > 0"),
         ({"identifier": {"window": -1.0}}, r"^identifier\.window: must be > 0"),
         ({"identifier": {"history_size": 0}}, r"^identifier\.history_size: "),
+        ({"identifier": {"tolerance": 0.0}}, r"^identifier\.tolerance: must be > 0"),
         (
             {"identifier": {"inertia": False, "gravity": False}},
             r"^identifier\.inertia, identifier\.gravity, identifier\.friction: at least one",

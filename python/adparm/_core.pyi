@@ -566,12 +566,13 @@ class ExtrapolationSettings:
         ...
 class IdentifierSettings:
     """
-    The online identifier of beta (identifier.hpp): enabled, gain, concurrent_gain, history_size, window, singular_value_threshold, inertia, gravity, friction.
+    The online identifier of beta (identifier.hpp): enabled, gain, concurrent_gain, history_size, window, singular_value_threshold, inertia, gravity, friction, stop_probe, tolerance.
     """
     enabled: bool
     friction: bool
     gravity: bool
     inertia: bool
+    stop_probe: bool
     def __init__(self) -> None:
         ...
     @property
@@ -597,6 +598,12 @@ class IdentifierSettings:
         ...
     @singular_value_threshold.setter
     def singular_value_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def tolerance(self) -> float:
+        ...
+    @tolerance.setter
+    def tolerance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def window(self) -> float:

@@ -156,8 +156,25 @@ class IdentifierConfig:
         core="identifier.friction",
     )
 
+    stop_probe: bool = setting(
+        True,
+        "Switch the probing signal off for good once the history stack is informative and "
+        "beta_hat has moved by at most tolerance over the last history_size windows: the probe "
+        "slows the critic, and the stack keeps what it recorded. Only with extrapolation points "
+        "(without them the probe is the critic's only excitation, and it stays). Not in the "
+        "paper.",
+        core="identifier.stop_probe",
+    )
+    tolerance: float = setting(
+        0.01,
+        "stop_probe's settled beta_hat: its change over the last history_size windows at most "
+        "this fraction of its norm, over the identified parameters (> 0). The default is the 1 % "
+        "to which beta_hat and the critic are judged.",
+        core="identifier.tolerance",
+    )
+
     def __post_init__(self) -> None:
-        for name in ("enabled", "inertia", "gravity", "friction"):
+        for name in ("enabled", "inertia", "gravity", "friction", "stop_probe"):
             object.__setattr__(self, name, boolean_value(getattr(self, name), f"identifier.{name}"))
         object.__setattr__(
             self, "gain", scalar_value(self.gain, "identifier.gain", minimum=0.0, strict=True)
@@ -181,6 +198,11 @@ class IdentifierConfig:
             scalar_value(
                 self.singular_value_threshold, "identifier.singular_value_threshold", minimum=0.0
             ),
+        )
+        object.__setattr__(
+            self,
+            "tolerance",
+            scalar_value(self.tolerance, "identifier.tolerance", minimum=0.0, strict=True),
         )
         if not (self.inertia or self.gravity or self.friction):
             raise ValueError(

@@ -69,6 +69,8 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
       (a parameter with beta = 0, to 1e-9 of the largest: relative to the largest |beta|);
     - ever_informative, informative_time (s, the first recorded row at the threshold, or None),
       max_singular_value (the largest minimum singular value recorded);
+    - probe_stopped_time: the first recorded row from which identifier.stop_probe switched the
+      probe off (s), or None (not stopped, or no probe);
     - text: what the verdict says."""
     config = result.config
     if not config.identifier.enabled or result.model_parameters is None or result.t.size == 0:
@@ -83,12 +85,15 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     informative = np.flatnonzero((sigma >= threshold) & (sigma > 0.0))
     ever = bool(informative.size > 0)
     largest = float(np.max(sigma)) if sigma.size else 0.0
+    stopped = _probe_stopped_time(result)
     if ever:
         text = (
             f"the identifier's history stack became informative at t = "
             f"{result.t[informative[0]]:.3g} s; beta_hat ends {error:.3g} (relative) from the "
             "plant's beta"
         )
+        if stopped is not None:
+            text += f"; the probe stopped at t = {stopped:.3g} s (identifier.stop_probe)"
     else:
         text = (
             "the identifier's history stack never became informative (its minimum singular value "
@@ -103,8 +108,22 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
         "ever_informative": ever,
         "informative_time": float(result.t[informative[0]]) if ever else None,
         "max_singular_value": largest,
+        "probe_stopped_time": stopped,
         "text": text,
     }
+
+
+def _probe_stopped_time(result: SimulationResult) -> float | None:
+    """The first recorded row from which the applied probe is zero for good, before probe.until
+    (identifier.stop_probe, which acts only with extrapolation points); None otherwise."""
+    config = result.config
+    if not config.identifier.stop_probe or config.extrapolation.points == 0:
+        return None
+    probing = np.flatnonzero(np.any(np.asarray(result.probe) != 0.0, axis=1))
+    if probing.size == 0 or probing[-1] + 1 >= result.t.size:
+        return None
+    stopped = float(result.t[probing[-1] + 1])
+    return stopped if stopped < config.probe.until else None
 
 
 def plant_critic_error(result: SimulationResult) -> float | None:

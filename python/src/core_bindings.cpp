@@ -190,7 +190,8 @@ void bind_settings(py::module_& m) {
   py::class_<IdentifierSettings>(m, "IdentifierSettings",
                                  "The online identifier of beta (identifier.hpp): enabled, gain, "
                                  "concurrent_gain, history_size, window, "
-                                 "singular_value_threshold, inertia, gravity, friction.")
+                                 "singular_value_threshold, inertia, gravity, friction, "
+                                 "stop_probe, tolerance.")
       .def(py::init<>())
       .def_readwrite("enabled", &IdentifierSettings::enabled)
       .def_readwrite("gain", &IdentifierSettings::gain)
@@ -200,7 +201,9 @@ void bind_settings(py::module_& m) {
       .def_readwrite("singular_value_threshold", &IdentifierSettings::singular_value_threshold)
       .def_readwrite("inertia", &IdentifierSettings::inertia)
       .def_readwrite("gravity", &IdentifierSettings::gravity)
-      .def_readwrite("friction", &IdentifierSettings::friction);
+      .def_readwrite("friction", &IdentifierSettings::friction)
+      .def_readwrite("stop_probe", &IdentifierSettings::stop_probe)
+      .def_readwrite("tolerance", &IdentifierSettings::tolerance);
   py::class_<SimSettings>(m, "SimSettings", "T, dt, record_every, divergence_bound.")
       .def(py::init<>())
       .def_readwrite("T", &SimSettings::T)

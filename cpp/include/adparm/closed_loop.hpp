@@ -135,6 +135,7 @@ class ClosedLoop {
     typename IdentifierType::Data identifier;
     // (optional: a URDF arm has no default)
     std::conditional_t<kIdentifies, std::optional<ErrorSystem<Arm>>, NoTerms> believed;
+    Joint no_probe;  // zero: the probe once the identifier stopped it (identifier.stop_probe)
   };
 
   struct Outputs {
@@ -225,6 +226,7 @@ class ClosedLoop {
     if constexpr (kIdentifies) {
       if (identifies_) {
         data.identifier = identifier_.make_data();
+        data.no_probe = Joint::Zero(dof());
         data.believed = ErrorSystem<Arm>(identifier_.arm(data.identifier), error_system_.alpha1());
       }
     }
@@ -367,8 +369,9 @@ class ClosedLoop {
       mu = rise_.feedback(errors.e2, nu);                                            // eq. (27)
       rate.template segment<kDof>(nu_offset(), n) = rise_.integral_rate(errors.e2);  // eq. (28)
     }
+    const Joint& probe = applied_probe(signals, data);
     const Joint u = controller_.input(errors, error_system_.alpha1(), cost_.R_inverse(),
-                                      cost_.bound(), hjb.u_hat, signals.probe);
+                                      cost_.bound(), hjb.u_hat, probe);
     const Joint tau_commanded = system.feedforward(model_terms, dq, errors, desired) + mu - u;
     Joint tau = tau_commanded;
     if (limited_) {  // the drive's clip, and RISE's anti-windup (header comment)
@@ -389,7 +392,7 @@ class ClosedLoop {
     // eq. (10): x^T Q x + u^T R u; with an input bound and u = u_hat (an adp controller, no
     // probe) U(u_hat) of the policy's own terms, to round-off the same as input_cost(u)
     const bool policy_alone =
-        cost_.bounded() && controller_.learns() && (signals.probe.array() == 0.0).all();
+        cost_.bounded() && controller_.learns() && (probe.array() == 0.0).all();
     rate[cost_offset()] = point.state_cost + (policy_alone ? hjb.input_cost : cost_.input_cost(u));
 
     if (outputs != nullptr) {
@@ -400,9 +403,20 @@ class ClosedLoop {
       outputs->u = u;
       outputs->u_hat = hjb.u_hat;
       outputs->mu = mu;
-      outputs->probe = signals.probe;
+      outputs->probe = probe;
       outputs->hjb_error = hjb.error;
     }
+  }
+
+  // The probing signal applied: the time signal's, or zero once the identifier has stopped it
+  // (identifier.stop_probe), only with Bellman-error extrapolation: without extrapolation points
+  // the probe is the critic's only excitation, and it stays.
+  const Joint& applied_probe(const TimeSignals& signals, const Data& data) const {
+    if constexpr (kIdentifies) {
+      if (identifies_ && data.identifier.probe_stopped && extrapolation_.enabled())
+        return data.no_probe;
+    }
+    return signals.probe;
   }
 
   // Resets Gamma to gamma0 I when lambda_min(Gamma) < epsilon_T; returns whether it did.

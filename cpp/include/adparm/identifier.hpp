@@ -29,6 +29,12 @@
 // the stack are the identifier's evolving state, in its Data; the Identifier holds the fixed
 // parameters. Nothing allocates after make_data().
 //
+// Not in the paper: the probing signal slows the critic (guide "Unknown dynamics", measured on the
+// UR5), so with stop_probe the identifier marks the probe stopped (for good) once the stack is
+// informative and beta_hat has changed by at most `tolerance` of its norm over the last
+// history_size closed windows; the loop then applies no probe, with extrapolation points only
+// (without them the probe is the critic's only excitation).
+//
 // A Regressor (the arm's: TwoLinkRegressor below, PinocchioRegressor in urdf_regressor.hpp)
 // gives, for its arm: kDof, kParameters (or Dynamic, bounded by kMaxParameters), its Workspace
 // (the evolving scratch its regressors need, in the identifier's Data), beta of an arm, the
@@ -62,6 +68,12 @@ struct IdentifierSettings {
   bool inertia = true;                     // which parameters are identified
   bool gravity = true;
   bool friction = false;
+  // Not in the paper (the probe slows the critic; guide "Unknown dynamics"): switch the probing
+  // signal off for good once the stack is informative and beta_hat (its identified parameters)
+  // has moved by at most `tolerance` of its norm over the last history_size windows (the loop
+  // applies it only with extrapolation points, ClosedLoop::applied_probe)
+  bool stop_probe = true;
+  double tolerance = 0.01;
 };
 
 enum class ParameterGroup { inertia, gravity, friction };
@@ -219,6 +231,11 @@ class Identifier {
     Joint previous_torque;
     Matrix scratch;       // a regressor being computed
     Workspace workspace;  // the regressor's (e.g. Pinocchio's data and the estimated model)
+    // stop_probe: beta_hat when the current run of calm windows began, their count, and whether
+    // the probe is off (for good)
+    Parameters calm_estimate;
+    long calm_windows = 0;
+    bool probe_stopped = false;
   };
 
   Identifier() = default;
@@ -240,6 +257,8 @@ class Identifier {
     if (!settings.inertia && !settings.gravity && !settings.friction)
       throw std::invalid_argument(
           "identifier.inertia, gravity, friction: at least one group must be identified");
+    if (!(settings.tolerance > 0.0) || !std::isfinite(settings.tolerance))
+      throw std::invalid_argument("identifier.tolerance: must be > 0 and finite");
     window_steps_ = std::max(1L, std::lround(settings.window / dt));
     for (int i = 0; i < parameters(); ++i) {
       const ParameterGroup g = regressor_.group(i);
@@ -264,6 +283,7 @@ class Identifier {
     const Eigen::Index p = parameters(), n = initial_dof();
     Data data;
     data.estimate = initial_;
+    data.calm_estimate = initial_;
     data.stack.reserve(static_cast<std::size_t>(std::max(1L, settings_.history_size)));
     data.information.setZero(p, p);
     data.projection.setZero(p);
@@ -317,6 +337,31 @@ class Identifier {
   }
 
  private:
+  // Whether `estimate` differs from `reference` by more than `tolerance` of the reference's norm
+  // (over the identified parameters).
+  bool moved(const Parameters& estimate, const Parameters& reference) const {
+    double change = 0.0, size = 0.0;
+    for (int a = 0; a < identified_; ++a) {
+      const Eigen::Index i = index_[a];
+      const double d = estimate[i] - reference[i];
+      change += d * d;
+      size += reference[i] * reference[i];
+    }
+    return change > settings_.tolerance * settings_.tolerance * size;
+  }
+
+  // stop_probe, at each closed window: counts the windows over which beta_hat stayed within
+  // `tolerance` of its value when they began, while the stack is informative.
+  void settle(Data& data) const {
+    if (!settings_.stop_probe || data.probe_stopped) return;
+    if (!data.informative || moved(data.estimate, data.calm_estimate)) {
+      data.calm_estimate = data.estimate;
+      data.calm_windows = 0;
+      return;
+    }
+    data.probe_stopped = ++data.calm_windows >= settings_.history_size;
+  }
+
   Eigen::Index initial_dof() const {
     if constexpr (kDof == Dynamic)
       return regressor_.dof();
@@ -344,6 +389,7 @@ class Identifier {
     closed.regressor = data.scratch - data.momentum_start + data.rate_integral;
     closed.torque = data.torque_integral;
     add(closed, data);
+    settle(data);
     regressor_.momentum_rate_regressor(q, dq, data.scratch, data.workspace);
     open_window(t, q, dq, tau, data);
   }
