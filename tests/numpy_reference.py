@@ -264,10 +264,14 @@ def box_vector(config: Config) -> np.ndarray:
     return np.broadcast_to(np.array(config.extrapolation.box, dtype=float), (4,)).copy()
 
 
+def centre_vector(config: Config) -> np.ndarray:
+    return np.broadcast_to(np.array(config.extrapolation.centre, dtype=float), (4,)).copy()
+
+
 def fixed_points(config: Config) -> np.ndarray:
     e = config.extrapolation
     draw = np.random.RandomState(e.seed).random_sample((e.points, 4))
-    return box_vector(config) * (2 * draw - 1)
+    return centre_vector(config) + box_vector(config) * (2 * draw - 1)
 
 
 def grid_points(config: Config) -> np.ndarray:
@@ -276,6 +280,7 @@ def grid_points(config: Config) -> np.ndarray:
     assert m**4 == e.points
     box = box_vector(config)
     axes = [box[k] * (2 * np.arange(m) / (m - 1) - 1) if m > 1 else np.zeros(1) for k in range(4)]
+    axes = [centre + axis for centre, axis in zip(centre_vector(config), axes, strict=True)]
     return np.array(list(itertools.product(*axes)), dtype=float).reshape(-1, 4)
 
 
@@ -290,15 +295,17 @@ def extrapolation_points(config: Config) -> np.ndarray:
 
 
 class LocalPoints:
-    """The local mode's stream: points = x + box (2 U - 1), U drawn from RandomState(seed)."""
+    """The local mode's stream: points = x + centre + box (2 U - 1), U drawn from
+    RandomState(seed)."""
 
     def __init__(self, config: Config) -> None:
         self.points = config.extrapolation.points
         self.box = box_vector(config)
+        self.centre = centre_vector(config)
         self.stream = np.random.RandomState(config.extrapolation.seed)
 
     def draw(self, x: np.ndarray) -> np.ndarray:
-        return x + self.box * (2 * self.stream.random_sample((self.points, 4)) - 1)
+        return (x + self.centre) + self.box * (2 * self.stream.random_sample((self.points, 4)) - 1)
 
 
 def tracking_error(config: Config, t: float, state: np.ndarray) -> np.ndarray:

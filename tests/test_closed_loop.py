@@ -63,7 +63,10 @@ def random_extrapolation(rng: np.random.Generator, mode: str) -> dict:
         return {"points": 0}
     points = 16 if mode == "grid" else int(rng.integers(1, 5))
     box = rng.uniform(0.1, 2.0, 4) if rng.uniform() < 0.5 else rng.uniform(0.1, 2.0)
-    return {"points": points, "mode": mode, "box": box, "seed": int(rng.integers(0, 2**32))}
+    seed = int(rng.integers(0, 2**32))
+    # the box's centre from its own stream (the other cases' draws stay as they were)
+    centre = np.random.default_rng(seed).uniform(-0.5, 0.5, 4)
+    return {"points": points, "mode": mode, "box": box, "centre": centre, "seed": seed}
 
 
 def random_config(
@@ -212,7 +215,7 @@ def test_local_points_are_drawn_around_the_given_state() -> None:
     t = 1.3
     x = reference.tracking_error(config, t, state)
     draw = np.random.RandomState(config.extrapolation.seed).random_sample((3, 4))
-    points = x + 1e-3 * (2 * draw - 1)
+    points = (x + config.extrapolation.centre_vector()) + 1e-3 * (2 * draw - 1)
     rate = _core.closed_loop_derivative(core_settings(config), t, state)[0]
     assert_close(rate, reference.rhs(config, t, state, points)[0], "rate")
     # points around x = 0 instead (what the fixed mode would use) do not match

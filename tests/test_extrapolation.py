@@ -102,6 +102,27 @@ def test_fixed_points_are_uniform_in_the_box_and_follow_the_seed() -> None:
     assert not np.allclose(points, other)
 
 
+def test_the_centre_moves_the_box_and_zero_changes_nothing() -> None:
+    box = [1.0, 0.5, 2.0, 3.0]
+    centre = [-0.5, 0.25, 0.0, 1.0]
+    config = adparm.paper_config().updated(
+        {"extrapolation": {"points": 200, "box": box, "seed": 7}}
+    )
+    points = adparm.extrapolation_points(config)
+    moved = adparm.extrapolation_points(config.updated({"extrapolation": {"centre": centre}}))
+    np.testing.assert_allclose(moved, points + np.array(centre), rtol=0, atol=1e-15)
+    zero = adparm.extrapolation_points(config.updated({"extrapolation": {"centre": 0.0}}))
+    np.testing.assert_array_equal(zero, points)
+    grid = config.updated({"extrapolation": {"points": 81, "mode": "grid", "centre": centre}})
+    grid_points = adparm.extrapolation_points(grid)
+    for axis in range(4):
+        np.testing.assert_allclose(
+            np.unique(grid_points[:, axis]), centre[axis] + np.array([-1, 0, 1]) * box[axis]
+        )
+    with pytest.raises(ValueError, match="extrapolation.centre"):
+        adparm.paper_config().updated({"extrapolation": {"centre": [0.0, 1.0]}})
+
+
 def test_grid_points_span_the_box() -> None:
     config = adparm.paper_config().updated(
         {"extrapolation": {"points": 81, "mode": "grid", "box": 2.0}}

@@ -352,3 +352,32 @@ def test_a_divergence_suggests_only_what_works_and_is_not_in_effect() -> None:
     causes = divergence_causes(adparm.paper_config())
     assert not any("use sim.dt" in cause or "leave init" in cause for cause in causes)
     assert any("rates at the start" in cause for cause in causes)
+
+
+def test_the_asymmetric_range_spans_the_joint_range_within_the_limits() -> None:
+    """rates.extrapolation_range: with e1 = qd - q, e1_i in [max(qd_i - high_i, -pi),
+    min(qd_i - low_i, pi)], holding 0 and e1_i(0), at least 1 rad wide; e2 symmetric,
+    max|alpha1| max(|lo_i|, |hi_i|)."""
+    from adparm.rates import extrapolation_range
+
+    qd, q0 = np.array([0.0, 0.5, 0.0, 0.0, 0.0, 0.0]), np.array([0.1, 0.5, 0.0, 0.0, 0.0, 0.0])
+    low = np.array([0.0, -1.0, -2.0, -np.inf, np.nan, -0.2])
+    high = np.array([3.0, 2.0, 5.0, np.inf, 1.5, 0.3])
+    alpha1 = np.diag([2.0, 3.0, 1.0, 1.0, 1.0, 1.0])
+    centre, box = extrapolation_range(qd, q0, low, high, alpha1)
+    lower, upper = centre[:6] - box[:6], centre[:6] + box[:6]
+    # qd on the lower limit: q in [0, 3] is e1 in [-3, 0] (e1(0) = -0.1 inside); qd in the
+    # middle: [-1.5, 1.5]; 5 rad away capped at pi; unlimited (inf or nan): pi each way; a
+    # 0.5 rad range widened about its middle to 1 rad
+    assert np.allclose(lower, [-3.0, -1.5, -np.pi, -np.pi, -1.5, -0.55])
+    assert np.allclose(upper, [0.0, 1.5, 2.0, np.pi, np.pi, 0.45])
+    assert np.allclose(centre[6:], 0.0)
+    assert np.allclose(box[6:], 3.0 * np.maximum(np.abs(lower), np.abs(upper)))
+    # the points' joint positions q = qd - e1 stay within the limits where the range allows
+    q_low, q_high = qd - upper, qd - lower
+    assert np.all(q_low[:5] >= np.nan_to_num(low[:5], nan=-np.inf) - 1e-12)
+    assert np.all(q_high[:5] <= np.nan_to_num(high[:5], nan=np.inf) + 1e-12)
+    # an initial error outside the range widens it to hold e1(0) = qd - q0
+    start = q0 + np.array([4.0, 0, 0, 0, 0, 0])
+    centre, box = extrapolation_range(qd, start, low, high, alpha1)
+    assert np.isclose(centre[0] - box[0], -4.1) and np.isclose(centre[0] + box[0], 0.0)

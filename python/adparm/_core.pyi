@@ -541,7 +541,7 @@ class ExtrapolationMode:
         ...
 class ExtrapolationSettings:
     """
-    points, box (2 n,), mode, seed.
+    points, box (2 n,), centre (2 n,; empty: 0), mode, seed.
     """
     mode: ExtrapolationMode
     def __init__(self) -> None:
@@ -551,6 +551,12 @@ class ExtrapolationSettings:
         ...
     @box.setter
     def box(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
+        ...
+    @property
+    def centre(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    @centre.setter
+    def centre(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
         ...
     @property
     def points(self) -> int:

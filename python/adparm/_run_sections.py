@@ -34,8 +34,11 @@ class ExtrapolationConfig:
     """Bellman-error extrapolation: the critic and actor laws also average their terms over the
     HJB error at ``points`` extra states x (0: off, the paper; at most MAX_POINTS = 10^6, which
     already takes about 0.2 s per RK4 step). ``mode``: ``fixed`` (points drawn once, uniform in
-    [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points redrawn every
-    step, uniform in x(t) + [-box, box]). ``box``: half-widths in x = [e1; e2], one number or 4.
+    centre + [-box, box]), ``grid`` (m points per axis, points = m^4) or ``local`` (points redrawn
+    every step, uniform in x(t) + centre + [-box, box]). ``box``: half-widths in x = [e1; e2],
+    one number or 4; ``centre``: the box's centre in x, one number or 4 (0: symmetric about x =
+    0, the paper's and the two-link default; a URDF arm's derived box spans each joint's range
+    within its limits, :func:`adparm.rates.extrapolation_range`).
     ``seed`` (0 <= seed < 2^32) seeds MT19937, drawn in the order of NumPy's
     ``RandomState(seed).random_sample((points, 4))``."""
 
@@ -50,10 +53,16 @@ class ExtrapolationConfig:
         "Half-widths of the sampling box in x = [e1; e2] (one number or 4).",
         via="extrapolation.box, one per state (box_vector)",
     )
+    centre: float | Vector = setting(
+        0.0,
+        "Centre of the sampling box in x = [e1; e2] (one number or 4; the points are drawn in "
+        "centre + [-box, box]).",
+        via="extrapolation.centre, one per state (centre_vector)",
+    )
     mode: str = setting(
         "fixed",
-        "``fixed`` (drawn once in [-box, box]), ``grid`` (m per axis, points = m^4) or ``local`` "
-        "(redrawn every step around x(t)).",
+        "``fixed`` (drawn once in centre + [-box, box]), ``grid`` (m per axis, points = m^4) or "
+        "``local`` (redrawn every step around x(t) + centre).",
         via="extrapolation.mode, an enum (ExtrapolationMode)",
     )
     seed: int = setting(
@@ -75,6 +84,11 @@ class ExtrapolationConfig:
             if min(box) <= 0.0:
                 raise ValueError(f"extrapolation.box: half-widths must be > 0, got {list(box)}")
         object.__setattr__(self, "box", box)
+        if is_number(self.centre):
+            centre: float | Vector = scalar_value(self.centre, "extrapolation.centre")
+        else:
+            centre = vector_value(self.centre, "extrapolation.centre", None)
+        object.__setattr__(self, "centre", centre)
         choice_value(self.mode, "extrapolation.mode", EXTRAPOLATION_MODES)
         object.__setattr__(self, "seed", integer_value(self.seed, "extrapolation.seed", minimum=0))
         if self.seed >= 2**32:
@@ -90,6 +104,15 @@ class ExtrapolationConfig:
     def box_vector(self, joints: int = 2) -> np.ndarray:
         """The half-widths as a (2 joints,) array."""
         return np.broadcast_to(np.array(self.box, dtype=float), (2 * joints,)).copy()
+
+    def centre_vector(self, joints: int = 2) -> np.ndarray:
+        """The box's centre as a (2 joints,) array."""
+        return np.broadcast_to(np.array(self.centre, dtype=float), (2 * joints,)).copy()
+
+    def bounds(self, joints: int = 2) -> tuple[np.ndarray, np.ndarray]:
+        """The sampling box's lower and upper corners in x, centre -+ box, each (2 joints,)."""
+        box, centre = self.box_vector(joints), self.centre_vector(joints)
+        return centre - box, centre + box
 
 
 @dataclass(frozen=True)

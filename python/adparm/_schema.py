@@ -412,3 +412,5 @@ def check_sizes(config: ConfigSchema, n: int) -> None:
             check_shape(gain, f"controller.{key}", (n, n), n)
     if not isinstance(config.extrapolation.box, float):
         check_shape(config.extrapolation.box, "extrapolation.box", (2 * n,), n)
+    if not isinstance(config.extrapolation.centre, float):
+        check_shape(config.extrapolation.centre, "extrapolation.centre", (2 * n,), n)

@@ -43,6 +43,7 @@ __all__ = [
     "auto_step",
     "check_step",
     "extrapolation_box",
+    "extrapolation_range",
     "closed_loop_rates",
     "inertia_range",
     "rise_ks",
@@ -325,6 +326,37 @@ def extrapolation_box(
     return b1, b2
 
 
+def extrapolation_range(
+    qd: np.ndarray, q0: np.ndarray, low: np.ndarray, high: np.ndarray, alpha1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """An asymmetric extrapolation box, (centre, box) in x = [e1; e2], each (2n,), to give as
+    ``extrapolation.centre`` and ``extrapolation.box`` (an option; the derived default is
+    :func:`extrapolation_box`). With e1 = qd - q, the joint positions q = qd - e1 span the joint's
+    range within its limits, at most pi each way from qd: e1_i in [lo_i, hi_i] with
+    lo_i = max(qd_i - high_i, -pi), hi_i = min(qd_i - low_i, pi) (a missing limit: pi), widened to
+    hold 0 and e1_i(0), and then about its middle to a width of at least 1 rad (a joint whose
+    range is narrower reaches past its limits). e2 stays symmetric about 0, with half-width
+    |alpha1|_max max(|lo_i|, |hi_i|) (e2 ~ alpha1 e1 over the e1 range)."""
+    e1_start = qd - q0
+    lower = np.fmax(qd - high, -BOX_REACH_CAP)  # fmax: a missing (nan) limit is no limit
+    upper = np.fmin(qd - low, BOX_REACH_CAP)
+    lower = np.where(np.isfinite(lower), lower, -BOX_REACH_CAP)
+    upper = np.where(np.isfinite(upper), upper, BOX_REACH_CAP)
+    lower = np.minimum(lower, np.minimum(0.0, e1_start))
+    upper = np.maximum(upper, np.maximum(0.0, e1_start))
+    grow = np.maximum(0.0, RANGE_WIDTH_FLOOR - (upper - lower)) / 2.0
+    lower, upper = lower - grow, upper + grow
+    reach = np.maximum(np.abs(lower), np.abs(upper))
+    rate = float(np.abs(np.linalg.eigvals(alpha1)).max())
+    centre = np.concatenate([(lower + upper) / 2.0, np.zeros_like(lower)])
+    box = np.concatenate([(upper - lower) / 2.0, rate * reach])
+    return centre, box
+
+
+#: extrapolation_range's least width of a joint's e1 range (rad).
+RANGE_WIDTH_FLOOR = 1.0
+
+
 # --- cost.input_bound = "auto" ------------------------------------------------------------
 
 #: cost.input_bound = "auto" on a joint without a torque limit (N m): so large that the bounded
@@ -413,9 +445,9 @@ def check_positions(config: ConfigSchema) -> np.ndarray:
     qd = desired_state(config, 0.0)[0]
     rows = [qd, np.array(config.task.q0, dtype=float)]
     if config.extrapolation.points > 0:
-        box = config.extrapolation.box_vector(n)[:n]
+        low, high = (bound[:n] for bound in config.extrapolation.bounds(n))
         rng = np.random.default_rng(_SEED)
-        rows += list(qd - rng.uniform(-box, box, size=(32, n)))
+        rows += list(qd - rng.uniform(low, high, size=(32, n)))
     return np.array(rows)
 
 
@@ -432,9 +464,9 @@ def rate_positions(config: ConfigSchema) -> np.ndarray:
     rows = [qd, q0]
     if config.extrapolation.points > 0:
         reach = max(1.0, 2.0 * float(np.abs(qd - q0).max()))
-        box = np.minimum(config.extrapolation.box_vector(n)[:n], reach)
+        low, high = (np.clip(bound[:n], -reach, reach) for bound in config.extrapolation.bounds(n))
         rng = np.random.default_rng(_SEED)
-        rows += list(qd - rng.uniform(-box, box, size=(32, n)))
+        rows += list(qd - rng.uniform(low, high, size=(32, n)))
     return np.array(rows)
 
 

@@ -77,6 +77,9 @@ def core_settings(config: Config) -> _core.Settings:
     settings.e2_cost = getattr(_core.E2Cost, config.cost.e2_cost)
     extrapolation = settings.extrapolation
     extrapolation.box = config.extrapolation.box_vector(config.dof)
+    centre = config.extrapolation.centre_vector(config.dof)
+    if np.any(centre != 0.0):  # the core's empty centre is 0
+        extrapolation.centre = centre
     extrapolation.mode = getattr(_core.ExtrapolationMode, config.extrapolation.mode)
     settings.extrapolation = extrapolation
 

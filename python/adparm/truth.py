@@ -378,9 +378,9 @@ def _diagnose_learning(
     out["hjb_residual_explored"] = _relative_residual(config, X, Wc, Wa, t_end)
     out["hjb_residual_box"] = None
     if config.extrapolation.points > 0:
-        box = np.array(config.extrapolation.box_vector(config.dof))
+        low, high = config.extrapolation.bounds(config.dof)
         out["hjb_residual_box"] = _relative_residual(
-            config, rng.uniform(-box, box, size=(_SAMPLES, box.size)), Wc, Wa, t_end
+            config, rng.uniform(low, high, size=(_SAMPLES, low.size)), Wc, Wa, t_end
         )
     tail = result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0])
     x_tail = np.hstack([result.e1, result.e2])[tail]
@@ -450,8 +450,8 @@ def _diagnose_learning(
     fitted = config.extrapolation.points > 0 and config.extrapolation.mode != "local"
     X_fit = X
     if fitted:
-        box = np.array(config.extrapolation.box_vector(config.dof))
-        X_fit = np.random.default_rng(_SEED + 1).uniform(-box, box, size=(_SAMPLES, box.size))
+        low, high = config.extrapolation.bounds(config.dof)
+        X_fit = np.random.default_rng(_SEED + 1).uniform(low, high, size=(_SAMPLES, low.size))
     residual = (
         _relative_residual(config, X_fit, Wc, Wa, t_end)
         if fitted

@@ -181,10 +181,12 @@ void bind_settings(py::module_& m) {
       .value("fixed", ExtrapolationMode::fixed)
       .value("grid", ExtrapolationMode::grid)
       .value("local", ExtrapolationMode::local);
-  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings", "points, box (2 n,), mode, seed.")
+  py::class_<ExtrapolationSettings>(m, "ExtrapolationSettings",
+                                    "points, box (2 n,), centre (2 n,; empty: 0), mode, seed.")
       .def(py::init<>())
       .def_readwrite("points", &ExtrapolationSettings::points)
       .def_readwrite("box", &ExtrapolationSettings::box)
+      .def_readwrite("centre", &ExtrapolationSettings::centre)
       .def_readwrite("mode", &ExtrapolationSettings::mode)
       .def_readwrite("seed", &ExtrapolationSettings::seed);
   py::class_<IdentifierSettings>(m, "IdentifierSettings",

@@ -7,15 +7,16 @@
 //                 - eta_a2 (Wa - Wc)}
 // which is what lets the critic converge without a probing signal (model-based learning for
 // approximate optimal regulation). The points, in x = [e1; e2], are
-//   fixed  N points drawn once, uniform in the box [-box, box]
+//   fixed  N points drawn once, uniform in the box centre + [-box, box]
 //   grid   a regular grid of m points per axis over the box (N = m^4)
-//   local  N points drawn at the start of every step, uniform in x(t_k) + [-box, box]
+//   local  N points drawn at the start of every step, uniform in x(t_k) + centre + [-box, box]
+// (`centre`, 0 by default, moves the box off x = 0: a URDF arm's derived box spans each joint's
+// range within its limits, which is not symmetric about qd.)
 // and each is evaluated with the current desired state (qd, dqd). Draws use MT19937 seeded with
 // `seed`, in the order of NumPy's legacy RandomState(seed).random_sample((N, 2n)), each mapped to
-// box * (2 u - 1); so the points are reproducible, also from Python. (n joints: x has 2n entries,
-// the grid has m^(2n) points.)
-// For a constant desired state the weight-free part of each point (HjbPoint) is computed when the
-// points are drawn, not at every evaluation.
+// centre + box * (2 u - 1); so the points are reproducible, also from Python. (n joints: x has 2n
+// entries, the grid has m^(2n) points.) For a constant desired state the weight-free part of each
+// point (HjbPoint) is computed when the points are drawn, not at every evaluation.
 #pragma once
 
 #include <cmath>
@@ -33,6 +34,7 @@ enum class ExtrapolationMode { fixed, grid, local };
 struct ExtrapolationSettings {
   long points = 0;                                 // N; 0 turns extrapolation off
   Eigen::VectorXd box = Eigen::VectorXd::Ones(4);  // half-widths in x = [e1; e2], 2n
+  Eigen::VectorXd centre;                          // the box's centre in x, 2n (empty: 0)
   ExtrapolationMode mode = ExtrapolationMode::fixed;
   std::uint32_t seed = 0;
 };
@@ -75,6 +77,14 @@ class Extrapolation {
     if (!(settings.box.array() > 0.0).all())
       throw std::invalid_argument("extrapolation.box: half-widths must be > 0");
     box_ = settings.box;
+    if (settings.centre.size() == 0) {
+      centre_ = Error::Zero(dim);
+    } else {
+      check_size(settings.centre, dim, 1, "extrapolation.centre");
+      check_finite(settings.centre, "extrapolation.centre");
+      centre_ = settings.centre;
+    }
+    shifted_ = centre_;
     const long n = settings.points;
     points_.assign(n, Error::Zero(dim));
     prepared_.resize(n);
@@ -94,11 +104,12 @@ class Extrapolation {
           const long k = rest % m;
           rest /= m;
           points_[i][axis] =
-              m == 1 ? 0.0 : box_[axis] * (2.0 * static_cast<double>(k) / (m - 1) - 1.0);
+              centre_[axis] +
+              (m == 1 ? 0.0 : box_[axis] * (2.0 * static_cast<double>(k) / (m - 1) - 1.0));
         }
       }
     } else if (settings.mode == ExtrapolationMode::fixed) {
-      draw(Error::Zero(dim));
+      draw(centre_);
     }
   }
 
@@ -120,7 +131,8 @@ class Extrapolation {
                   typename Arm::Terms& terms, BasisWorkspace<Basis>& workspace) {
     if (!needs_begin_step()) return;
     if (settings_.mode == ExtrapolationMode::local) {
-      draw(x);
+      shifted_ = x + centre_;  // no allocation: sized at construction
+      draw(shifted_);
       prepared_valid_ = false;
     }
     if (constant_desired_ && !prepared_valid_) {
@@ -178,6 +190,8 @@ class Extrapolation {
 
   ExtrapolationSettings settings_{};
   Error box_;
+  Error centre_;
+  Error shifted_;  // x(t_k) + centre (local mode)
   UniformDraws draws_;
   bool constant_desired_ = true;
   bool prepared_valid_ = false;
