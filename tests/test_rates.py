@@ -72,29 +72,44 @@ def test_defaults_follow_the_rule_of_the_docs() -> None:
 
 
 def test_the_derived_box_spans_the_joint_range() -> None:
-    """extrapolation.box: per joint the distance from qd to the nearer limit (the box of e1 = qd - q
-    stays within the limits), capped at pi, at least max(1, 2 |e1(0)|); alpha1 times that on e2;
-    derived again for a new alpha1; given: kept. The rates are taken where the plant moves
+    """extrapolation.centre and .box (rates.extrapolation_range): per joint, e1 = qd - q spans the
+    joint's range within its limits, at most pi each way from qd, at least 1 rad wide; e2 centred
+    at 0, alpha1 times the farther end; derived again for a new alpha1; a given box is kept (and
+    then centred on qd unless a centre is given too). The rates are taken where the plant moves
     (within max(1, 2 |e1(0)|) of qd), not over the whole box."""
-    from adparm.rates import rate_positions
+    from adparm.rates import extrapolation_range, rate_positions
 
     config = _bare(PLANAR)
     n = config.dof
     limits = adparm.urdf.config_arm(config).limits
     low, high = np.asarray(limits["lower"]), np.asarray(limits["upper"])
     qd = np.asarray(config.task.qd, dtype=float)
-    reach = np.minimum(np.pi, np.minimum(qd - low, high - qd))
-    b1 = np.maximum(reach, 1.0)
-    box = config.extrapolation.box_vector(n)
-    assert np.allclose(box, np.concatenate([b1, 2.0 * b1]))  # alpha1 = 2 I
-    assert "extrapolation.box" in config.derived
-    assert "nearer limit" in config.derived["extrapolation.box"]
+    lower = np.maximum(qd - high, -np.pi)
+    upper = np.minimum(qd - low, np.pi)
+    centre, box = config.extrapolation.centre_vector(n), config.extrapolation.box_vector(n)
+    assert np.allclose(centre[:n], (lower + upper) / 2) and np.all(centre[n:] == 0.0)
+    assert np.allclose(box[:n], (upper - lower) / 2)
+    reach = np.maximum(np.abs(lower), np.abs(upper))
+    assert np.allclose(box[n:], 2.0 * reach)  # alpha1 = 2 I
+    # the points' joint positions qd - e1 stay within the limits
+    assert np.all(qd - (centre[:n] + box[:n]) >= low - 1e-12)
+    assert np.all(qd - (centre[:n] - box[:n]) <= high + 1e-12)
+    assert "extrapolation.box" in config.derived and "extrapolation.centre" in config.derived
+    assert "extrapolation_range" in config.derived["extrapolation.box"]
     faster = config.updated({"control": {"alpha1": (3.0 * np.eye(n)).tolist()}})
-    assert np.allclose(faster.extrapolation.box_vector(n)[n:], 3.0 * b1)
+    assert np.allclose(faster.extrapolation.box_vector(n)[n:], 3.0 * reach)
     given = config.updated({"extrapolation": {"box": 0.5}})
     assert np.allclose(given.extrapolation.box_vector(n), 0.5)
+    assert np.all(given.extrapolation.centre_vector(n) == 0.0)
     positions = rate_positions(config)
     assert np.abs(positions - qd).max() <= max(1.0, 2 * np.abs(qd - config.task.q0).max())
+    # a joint with qd on a limit, one in the middle, an unlimited one, a narrow one
+    qd, q0 = np.zeros(4), np.array([0.1, 0.0, 0.0, 0.0])
+    low, high = np.array([0.0, -1.5, -np.inf, -0.2]), np.array([3.0, 1.5, np.inf, 0.3])
+    centre, box = extrapolation_range(qd, q0, low, high, 2.0 * np.eye(4))
+    lo, hi = centre[:4] - box[:4], centre[:4] + box[:4]
+    # e1 = qd - q: joint 0 spans q in [0, 3] (e1 in [-3, 0.1]: e1(0) = -0.1... held, and 0)
+    assert np.allclose(lo, [-3.0, -1.5, -np.pi, -0.55]) and np.allclose(hi, [0.0, 1.5, np.pi, 0.45])
 
 
 def test_the_box_rule_stays_within_the_limits() -> None:
@@ -119,12 +134,13 @@ def test_the_box_rule_stays_within_the_limits() -> None:
     far = np.full(1, 9.0)
     b1, _ = extrapolation_box(np.zeros(1), np.zeros(1), -far, far, np.eye(1))
     assert np.allclose(b1, [np.pi])
-    # the Z1 (qd = 0 on the limit of three joints): its derived box stays within the limits,
-    # but on those three joints, which get the floor
+    # the Z1 (qd = 0 on the limit of three joints): the symmetric box stays within the limits,
+    # but on those three joints, which get the floor (its derived box is extrapolation_range's)
     z1 = _bare(_example("z1"))
     limits = adparm.urdf.config_arm(z1).limits
     low, high = np.asarray(limits["lower"]), np.asarray(limits["upper"])
-    qd, b1 = np.asarray(z1.task.qd, dtype=float), z1.extrapolation.box_vector(z1.dof)[: z1.dof]
+    qd, q0 = np.asarray(z1.task.qd, dtype=float), np.asarray(z1.task.q0, dtype=float)
+    b1, _ = extrapolation_box(qd, q0, low, high, np.asarray(z1.control.alpha1, dtype=float))
     on_a_limit = (qd == low) | (qd == high)
     assert on_a_limit.sum() == 3 and np.all(b1[on_a_limit] == 1.0)
     inside = (qd - b1 >= low - 1e-12) & (qd + b1 <= high + 1e-12)

@@ -288,14 +288,30 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         "a tenth of lambda_min(M): the e2 block of the learned V stays positive definite, "
         "well below the arm's own",
     )
-    b1, b2 = extrapolation_box(qd, q0, low, high, alpha1)
-    put(
-        "extrapolation.box",
-        tuple(float(v) for v in np.concatenate([b1, b2])),
-        "e1: the distance from qd(0) to the joint's nearer limit (the box stays within the "
-        "limits), capped at pi rad, at least max(1, 2 |e1(0)|); e2: alpha1 times that "
-        "(rates.extrapolation_box)",
-    )
+    if "extrapolation.box" not in explicit and "extrapolation.centre" not in explicit:
+        centre, box = extrapolation_range(qd, q0, low, high, alpha1)
+        put(
+            "extrapolation.centre",
+            tuple(float(v) for v in centre),
+            "e1: the middle of the joint's range within its limits, at most pi rad each way from "
+            "qd(0); e2: 0 (rates.extrapolation_range)",
+        )
+        put(
+            "extrapolation.box",
+            tuple(float(v) for v in box),
+            "e1: half the joint's range within its limits, at most pi rad each way from qd(0), "
+            "holding e1(0), at least 1 rad wide; e2: alpha1 times the farther end "
+            "(rates.extrapolation_range)",
+        )
+    else:
+        b1, b2 = extrapolation_box(qd, q0, low, high, alpha1)
+        put(
+            "extrapolation.box",
+            tuple(float(v) for v in np.concatenate([b1, b2])),
+            "e1: the distance from qd(0) to the joint's nearer limit (the box stays within the "
+            "limits), capped at pi rad, at least max(1, 2 |e1(0)|); e2: alpha1 times that "
+            "(rates.extrapolation_box; extrapolation.centre is given)",
+        )
     put("sim.T", 10.0, "learning from extrapolation reaches W* within seconds")
     return values, reasons
 
@@ -307,7 +323,8 @@ BOX_REACH_CAP = math.pi
 def extrapolation_box(
     qd: np.ndarray, q0: np.ndarray, low: np.ndarray, high: np.ndarray, alpha1: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The derived extrapolation.box (b1 on e1, b2 on e2, per joint; docs: URDF arms):
+    """The derived extrapolation.box of a URDF arm that gives extrapolation.centre but not the box
+    (b1 on e1, b2 on e2, per joint, symmetric about the centre; docs: URDF arms):
     b1_i = max(1, 2 max|e1(0)|, min(pi, qd_i - low_i, high_i - qd_i)), the largest box around qd
     whose joint positions stay within the limits, so the points inform the inertia block of the
     weights over the joint range (a 1 rad box left 5- and 7-joint chains 106 % and 4.3 % off W*
@@ -330,9 +347,10 @@ def extrapolation_range(
     qd: np.ndarray, q0: np.ndarray, low: np.ndarray, high: np.ndarray, alpha1: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """An asymmetric extrapolation box, (centre, box) in x = [e1; e2], each (2n,), to give as
-    ``extrapolation.centre`` and ``extrapolation.box`` (an option; the derived default is
-    :func:`extrapolation_box`). With e1 = qd - q, the joint positions q = qd - e1 span the joint's
-    range within its limits, at most pi each way from qd: e1_i in [lo_i, hi_i] with
+    ``extrapolation.centre`` and ``extrapolation.box``, the derived default of a URDF arm that
+    gives neither (36 of 36 random costs within 1 % of W* on six arms, where a box symmetric
+    about qd left one outside: docs, URDF arms). With e1 = qd - q, the joint positions q = qd - e1
+    span the joint's range within its limits, at most pi each way from qd: e1_i in [lo_i, hi_i] with
     lo_i = max(qd_i - high_i, -pi), hi_i = min(qd_i - low_i, pi) (a missing limit: pi), widened to
     hold 0 and e1_i(0), and then about its middle to a width of at least 1 rad (a joint whose
     range is narrower reaches past its limits). e2 stays symmetric about 0, with half-width
