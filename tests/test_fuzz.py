@@ -448,6 +448,10 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
         return [0.0, -1.0, NAN, INF, "1", None, True, [1.0, 1.0], [1.0, 1.0, 0.0, 1.0]] + [
             with_bad_element([1.0] * 4, element) for element in BAD_ELEMENTS
         ]
+    if key == "centre":  # any finite number, or one per state
+        return [NAN, INF, "1", None, True, [1.0, 1.0], HUGE] + [
+            with_bad_element([0.0] * 4, element) for element in BAD_ELEMENTS
+        ]
     if key == "frequencies":
         return ["1", None, True, 1.0, [[1.0, 2.0]], {"a": 1}] + [
             with_bad_element([1.0, 2.0], element) for element in BAD_ELEMENTS

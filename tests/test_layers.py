@@ -36,6 +36,7 @@ LAYERS = {
     "symbolic_arm": 2,
     "basis_family": 2,
     "optimal": 2,
+    "extrapolation_region": 2,
     "rates": 2,
     "config": 2,
     # 3 running: the Config -> core translation, simulate, batch and sweep
