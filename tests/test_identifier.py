@@ -573,3 +573,20 @@ def test_urdf_identification_reaches_the_plant_from_a_model_off(tmp_path) -> Non
     plain = adparm.simulate(config.updated({"identifier": {"enabled": False}}), diagnose=False)
     assert critic_error(plain, W_model) < 0.01, critic_error(plain, W_model)
     assert critic_error(plain, W_plant) > 0.015, critic_error(plain, W_plant)
+
+
+def test_the_parameter_figure_draws_round_off_zeros_as_zero() -> None:
+    """A planar URDF arm's base parameters hold round-off zeros (mc_z of about 1e-17 beside
+    2 kg m): the figure lists them as plant value 0 instead of drawing beta_hat / 1e-17."""
+    from adparm.identifier_figure import ZERO_PARAMETER, relative_parameters
+
+    config = adparm.load_config(adparm.example_path("planar_3link.toml")).updated(
+        {"identifier": {"enabled": True}, "sim": {"T": 0.02}}
+    )
+    result = adparm.simulate(config, diagnose=False)
+    beta = adparm.base_parameters(config, "plant")
+    names = adparm.base_parameter_names(config)
+    values, drawn, zero = relative_parameters(result)
+    assert zero and all(names[i].startswith("mc_z") for i in zero)
+    assert all(abs(beta[i]) > ZERO_PARAMETER * np.abs(beta).max() for i in drawn)
+    assert np.abs(values).max() < 10.0  # ratios of real parameters, not of round-off

@@ -4,6 +4,7 @@ singular value against its threshold. adparm.plotting re-exports plot_model_para
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -50,13 +51,20 @@ def parameter_label(name: str) -> str:
     return f"${_TWO_LINK_LABELS[name]}$" if name in _TWO_LINK_LABELS else name
 
 
+#: A plant parameter this small relative to the largest |beta_i| is drawn as 0 (not as a ratio).
+ZERO_PARAMETER = 1e-9
+
+
 def relative_parameters(result: SimulationResult) -> tuple[np.ndarray, list[int], list[int]]:
     """(beta_hat / beta over time for the drawn parameters, their indices, the indices of the
-    identified parameters whose plant value is 0, which have no relative value)."""
+    identified parameters whose plant value is 0, which have no relative value). A plant value
+    within ZERO_PARAMETER of the largest |beta_i| counts as 0: a URDF arm's base parameters hold
+    round-off zeros (a planar arm's mc_z of 1e-17 beside 2 kg m), whose ratio would be noise."""
     beta = base_parameters(result.config, "plant")
     identified = identified_parameters(result.config)
-    drawn = [i for i in identified if beta[i] != 0.0]
-    zero = [i for i in identified if beta[i] == 0.0]
+    floor = ZERO_PARAMETER * float(np.abs(beta).max()) if beta.size else 0.0
+    drawn = [i for i in identified if abs(beta[i]) > floor]
+    zero = [i for i in identified if abs(beta[i]) <= floor]
     estimate = np.asarray(result.model_parameters, dtype=float)
     return estimate[:, drawn] / beta[drawn], drawn, zero
 
@@ -76,7 +84,8 @@ def _note(result: SimulationResult, zero: list[int]) -> str | None:
             "plant value 0, not drawn: "
             + ", ".join(f"{names[i]} ends at {final[i]:.3g}" for i in zero)
         )
-    return "; ".join(parts) or None
+    # one line per part, wrapped to the panel: a list of URDF parameters runs past the figure
+    return "\n".join(textwrap.fill(part, 120) for part in parts) or None
 
 
 def _parameters_panel(result: SimulationResult) -> Panel:
