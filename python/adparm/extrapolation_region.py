@@ -13,6 +13,8 @@ __all__ = ["BOX_REACH_CAP", "RANGE_WIDTH_FLOOR", "extrapolation_box", "extrapola
 
 #: The derived box's e1 half-width cap (rad): M(q) of a revolute joint repeats every 2 pi.
 BOX_REACH_CAP = math.pi
+#: extrapolation_range's least width of a joint's e1 range (rad).
+RANGE_WIDTH_FLOOR = 1.0
 
 
 def extrapolation_box(
@@ -64,7 +66,3 @@ def extrapolation_range(
     centre = np.concatenate([(lower + upper) / 2.0, np.zeros_like(lower)])
     box = np.concatenate([(upper - lower) / 2.0, rate * reach])
     return centre, box
-
-
-#: extrapolation_range's least width of a joint's e1 range (rad).
-RANGE_WIDTH_FLOOR = 1.0
