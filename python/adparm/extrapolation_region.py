@@ -17,6 +17,14 @@ BOX_REACH_CAP = math.pi
 RANGE_WIDTH_FLOOR = 1.0
 
 
+def _limit_distances(
+    qd: np.ndarray, low: np.ndarray, high: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """qd's distances to each joint's lower and upper limit, qd - low and high - qd, at most
+    BOX_REACH_CAP (a missing limit, nan or infinite, is no limit: fmin drops the nan)."""
+    return np.fmin(qd - low, BOX_REACH_CAP), np.fmin(high - qd, BOX_REACH_CAP)
+
+
 def extrapolation_box(
     qd: np.ndarray, q0: np.ndarray, low: np.ndarray, high: np.ndarray, alpha1: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -32,8 +40,8 @@ def extrapolation_box(
     Panda: docs, URDF arms, "Other random costs"). The box is symmetric ([-box, box]): a
     joint with qd on or near a limit gets the floor, 1 rad, half of it outside the limits; an
     unlimited joint reaches pi (M(q) repeats every 2 pi). b2 = |alpha1|_max b1 (e2 ~ alpha1 e1)."""
-    reach = np.fmin(qd - low, high - qd)  # fmin: a missing (nan) limit is no limit
-    reach = np.where(np.isfinite(reach), reach, BOX_REACH_CAP)
+    below, above = _limit_distances(qd, low, high)
+    reach = np.minimum(below, above)
     floor = max(1.0, 2.0 * float(np.abs(qd - q0).max()))
     b1 = np.maximum(floor, np.minimum(BOX_REACH_CAP, reach))
     b2 = float(np.abs(np.linalg.eigvals(alpha1)).max()) * b1
@@ -53,10 +61,8 @@ def extrapolation_range(
     range is narrower reaches past its limits). e2 stays symmetric about 0, with half-width
     |alpha1|_max max(|lo_i|, |hi_i|) (e2 ~ alpha1 e1 over the e1 range)."""
     e1_start = qd - q0
-    lower = np.fmax(qd - high, -BOX_REACH_CAP)  # fmax: a missing (nan) limit is no limit
-    upper = np.fmin(qd - low, BOX_REACH_CAP)
-    lower = np.where(np.isfinite(lower), lower, -BOX_REACH_CAP)
-    upper = np.where(np.isfinite(upper), upper, BOX_REACH_CAP)
+    below, above = _limit_distances(qd, low, high)
+    lower, upper = -above, below
     lower = np.minimum(lower, np.minimum(0.0, e1_start))
     upper = np.maximum(upper, np.maximum(0.0, e1_start))
     grow = np.maximum(0.0, RANGE_WIDTH_FLOOR - (upper - lower)) / 2.0
