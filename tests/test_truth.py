@@ -304,3 +304,23 @@ def test_no_progress_is_not_answered_with_run_longer() -> None:
     result = adparm.simulate(config, progress=False, diagnose=False)
     advice = " ".join(adparm.diagnose(result)["advice"])
     assert "a longer run will not help" in advice and "sim.T =" not in advice
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {},
+        {"model": {"p1": 4.0}},  # a believed model that is not the plant
+        {"cost": {"input_bound": [5.0, 5.0]}},  # the bounded policy
+    ],
+)
+def test_the_recorded_actor_input_is_the_policy_of_the_recorded_weights(changes) -> None:
+    # the diagnostics judge the policy by the recorded u_hat (the controller's eq. 20 with the g
+    # it believed); without identification that is adparm.optimal.policy of the recorded actor
+    # weights with the config's model (an independent evaluation, in NumPy and the basis)
+    config = adparm.paper_config().updated({"sim": {"T": 1.0, "record_every": 50}, **changes})
+    result = adparm.simulate(config, diagnose=False)
+    x = np.hstack([result.e1, result.e2])
+    u = adparm.optimal.policy(config, x, result.t, result.actor_weights)
+    scale = np.abs(result.u_hat).max()
+    np.testing.assert_allclose(result.u_hat, u, rtol=0, atol=1e-13 * scale)
