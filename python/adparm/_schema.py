@@ -106,7 +106,6 @@ class ConfigSchema:
             model = self.model.resolve(self.plant)
             check_arm(model["p1"], model["p2"], model["p3"], "model")
         self._check_basis()
-        self._check_identifier()
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
                 f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
@@ -122,27 +121,6 @@ class ConfigSchema:
 
     def _check_basis(self) -> None:
         """The initial weights and the basis against the arm (adparm.Config)."""
-
-    def _check_identifier(self) -> None:
-        """The online identifier runs on the two-link arm's fixed-size loop and on URDF arms
-        with the structured basis (issue 25): an expression basis with identifier.enabled is
-        refused."""
-        if not self.identifier.enabled:
-            return
-        if self.plant.urdf is not None:
-            if self.controller.basis != "structured":
-                raise ValueError(
-                    "identifier.enabled: on a URDF arm the online identifier runs with the "
-                    f"structured basis, not controller.basis = {self.controller.basis!r} (the "
-                    "expression bases are its next stage; guide: Unknown dynamics)"
-                )
-            return
-        if self.controller.basis not in BASIS_KINDS:
-            raise ValueError(
-                "identifier.enabled: the online identifier runs with the two-link arm's bases "
-                f"({', '.join(BASIS_KINDS)}) in this version, not controller.basis = "
-                f"{self.controller.basis!r} (the expression bases are its next stage)"
-            )
 
     def _arm_defaults(self) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
         """The settings a URDF arm derives, with their reasons (adparm.Config)."""

@@ -499,20 +499,13 @@ class ClosedLoop {
   static IdentifierType make_identifier(const Settings& settings, const Arm& model) {
     if constexpr (kIdentifies) {
       if (!settings.identifier.enabled) return IdentifierType();
-      if (settings.basis == BasisKind::expression)
-        throw std::invalid_argument(
-            "identifier.enabled: the online identifier runs with the structured basis on URDF "
-            "arms (and the paper, augmented and structured bases on the two-link arm), not an "
-            "expression basis (controller.basis)");
       using Regressor = typename IdentifierType::RegressorType;
       return IdentifierType(settings.identifier, Regressor::of(model), model, settings.sim.dt);
     } else {
       if (settings.identifier.enabled)
         throw std::invalid_argument(
-            "identifier.enabled: the online identifier runs on the two-link arm's fixed-size "
-            "loop (the paper, augmented and structured bases, sim.dynamic_sizes off) and on URDF "
-            "arms with the structured basis; not on the two-link arm's dynamic-size loop or "
-            "with expression bases");
+            "identifier.enabled: this arm has no regressor for the online identifier "
+            "(identifier.hpp: IdentifierOf)");
       return IdentifierType();
     }
   }

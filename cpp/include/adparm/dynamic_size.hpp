@@ -3,11 +3,16 @@
 // ClosedLoop<DynamicArm<TwoLinkArm>, DynamicBasis<...>> runs the n-joint loop of any arm (bounded
 // types, buffers sized once) on the paper's instance. The two paths compute the same laws; a test
 // compares their recordings (tests/test_dynamic_sizes.py, bench --checks). Settings::dynamic_sizes
-// selects this path (simulation.hpp).
+// selects this path (simulation.hpp), and so does an expression basis on the two-link arm.
+// DynamicRegressor<TwoLinkRegressor> is the online identifier's regressor (identifier.hpp) of
+// DynamicArm<TwoLinkArm>: the fixed-size one's, its joint vectors seen through dynamic sizes.
 #pragma once
+
+#include <utility>
 
 #include "adparm/arm_model.hpp"
 #include "adparm/basis.hpp"
+#include "adparm/identifier.hpp"
 
 namespace adparm {
 
@@ -96,6 +101,69 @@ struct DynamicBasis {
     d.ddq = desired.ddq;
     return d;
   }
+};
+
+// A fixed-size Regressor (identifier.hpp) behind the dynamic-size joint vectors of DynamicArm: the
+// same regressors, beta and checks, so the dynamic-size loop identifies as the fixed-size one.
+template <class FixedRegressor>
+class DynamicRegressor {
+ public:
+  static constexpr int kDof = Dynamic;
+  static constexpr int kFixedDof = FixedRegressor::kDof;
+  static constexpr int kParameters = FixedRegressor::kParameters;
+  static constexpr int kMaxParameters = FixedRegressor::kMaxParameters;
+  using Arm = DynamicArm<typename FixedRegressor::Arm>;
+  using Joint = JointVector<Dynamic>;
+  using Parameters = typename FixedRegressor::Parameters;
+  using Matrix = Eigen::Matrix<double, Dynamic, kParameters, 0, kMaxDof, kParameters>;
+  using Workspace = typename FixedRegressor::Workspace;
+
+  static DynamicRegressor of(const Arm& model) {
+    return DynamicRegressor(FixedRegressor::of(model.fixed()));
+  }
+  Parameters beta(const Arm& arm) const { return fixed_.beta(arm.fixed()); }
+  int dof() const { return kFixedDof; }
+  int parameters() const { return fixed_.parameters(); }
+  ParameterGroup group(int i) const { return fixed_.group(i); }
+  Workspace make_workspace(const Parameters& initial) const {
+    return fixed_.make_workspace(initial);
+  }
+  void reference_regressor(const Joint& q, const Joint& dq, const Joint& v, const Joint& a,
+                           Matrix& out, Workspace& workspace) const {
+    typename FixedRegressor::Matrix fixed;
+    fixed_.reference_regressor(Fixed(q), Fixed(dq), Fixed(v), Fixed(a), fixed, workspace);
+    out = fixed;
+  }
+  void momentum_regressor(const Joint& q, const Joint& dq, Matrix& out,
+                          Workspace& workspace) const {
+    typename FixedRegressor::Matrix fixed;
+    fixed_.momentum_regressor(Fixed(q), Fixed(dq), fixed, workspace);
+    out = fixed;
+  }
+  void momentum_rate_regressor(const Joint& q, const Joint& dq, Matrix& out,
+                               Workspace& workspace) const {
+    typename FixedRegressor::Matrix fixed;
+    fixed_.momentum_rate_regressor(Fixed(q), Fixed(dq), fixed, workspace);
+    out = fixed;
+  }
+  bool accept(const Parameters& next, const Joint& q, Workspace& workspace) const {
+    return fixed_.accept(next, Fixed(q), workspace);
+  }
+  Arm arm(const Parameters& estimate, const Workspace& workspace) const {
+    return Arm(fixed_.arm(estimate, workspace));
+  }
+
+  DynamicRegressor() = default;
+
+ private:
+  using Fixed = JointVector<kFixedDof>;
+  explicit DynamicRegressor(FixedRegressor fixed) : fixed_(std::move(fixed)) {}
+  FixedRegressor fixed_{};
+};
+
+template <>
+struct IdentifierOf<DynamicArm<TwoLinkArm>> {
+  using type = Identifier<DynamicRegressor<TwoLinkRegressor>>;
 };
 
 }  // namespace adparm
