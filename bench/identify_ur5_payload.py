@@ -1,7 +1,7 @@
 """Issue 25's target on a URDF arm: the UR5 with a 2 kg payload its model does not know.
 
 The plant is the UR5 URDF (example-robot-data) with a 2 kg link fixed 0.1 m from wrist_3_link
-(written next to this run, tests/test_identifier.py's urdf_with_payload); the model is the UR5
+(adparm.urdf_with_payload, written next to this run); the model is the UR5
 URDF; examples/ur5.toml with identifier.enabled and a 5 N m probe per joint at random phases.
 Prints beta_hat's error (largest over the largest identified parameter), the stack's minimum
 singular value, the critic's distance to the plant's W* and to its current target W*(beta_hat)
@@ -24,9 +24,6 @@ import numpy as np
 
 import adparm
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_identifier import urdf_with_payload  # noqa: E402
-
 
 def main() -> None:
     T = float(sys.argv[1]) if len(sys.argv) > 1 else 30.0
@@ -38,7 +35,7 @@ def main() -> None:
     ur5 = adparm.example_robot_urdf("ur5")
     folder = Path(tempfile.mkdtemp())
     plant = folder / "ur5_payload.urdf"
-    urdf_with_payload(ur5, "wrist_3_link", 2.0, (0.0, 0.1, 0.0), plant)
+    adparm.urdf_with_payload(ur5, "wrist_3_link", 2.0, (0.0, 0.1, 0.0), path=plant)
     base = adparm.load_config(adparm.example_path("ur5.toml"))
     n = base.dof
     rng = np.random.default_rng(1)

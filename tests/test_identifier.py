@@ -516,36 +516,6 @@ def test_a_urdf_model_off_gives_beta_with_the_same_structure(tmp_path) -> None:
     assert np.abs(beta_model / np.where(beta_plant == 0, 1, beta_plant) - 1).max() > 0.05
 
 
-def urdf_with_payload(path, link: str, mass: float, offset, out) -> None:
-    """The URDF at ``path`` with a point-like payload (``mass`` kg, a 2 cm sphere's inertia)
-    fixed to ``link`` at ``offset`` (m, in the link's frame): a new link and fixed joint, which
-    Pinocchio merges into the body that moves ``link``."""
-    import xml.etree.ElementTree as ET
-
-    tree = ET.parse(str(path))
-    root = tree.getroot()
-    inertia = 2.0 / 5.0 * mass * 0.02**2
-    payload = ET.SubElement(root, "link", name="payload")
-    inertial = ET.SubElement(payload, "inertial")
-    ET.SubElement(inertial, "origin", xyz="0 0 0", rpy="0 0 0")
-    ET.SubElement(inertial, "mass", value=repr(mass))
-    ET.SubElement(
-        inertial,
-        "inertia",
-        ixx=repr(inertia),
-        iyy=repr(inertia),
-        izz=repr(inertia),
-        ixy="0",
-        ixz="0",
-        iyz="0",
-    )
-    joint = ET.SubElement(root, "joint", name="payload_joint", type="fixed")
-    ET.SubElement(joint, "parent", link=link)
-    ET.SubElement(joint, "child", link="payload")
-    ET.SubElement(joint, "origin", xyz=" ".join(repr(float(x)) for x in offset), rpy="0 0 0")
-    tree.write(str(out))
-
-
 def urdf_identifying_config(tmp_path, T: float) -> adparm.Config:
     """The planar 3-link arm (examples/planar_3link.toml: the exact cost family, 50 fixed
     extrapolation points) believing a model whose links' masses and inertias are scaled by

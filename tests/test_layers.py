@@ -21,6 +21,7 @@ LAYERS = {
     "_examples": 0,
     "physical": 0,
     "urdf": 0,
+    "urdf_payload": 0,
     "term_checks": 0,
     "bases": 0,
     "_files": 0,

@@ -174,15 +174,13 @@ def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: floa
 
 
 def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
-    """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200 of
-    them): u_hat the actor's input as recorded (eq. 20 with the g the controller believed at that
-    row: the model's, or beta_hat's while identifying, which only the recording holds), u* of W*
-    and the judged arm's g, at the recorded states."""
+    """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200): u_hat
+    as recorded (eq. 20 with the g the controller believed: beta_hat's while identifying), u* of
+    W* and the judged arm's g, at the recorded states."""
     config = judged_config(result.config)
     tail = np.nonzero(result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0]))[0]
     tail = tail[np.linspace(0, tail.size - 1, min(tail.size, 200)).round().astype(int)]
-    x = np.hstack([result.e1, result.e2])[tail]
-    u_hat = result.u_hat[tail]
+    u_hat, x = result.u_hat[tail], np.hstack([result.e1, result.e2])[tail]
     u_star = policy(config, x, result.t[tail], target)
     scale = math.sqrt(float(np.mean(u_star**2)))
     if scale == 0.0:  # at rest exactly: u* = 0 there, compare the weights alone
