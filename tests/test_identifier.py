@@ -619,4 +619,15 @@ def test_a_urdf_arm_identifies_with_an_expression_basis(tmp_path) -> None:
     diagnostics = result.diagnostics
     assert diagnostics["identifier"]["ever_informative"]
     assert "the optimum is not known" in diagnostics["verdict"]
-    assert "beta_hat ends" in diagnostics["verdict"]
+    # the verdict gives beta_hat's error by norm and its worst parameter's (named)
+    identifier = diagnostics["identifier"]
+    assert identifier["parameter_norm_error"] == pytest.approx(error(result.model_parameters[-1]))
+    names = adparm.base_parameter_names(config)
+    largest = np.abs(beta).max()  # a zero parameter (to 1e-9) relative to the largest
+    scale = np.where(np.abs(beta) > 1e-9 * largest, np.abs(beta), largest)
+    worst = max(identified, key=lambda i: abs(result.model_parameters[-1, i] - beta[i]) / scale[i])
+    assert identifier["worst_parameter"] == names[worst]
+    assert (
+        f"beta_hat ends {identifier['parameter_norm_error']:.3g} (relative, by norm) from the "
+        f"plant's beta, its worst parameter ({names[worst]})" in diagnostics["verdict"]
+    )

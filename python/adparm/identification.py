@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .config import Config, ModelConfig
-from .dynamics import base_parameter_groups
+from .dynamics import base_parameter_groups, base_parameter_names
 from .optimal import base_parameters, optimal_weights
 from .result import SimulationResult
 
@@ -66,7 +66,10 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
 
     - beta_plant, beta_hat: lists in the order of base_parameter_names;
     - parameter_relative_error: max over the identified parameters of |beta_hat - beta| / |beta|
-      (a parameter with beta = 0, to 1e-9 of the largest: relative to the largest |beta|);
+      (a parameter with beta = 0, to 1e-9 of the largest: relative to the largest |beta|), and
+      worst_parameter, its name;
+    - parameter_norm_error: ||beta_hat - beta|| / ||beta|| over the identified parameters (a
+      small parameter's relative error can be large while this is small: URDF arms);
     - ever_informative, informative_time (s, the first recorded row at the threshold, or None),
       max_singular_value (the largest minimum singular value recorded);
     - probe_stopped_time: the first recorded row from which identifier.stop_probe switched the
@@ -80,6 +83,9 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     identified = identified_parameters(config)
     errors = [abs(beta_hat[i] - beta[i]) / _scale(beta, i) for i in identified]
     error = float(max(errors)) if errors else 0.0
+    worst = base_parameter_names(config)[identified[int(np.argmax(errors))]] if errors else None
+    difference, size = beta_hat[identified] - beta[identified], beta[identified]
+    norm_error = float(np.linalg.norm(difference) / max(float(np.linalg.norm(size)), 1e-300))
     sigma = np.asarray(result.stack_singular_value, dtype=float)
     threshold = config.identifier.singular_value_threshold
     informative = np.flatnonzero((sigma >= threshold) & (sigma > 0.0))
@@ -89,8 +95,8 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     if ever:
         text = (
             f"the identifier's history stack became informative at t = "
-            f"{result.t[informative[0]]:.3g} s; beta_hat ends {error:.3g} (relative) from the "
-            "plant's beta"
+            f"{result.t[informative[0]]:.3g} s; beta_hat ends {norm_error:.3g} (relative, by "
+            f"norm) from the plant's beta, its worst parameter ({worst}) {error:.3g}"
         )
         if stopped is not None:
             text += f"; the probe stopped at t = {stopped:.3g} s (identifier.stop_probe)"
@@ -105,6 +111,8 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
         "beta_plant": [float(v) for v in beta],
         "beta_hat": [float(v) for v in beta_hat],
         "parameter_relative_error": error,
+        "worst_parameter": worst,
+        "parameter_norm_error": norm_error,
         "ever_informative": ever,
         "informative_time": float(result.t[informative[0]]) if ever else None,
         "max_singular_value": largest,
