@@ -7,9 +7,9 @@ instead of the 0.2 kg of the URDF the controller believes. Without identificatio
 learns the *believed* arm's optimum; with ``[identifier] enabled = true`` the controller
 identifies the arm's base parameters online (:doc:`/guide/unknown-dynamics`) from a probe of 5 N
 m per joint, switches the probe off once the estimate has settled (``identifier.stop_probe``),
-and the critic then learns the plant's W*. (The guide's target arm, the UR5 with a 2 kg payload,
-takes minutes of computing for its 30 s: ``bench/identify_ur5_payload.py``; this 3-joint arm
-shows the same in seconds.) Measured (12 s): the stack is informative at 0.62 s, the probe
+and the critic then learns the plant's W*. (The next example shows the same on the UR5 with a
+2 kg payload, in about a minute of computing; this 3-joint arm takes seconds, so it also runs
+without identification for comparison.) Measured (12 s): the stack is informative at 0.62 s, the probe
 stops at 7.62 s, the critic ends 0.19 % from the plant's W* (the W* of beta_hat to round-off)
 and the policy applied within 1e-6 of the plant's u*; beta_hat is 0.43 % from beta by norm, its
 smallest parameter 1.6 % off its own value (the guide: "The probe and the critic").
