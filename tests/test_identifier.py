@@ -631,3 +631,20 @@ def test_a_urdf_arm_identifies_with_an_expression_basis(tmp_path) -> None:
         f"beta_hat ends {identifier['parameter_norm_error']:.3g} (relative, by norm) from the "
         f"plant's beta, its worst parameter ({names[worst]})" in diagnostics["verdict"]
     )
+
+
+@pytest.mark.parametrize("kind", ["rise", "pd", "optimal"])
+def test_controllers_that_do_not_learn_identify_too(kind: str) -> None:
+    # the identifier feeds every controller's feedforward; the verdict of a run that does not
+    # learn says nothing of the identifier unless its stack never became informative
+    config = model_off(
+        base(identifier={"enabled": True}, controller={"kind": kind}, sim={"T": 4.0})
+    )
+    beta, beta_model = (adparm.base_parameters(config, which) for which in ("plant", "model"))
+    result = adparm.simulate(config)
+    assert np.abs(beta_model[:5] / beta[:5] - 1).max() > 0.1
+    assert np.abs(result.model_parameters[-1, :5] / beta[:5] - 1).max() < 0.01
+    assert result.diagnostics["verdict"] == "not a learning run"
+    still = config.updated({"task": {"q0": [0.0, 0.0]}, "probe": {"until": 0.0}, "sim": {"T": 1.0}})
+    verdict = adparm.simulate(still).diagnostics["verdict"]
+    assert verdict.startswith("not a learning run; the identifier's history stack never became")

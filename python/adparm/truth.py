@@ -291,13 +291,13 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     out = _diagnose_learning(result, tolerance=tolerance)
     identifier = identifier_diagnosis(result)
     out["identifier"] = identifier
-    if identifier is not None:
-        if out["verdict"] == "not a learning run" or out["verdict"] == "no rows":
-            pass
-        elif not identifier["ever_informative"] and out["verdict"] == "ok":
-            out["verdict"] = identifier["text"]
-        else:
-            out["verdict"] += "; " + identifier["text"]
+    informative = identifier is not None and identifier["ever_informative"]
+    if identifier is None or out["verdict"] == "no rows":
+        pass  # below: a run that does not learn hears only of a stack never informative
+    elif not informative and out["verdict"] == "ok":
+        out["verdict"] = identifier["text"]
+    elif not (informative and out["verdict"] == "not a learning run"):
+        out["verdict"] += "; " + identifier["text"]
     out["model_gap"] = model_gap_text(result, out["verdict"])
     if out["model_gap"] is not None:
         out["verdict"] += "; " + out["model_gap"]
