@@ -166,9 +166,7 @@ class ClosedLoop {
         actor_(settings.actor),
         controller_(settings.controller, dof_),
         trajectory_(settings.task.qd, dof_),
-        // with identification the model changes every step: no points prepared once
-        extrapolation_(settings.extrapolation,
-                       trajectory_.is_constant() && !settings.identifier.enabled, model),
+        extrapolation_(settings.extrapolation, trajectory_.is_constant(), model),
         probe_(settings.probe, dof_),
         torque_limits_(checked_torque_limits(settings.torque_limits, dof_)),
         limited_(settings.torque_limits.size() > 0 &&
@@ -278,8 +276,11 @@ class ClosedLoop {
   }
 
   // Called at the start of each step (and before the first evaluation): draws local
-  // extrapolation points around the current error state, or prepares fixed ones once.
+  // extrapolation points around the current error state, or prepares fixed ones once (with
+  // identification, again at each step: the believed model, beta_hat's, is held over the step and
+  // changes after it, end_step).
   void begin_step(double t, const State& state, Data& data) {
+    if (identifies_) extrapolation_.model_changed();
     if (!extrapolation_.needs_begin_step()) return;
     const ErrorSystem<Arm>& system = believed_system(data);
     const Eigen::Index n = dof();

@@ -122,6 +122,9 @@ class Extrapolation {
            (settings_.mode == ExtrapolationMode::local || (constant_desired_ && !prepared_valid_));
   }
   const Points& points() const { return points_; }
+  // The believed model changed (online identification): prepared points are prepared again at
+  // the next begin_step.
+  void model_changed() { prepared_valid_ = false; }
 
   // Start of a step at error state x: draws new local points; prepares points that are fixed for
   // the step when the desired state is constant. `terms`: a buffer of the model's terms at a point
