@@ -11,7 +11,7 @@ critic then learns the *plant's* W*, not the believed arm's (:doc:`/guide/unknow
 Measured (16 s, 2026-12-04): the stack is informative from 2.1 s, beta_hat within 1 % of beta
 from 5.1 s, the probe stops at 12.5 s, and beta_hat and the critic are both within 1 % of the
 plant's from 14.3 s (the critic ends 0.54 % from the plant's W*, 4e-8 from the W* of beta_hat).
-About a minute of computing.
+About 20 s of computing.
 """
 
 import tempfile
