@@ -648,3 +648,25 @@ def test_controllers_that_do_not_learn_identify_too(kind: str) -> None:
     still = config.updated({"task": {"q0": [0.0, 0.0]}, "probe": {"until": 0.0}, "sim": {"T": 1.0}})
     verdict = adparm.simulate(still).diagnostics["verdict"]
     assert verdict.startswith("not a learning run; the identifier's history stack never became")
+
+
+def test_many_parameters_are_drawn_in_the_range_they_reach_once_informative() -> None:
+    # a URDF arm's dozens of ratios swing far before the stack is informative (the UR5's reach
+    # 20): the panel's y range is then the one from the informative time on, and the note says
+    # how far the earlier values reach
+    import matplotlib.pyplot as plt
+
+    from adparm import identifier_figure
+
+    result = _identifying_run()
+    start = adparm.diagnose(result)["identifier"]["informative_time"]
+    assert start is not None and start > result.t[1]
+    values = 1.0 + 0.01 * np.sin(np.outer(result.t, np.arange(1, 13)))  # 12 parameters near 1
+    figure, axes = plt.subplots()
+    assert identifier_figure._focus(axes, result, values) is None  # nothing beyond the range
+    values[result.t < start, 3] = 20.0
+    note = identifier_figure._focus(axes, result, values)
+    assert note is not None and "before, they reach 0.99 to 20" in note
+    low, high = axes.get_ylim()
+    assert 0.8 < low < 0.9 and 1.1 < high < 1.2
+    plt.close(figure)

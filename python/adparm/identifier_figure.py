@@ -88,6 +88,26 @@ def _note(result: SimulationResult, zero: list[int]) -> str | None:
     return "\n".join(textwrap.fill(part, 120) for part in parts) or None
 
 
+def _focus(axes: Axes, result: SimulationResult, values: np.ndarray) -> str | None:
+    """Sets the y range of the ratios from the time the stack became informative (at least 0.9
+    to 1.1) when earlier ratios reach further, and says so: a URDF arm's dozens of parameters
+    swing far while the stack is not informative, which would flatten the convergence."""
+    informative = identifier_diagnosis(result)
+    start = None if informative is None else informative["informative_time"]
+    if start is None or not values.size or not np.all(np.isfinite(values)):
+        return None
+    later = values[result.t >= start]
+    low, high = min(float(later.min()), 0.9), max(float(later.max()), 1.1)
+    if values.min() >= low and values.max() <= high:
+        return None
+    pad = 0.05 * (high - low)
+    axes.set_ylim(low - pad, high + pad)
+    return (
+        f"y range of the values from t = {start:.3g} s (the stack informative); before, they "
+        f"reach {values.min():.3g} to {values.max():.3g}"
+    )
+
+
 def _parameters_panel(result: SimulationResult) -> Panel:
     def panel(axes: Axes) -> None:
         values, drawn, zero = relative_parameters(result)
@@ -103,12 +123,13 @@ def _parameters_panel(result: SimulationResult) -> Panel:
                 style.update(marker=MARKERS[j % len(MARKERS)], markersize=4)
                 style["markevery"] = (offset, every)
             symbol = parameter_label(names[i])
+            many = f"{len(drawn)} base parameters,\neach estimate over\nthe plant's value"
             axes.plot(
                 t,
                 values[:, j],
                 lw=1.2 if few else 0.9,
                 alpha=1.0 if few else 0.75,
-                label=f"{symbol}  (plant {beta[i]:.4g})" if few else "_parameter",
+                label=f"{symbol}  (plant {beta[i]:.4g})" if few else (many if j == 0 else "_"),
                 **style,
             )
         axes.axhline(1.0, color="k", lw=1.6, ls=(0, (4, 3)), zorder=5, label="plant's $\\beta$")
@@ -116,7 +137,8 @@ def _parameters_panel(result: SimulationResult) -> Panel:
             mark_last_row(axes, result, values[-1])
         axes.set_ylabel("$\\hat\\beta_i / \\beta_i$")
         axes.set_xlabel("time t (s)")
-        note = _note(result, zero)
+        focus = None if few else _focus(axes, result, values)  # many lines: a closer range
+        note = "\n".join(part for part in (_note(result, zero), focus) if part)
         if note:  # above the panel, off the data; the figure's title moves above it
             import matplotlib
 
@@ -125,16 +147,6 @@ def _parameters_panel(result: SimulationResult) -> Panel:
                 axes.figure.suptitle(title, fontsize=matplotlib.rcParams["axes.titlesize"])
                 axes.set_title("")
             axes.set_title(note, fontsize=7.5, loc="left", color="0.25")
-        if not few:
-            axes.text(
-                1.01,
-                1.0,
-                f"{len(drawn)} base parameters,\neach estimate over\nthe plant's value",
-                transform=axes.transAxes,
-                ha="left",
-                va="top",
-                fontsize=8,
-            )
         mark_probe_end(axes, result)
         mark_stop(axes, result)
         legend_outside(axes, title="estimate / plant" if few else None)
