@@ -65,11 +65,27 @@ inline constexpr double kLogCoshSeries[16] = {0.5,
                                               8.715903837635848e-08,
                                               -3.3116463500327045e-08};
 
-// sum_k c_k a2^k over the first K coefficients (Horner).
+// The two series side by side, {kTanhSeries[k], kLogCoshSeries[k]}: one Horner pass of pairs
+// (SSE2 / NEON lanes) sums both, lane by lane the same operations as one series alone.
+struct SeriesPairs {
+  alignas(16) double c[16][2];
+};
+constexpr SeriesPairs series_pairs() {
+  SeriesPairs pairs{};
+  for (int k = 0; k < 16; ++k) {
+    pairs.c[k][0] = kTanhSeries[k];
+    pairs.c[k][1] = kLogCoshSeries[k];
+  }
+  return pairs;
+}
+inline constexpr SeriesPairs kSeriesPairs = series_pairs();
+
+// {sum_k kTanhSeries[k] a2^k, sum_k kLogCoshSeries[k] a2^k} over the first K terms (Horner).
 template <int K>
-inline double even_series(const double (&c)[16], double a2) {
-  double sum = c[K - 1];
-  for (int k = K - 2; k >= 0; --k) sum = sum * a2 + c[k];
+inline Eigen::Array2d even_series_pair(double a2) {
+  using Pair = Eigen::Map<const Eigen::Array2d, Eigen::Aligned16>;
+  Eigen::Array2d sum = Pair(kSeriesPairs.c[K - 1]);
+  for (int k = K - 2; k >= 0; --k) sum = sum * a2 + Pair(kSeriesPairs.c[k]);
   return sum;
 }
 
@@ -99,9 +115,8 @@ inline double log1p_from_log(double x) {
 inline TanhLogCosh tanh_log_cosh(double a) {
   if (a < 0.5) {
     const double a2 = a * a;
-    if (a < 0.25)
-      return {a * even_series<10>(kTanhSeries, a2), a2 * even_series<10>(kLogCoshSeries, a2)};
-    return {a * even_series<16>(kTanhSeries, a2), a2 * even_series<16>(kLogCoshSeries, a2)};
+    const Eigen::Array2d sums = a < 0.25 ? even_series_pair<10>(a2) : even_series_pair<16>(a2);
+    return {a * sums[0], a2 * sums[1]};
   }
   const double e = std::exp(-2.0 * a);
   const double w = 1.0 + e;
