@@ -58,11 +58,11 @@ class QuadraticCostT {
     if (!bound_.logcosh()) return x.dot(Q_ * x);
     // e1^T Q11 e1 + 2 e1^T Q12 e2 + the ln cosh e2 term (input_bound.hpp)
     const Eigen::Index n = x.size() / 2;
-    double sum = 0.0;
-    for (Eigen::Index j = 0; j < 2 * n; ++j)
-      for (Eigen::Index i = 0; i < std::min(n, j + 1); ++i)
-        sum += (i == j ? 1.0 : 2.0) * Q_(i, j) * x[i] * x[j];
-    return sum + bound_.e2_cost(x.tail(n));
+    const auto e1 = x.template segment<N>(0, n);
+    const auto e2 = x.template segment<N>(n, n);
+    const JointVector<N> Q1_x = Q_.template topLeftCorner<N, N>(n, n) * e1 +
+                                2.0 * (Q_.template topRightCorner<N, N>(n, n) * e2);
+    return e1.dot(Q1_x) + bound_.e2_cost(e2);
   }
   // u^T R u, or U(u) with an input bound
   double input_cost(const JointVector<N>& u) const {

@@ -65,11 +65,27 @@ inline constexpr double kLogCoshSeries[16] = {0.5,
                                               8.715903837635848e-08,
                                               -3.3116463500327045e-08};
 
-// sum_k c_k a2^k over the first K coefficients (Horner).
+// The two series side by side, {kTanhSeries[k], kLogCoshSeries[k]}: one Horner pass of pairs
+// (SSE2 / NEON lanes) sums both, lane by lane the same operations as one series alone.
+struct SeriesPairs {
+  alignas(16) double c[16][2];
+};
+constexpr SeriesPairs series_pairs() {
+  SeriesPairs pairs{};
+  for (int k = 0; k < 16; ++k) {
+    pairs.c[k][0] = kTanhSeries[k];
+    pairs.c[k][1] = kLogCoshSeries[k];
+  }
+  return pairs;
+}
+inline constexpr SeriesPairs kSeriesPairs = series_pairs();
+
+// {sum_k kTanhSeries[k] a2^k, sum_k kLogCoshSeries[k] a2^k} over the first K terms (Horner).
 template <int K>
-inline double even_series(const double (&c)[16], double a2) {
-  double sum = c[K - 1];
-  for (int k = K - 2; k >= 0; --k) sum = sum * a2 + c[k];
+inline Eigen::Array2d even_series_pair(double a2) {
+  using Pair = Eigen::Map<const Eigen::Array2d, Eigen::Aligned16>;
+  Eigen::Array2d sum = Pair(kSeriesPairs.c[K - 1]);
+  for (int k = K - 2; k >= 0; --k) sum = sum * a2 + Pair(kSeriesPairs.c[k]);
   return sum;
 }
 
@@ -78,21 +94,34 @@ struct TanhLogCosh {
   double log_cosh = 0.0;  // ln cosh a
 };
 
+// ln 2 in two parts: the first has 20 significant bits, so a - kLn2High is exact for
+// 1/2 <= a < 2^33 (above, its rounding is half an ulp of the result).
+constexpr double kLn2High = 6.93145751953125e-1;
+constexpr double kLn2Low = 1.42860682030941723212e-6;
+
+// log1p(x) for x > -1 from one log: with w = 1 + x rounded, ln(1 + x) = ln w - ((w - 1) - x) / w
+// (the rounding of w, computed exactly, corrected to first order; x itself where w = 1). glibc's
+// log is several times cheaper than its log1p (and its exp than its expm1).
+inline double log1p_from_log(double x) {
+  const double w = 1.0 + x;
+  return std::log(w) - ((w - 1.0) - x) / w;
+}
+
 // tanh a and ln cosh a for a = |x| >= 0, accurate to round-off: below a = 1/2 their Taylor
 // series (no transcendental call: the policy's D and the ln cosh cost's argument are mostly
-// there), else from one expm1: m = e^-2a - 1, tanh a = -m / (2 + m), and ln cosh a =
-// -1/2 ln(1 - tanh^2 a) below a = 1, a + ln(1 + e^-2a) - ln 2 above (no overflow, no
-// cancellation).
+// there), else from one exp and one log: e = e^-2a <= e^-1, w = 1 + e rounded,
+// tanh a = (1 - e) / w and ln cosh a = a - ln 2 + log1p(e) (log1p_from_log); no overflow, and
+// log1p(e) <= 0.32 against a - ln 2 >= -0.19: little cancellation.
 inline TanhLogCosh tanh_log_cosh(double a) {
   if (a < 0.5) {
     const double a2 = a * a;
-    if (a < 0.25)
-      return {a * even_series<10>(kTanhSeries, a2), a2 * even_series<10>(kLogCoshSeries, a2)};
-    return {a * even_series<16>(kTanhSeries, a2), a2 * even_series<16>(kLogCoshSeries, a2)};
+    const Eigen::Array2d sums = a < 0.25 ? even_series_pair<10>(a2) : even_series_pair<16>(a2);
+    return {a * sums[0], a2 * sums[1]};
   }
-  const double m = std::expm1(-2.0 * a);
-  const double t = -m / (2.0 + m);
-  return {t, a < 1.0 ? -0.5 * std::log1p(-t * t) : a + std::log1p(1.0 + m) - kLn2};
+  const double e = std::exp(-2.0 * a);
+  const double w = 1.0 + e;
+  const double log1p_e = std::log(w) - ((w - 1.0) - e) / w;  // log1p_from_log(e), w shared
+  return {(1.0 - e) / w, ((a - kLn2High) - kLn2Low) + log1p_e};
 }
 
 // ln cosh z (tanh_log_cosh).
@@ -107,7 +136,7 @@ inline double bounded_input_shape(double s) {
     const double a2 = a * a;
     return a2 * (1.0 + a2 * (1.0 / 6.0 + a2 / 15.0));
   }
-  return (1.0 + a) * std::log1p(a) + (1.0 - a) * std::log1p(-a);
+  return (1.0 + a) * log1p_from_log(a) + (1.0 - a) * log1p_from_log(-a);
 }
 
 template <int N = 2>
