@@ -418,16 +418,24 @@ PinocchioReplay replay_pinocchio(const adparm::Settings& settings, const adparm:
   return replay;
 }
 
+// The settings of a case: urdf_settings with the basis' initial weights.
 template <class Case>
-bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
-                    double horizon, int repeats) {
-  using Simulation = adparm::Simulation<LoopArm, typename Case::Basis>;
+adparm::Settings case_settings(const adparm::PinocchioArm& arm, long points, double horizon) {
   adparm::Settings settings = urdf_settings(arm.dof(), points, horizon);
   settings.critic_weights = Case::initial_weights(arm);
   settings.actor_weights = settings.critic_weights;
+  return settings;
+}
+
+// The timed runs of a case (best of `repeats`, into `best`) and its bench=urdf_loop line. Not
+// inlined: bench/compare_urdf.py's callgrind mode counts the instructions of each call alone.
+template <class Case>
+[[gnu::noinline]] bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm,
+                                      long points, double horizon, int repeats, LoopTiming& best) {
+  using Simulation = adparm::Simulation<LoopArm, typename Case::Basis>;
+  const adparm::Settings settings = case_settings<Case>(arm, points, horizon);
   const LoopArm loop_arm(arm);
   const typename Case::Basis basis = Case::basis(arm);
-  LoopTiming best;
   for (int r = 0; r < repeats; ++r) {
     Simulation simulation(settings, loop_arm, loop_arm, true, basis);
     const LoopTiming timing = time_run(simulation);
@@ -439,6 +447,17 @@ bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long 
       arm_name, arm.dof(), Case::name(), basis.size(), points, best.steps, repeats,
       1e9 * best.seconds / std::max(best.steps, 1L), best.heap_allocations,
       status_name(best.status));
+  std::fflush(stdout);
+  return best.status == adparm::RunStatus::finished && best.heap_allocations <= 0;
+}
+
+// The bench=urdf_profile line of a case timed by time_urdf_loop (`best`): Pinocchio's calls
+// replayed (replay_pinocchio) and the heap allocations per step.
+template <class Case>
+bool profile_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
+                       double horizon, int repeats, const LoopTiming& best) {
+  const adparm::Settings settings = case_settings<Case>(arm, points, horizon);
+  const typename Case::Basis basis = Case::basis(arm);
   const PinocchioReplay replay = replay_pinocchio<Case>(settings, arm, basis, repeats);
   const double steps = static_cast<double>(std::max(best.steps, 1L));
   std::printf(
@@ -451,8 +470,15 @@ bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long 
       (replay.arm_seconds + replay.basis_seconds) / best.seconds,
       best.heap_allocations < 0 ? -1.0 : static_cast<double>(best.heap_allocations) / steps);
   std::fflush(stdout);
-  return best.status == adparm::RunStatus::finished && best.heap_allocations <= 0 &&
-         replay.calls > 0;
+  return replay.calls > 0;
+}
+
+template <class Case>
+bool time_and_profile_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
+                                double horizon, int repeats) {
+  LoopTiming best;
+  const bool timed = time_urdf_loop<Case>(arm_name, arm, points, horizon, repeats, best);
+  return profile_urdf_loop<Case>(arm_name, arm, points, horizon, repeats, best) && timed;
 }
 
 // The planar 3-link arm (examples/arms) and example-robot-data's UR5 in the closed loop, each
@@ -473,8 +499,8 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
     const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),
                                    Eigen::VectorXd::Constant(1, 0.1));
     for (const long points : point_counts) {
-      ok = time_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
-      ok = time_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
+      ok = time_and_profile_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
+      ok = time_and_profile_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
     }
   }
   return ok;
