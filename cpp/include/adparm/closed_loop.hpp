@@ -186,7 +186,8 @@ class ClosedLoop {
         gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)),
         identifier_(make_identifier(settings, model)),
         identifies_(identifier_.enabled()),
-        low_rank_(kBasisSize == Dynamic && !extrapolation_.enabled() && controller_.learns()) {
+        low_rank_(kBasisSize == Dynamic && !extrapolation_.enabled() && controller_.learns() &&
+                  basis_size_ > 24) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -302,8 +303,10 @@ class ClosedLoop {
                               data.basis);
   }
 
-  // Whether step() takes low-rank steps: dynamic sizes, a learning controller and no
-  // extrapolation points (one sample per evaluation, so each stage's dGamma is rank one).
+  // Whether step() takes low-rank steps: dynamic sizes, a learning controller, no extrapolation
+  // points (one sample per evaluation, so each stage's dGamma is rank one) and more than 24
+  // functions (measured: faster on the UR5's 55 and 78; at 8-21 within the noise or slower in
+  // wall time, where add_rates' unrolled products are cheap; those keep rk4_step, bit for bit).
   bool low_rank_steps() const { return low_rank_; }
 
   // One RK4 step from (t_begin, x) to (t_end, x_next) (x_next not x): rk4_step (rk4.hpp), or with
