@@ -34,7 +34,17 @@
 //     a set-point and N fixed extrapolation points (urdf_settings below): the planar 3-link arm
 //     and the UR5, N = 0 and 50, over min(simulated_seconds, 2 s); a run that does not finish or
 //     allocates in its steps fails the bench. bench/urdf_speed.py times the same 3-link cases in
-//     NumPy + Pinocchio's Python bindings against these lines. Before them
+//     NumPy + Pinocchio's Python bindings against these lines. After each, its profile:
+//   bench=urdf_profile arm=NAME basis=B points=N ns_per_step=x arm_computes_per_step=c
+//     arm_terms_ns_per_step=a basis_pinocchio_ns_per_step=b pinocchio_share=(a+b)/x
+//     heap_allocations_per_step=0 measured=replayed_states
+//     the share of the step spent in Pinocchio, measured by replaying: one more run of the same
+//     case records (q, dq) of every arm compute() of its steps (c per RK4 step: one per stage;
+//     a recorded row reuses the next step's first stage), then PinocchioArm::compute (M, C, G,
+//     M^-1, F) is timed over those states alone (a), and for the structured basis its Pinocchio
+//     passes (kinematics derivatives, PinocchioStructuredBasis::pinocchio_passes) at the same
+//     states (b; 0 for the quadratic basis), fastest of 3 each, divided by the loop's best step
+//     time x. Before them
 //   bench=dense_kernels name=avx512|avx2|portable
 //     the critic's dense kernels these loops run (dense_kernels.hpp; ADPARM_KERNELS chooses).
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
@@ -67,6 +77,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "adparm/any_simulation.hpp"
@@ -335,16 +346,96 @@ adparm::Settings urdf_settings(int n, long points, double horizon) {
   return s;
 }
 
+// The loop arm of the cases' profile (below): UrdfLoopArm, appending q and dq of every compute()
+// call to `calls` (reserved before the run; the run that records is not timed).
+class RecordingArm : public LoopArm {
+ public:
+  RecordingArm(const LoopArm& arm, std::vector<double>* calls) : LoopArm(arm), calls_(calls) {}
+  void compute(const Joint& q, const Joint& dq, Terms& terms) const {
+    calls_->insert(calls_->end(), q.data(), q.data() + q.size());
+    calls_->insert(calls_->end(), dq.data(), dq.data() + dq.size());
+    LoopArm::compute(q, dq, terms);
+  }
+
+ private:
+  std::vector<double>* calls_;
+};
+
+// The Pinocchio part of a case's step, replayed: the (q, dq) of every arm compute() of a run
+// through the same loop (recorded by RecordingArm; the loop is deterministic, so these are the
+// timed runs' states), then PinocchioArm::compute (M, C, G, M^-1, F) over them, and for the
+// structured basis its Pinocchio passes (PinocchioStructuredBasis::pinocchio_passes) at the same
+// states' x = [e1; e2] (the loop evaluates the basis once per compute(); fixed points are
+// prepared before the run), each the fastest of `repeats`. Seconds per run.
+struct PinocchioReplay {
+  long calls = 0;
+  double arm_seconds = 0.0;
+  double basis_seconds = 0.0;
+};
+
 template <class Case>
-bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
-                    double horizon, int repeats) {
-  using Simulation = adparm::Simulation<LoopArm, typename Case::Basis>;
+PinocchioReplay replay_pinocchio(const adparm::Settings& settings, const adparm::PinocchioArm& arm,
+                                 const typename Case::Basis& basis, int repeats) {
+  using Simulation = adparm::Simulation<RecordingArm, typename Case::Basis>;
+  const int n = arm.dof();
+  std::vector<double> calls;
+  const RecordingArm recording_arm(LoopArm(arm), &calls);
+  Simulation simulation(settings, recording_arm, recording_arm, true, basis);
+  calls.clear();  // the fixed points' preparation, before the run
+  calls.reserve(static_cast<std::size_t>(2 * n) * 5 * static_cast<std::size_t>(simulation.steps()));
+  simulation.advance(simulation.steps());
+  PinocchioReplay replay;
+  replay.calls = static_cast<long>(calls.size()) / (2 * n);
+  adparm::PinocchioArm::Terms terms = arm.make_terms();
+  Eigen::VectorXd x(2 * n);
+  const Eigen::VectorXd qd = settings.task.qd.offset;  // constant: dqd = 0
+  double checksum = 0.0;
+  for (int r = 0; r < repeats; ++r) {
+    auto start = Clock::now();
+    for (long i = 0; i < replay.calls; ++i) {
+      const Eigen::Map<const Eigen::VectorXd> q(calls.data() + 2 * n * i, n);
+      const Eigen::Map<const Eigen::VectorXd> dq(calls.data() + 2 * n * i + n, n);
+      arm.compute(q, dq, terms);
+      checksum += terms.mass_inverse(0, 0);
+    }
+    double seconds = seconds_since(start);
+    if (r == 0 || seconds < replay.arm_seconds) replay.arm_seconds = seconds;
+    if constexpr (std::is_same_v<typename Case::Basis, adparm::PinocchioStructuredBasis>) {
+      auto workspace = basis.workspace();
+      start = Clock::now();
+      for (long i = 0; i < replay.calls; ++i) {
+        const Eigen::Map<const Eigen::VectorXd> q(calls.data() + 2 * n * i, n);
+        const Eigen::Map<const Eigen::VectorXd> dq(calls.data() + 2 * n * i + n, n);
+        x.head(n) = qd - q;                                     // e1
+        x.tail(n) = -dq + settings.control.alpha1 * x.head(n);  // e2 (dqd = 0)
+        basis.pinocchio_passes(x, qd, workspace);
+      }
+      seconds = seconds_since(start);
+      if (r == 0 || seconds < replay.basis_seconds) replay.basis_seconds = seconds;
+    }
+  }
+  if (!std::isfinite(checksum)) replay.calls = -1;
+  return replay;
+}
+
+// The settings of a case: urdf_settings with the basis' initial weights.
+template <class Case>
+adparm::Settings case_settings(const adparm::PinocchioArm& arm, long points, double horizon) {
   adparm::Settings settings = urdf_settings(arm.dof(), points, horizon);
   settings.critic_weights = Case::initial_weights(arm);
   settings.actor_weights = settings.critic_weights;
+  return settings;
+}
+
+// The timed runs of a case (best of `repeats`, into `best`) and its bench=urdf_loop line. Not
+// inlined: bench/compare_urdf.py's callgrind mode counts the instructions of each call alone.
+template <class Case>
+[[gnu::noinline]] bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm,
+                                      long points, double horizon, int repeats, LoopTiming& best) {
+  using Simulation = adparm::Simulation<LoopArm, typename Case::Basis>;
+  const adparm::Settings settings = case_settings<Case>(arm, points, horizon);
   const LoopArm loop_arm(arm);
   const typename Case::Basis basis = Case::basis(arm);
-  LoopTiming best;
   for (int r = 0; r < repeats; ++r) {
     Simulation simulation(settings, loop_arm, loop_arm, true, basis);
     const LoopTiming timing = time_run(simulation);
@@ -358,6 +449,36 @@ bool time_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long 
       status_name(best.status));
   std::fflush(stdout);
   return best.status == adparm::RunStatus::finished && best.heap_allocations <= 0;
+}
+
+// The bench=urdf_profile line of a case timed by time_urdf_loop (`best`): Pinocchio's calls
+// replayed (replay_pinocchio) and the heap allocations per step.
+template <class Case>
+bool profile_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
+                       double horizon, int repeats, const LoopTiming& best) {
+  const adparm::Settings settings = case_settings<Case>(arm, points, horizon);
+  const typename Case::Basis basis = Case::basis(arm);
+  const PinocchioReplay replay = replay_pinocchio<Case>(settings, arm, basis, repeats);
+  const double steps = static_cast<double>(std::max(best.steps, 1L));
+  std::printf(
+      "bench=urdf_profile arm=%s basis=%s points=%ld ns_per_step=%.1f arm_computes_per_step=%.2f "
+      "arm_terms_ns_per_step=%.1f basis_pinocchio_ns_per_step=%.1f pinocchio_share=%.3f "
+      "heap_allocations_per_step=%g measured=replayed_states\n",
+      arm_name, Case::name(), points, 1e9 * best.seconds / steps,
+      static_cast<double>(replay.calls) / steps, 1e9 * replay.arm_seconds / steps,
+      1e9 * replay.basis_seconds / steps,
+      (replay.arm_seconds + replay.basis_seconds) / best.seconds,
+      best.heap_allocations < 0 ? -1.0 : static_cast<double>(best.heap_allocations) / steps);
+  std::fflush(stdout);
+  return replay.calls > 0;
+}
+
+template <class Case>
+bool time_and_profile_urdf_loop(const char* arm_name, const adparm::PinocchioArm& arm, long points,
+                                double horizon, int repeats) {
+  LoopTiming best;
+  const bool timed = time_urdf_loop<Case>(arm_name, arm, points, horizon, repeats, best);
+  return profile_urdf_loop<Case>(arm_name, arm, points, horizon, repeats, best) && timed;
 }
 
 // The planar 3-link arm (examples/arms) and example-robot-data's UR5 in the closed loop, each
@@ -378,8 +499,8 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
     const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),
                                    Eigen::VectorXd::Constant(1, 0.1));
     for (const long points : point_counts) {
-      ok = time_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
-      ok = time_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
+      ok = time_and_profile_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
+      ok = time_and_profile_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
     }
   }
   return ok;

@@ -8,7 +8,9 @@ and structured basis, N = 0 and 50 extrapolation points), in one of two ways:
     python bench/compare_urdf.py callgrind OLD_BENCH NEW_BENCH [T1] [T2]
         instruction counts under valgrind's callgrind (deterministic, unaffected by the load of
         other jobs): each build runs `--urdf T` at two horizons (default 0.02 and 0.2 s), with a
-        profile dumped after each case, and instructions per RK4 step =
+        profile dumped after each case's timed runs (time_urdf_loop) and after its
+        bench=urdf_profile replay (replay_pinocchio; that dump is not counted), and
+        instructions per RK4 step =
         (count at T2 - count at T1) / (3 repeats x (steps at T2 - steps at T1)).
 
 A ratio of wall times is what a user sees; a ratio of instruction counts ignores memory stalls
@@ -66,15 +68,17 @@ def instructions(binary: str, seconds: str, folder: Path) -> list[tuple[str, int
     out = folder / f"cg.{Path(binary).name}.{seconds}"
     output = subprocess.run(
         ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-         "--dump-after=*time_urdf_loop*", binary, "--urdf", seconds, "0", "50"],
+         "--dump-after=*time_urdf_loop*", "--dump-after=*replay_pinocchio*",
+         binary, "--urdf", seconds, "0", "50"],
         capture_output=True, text=True, check=True,
         env={"OPENBLAS_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"},
     ).stdout  # fmt: skip
     found = cases(output)
     counts = []
-    for i in range(1, len(found) + 1):
-        text = Path(f"{out}.{i}").read_text()
-        counts.append(int(re.search(r"^(?:summary|totals): (\d+)", text, re.M).group(1)))
+    for dump in sorted(folder.glob(f"{out.name}.*"), key=lambda p: int(p.suffix[1:])):
+        text = dump.read_text()
+        if "time_urdf_loop" in re.search(r"^desc: Trigger: (.*)$", text, re.M).group(1):
+            counts.append(int(re.search(r"^(?:summary|totals): (\d+)", text, re.M).group(1)))
     return [(case, steps, count) for (case, steps, *_), count in zip(found, counts, strict=True)]
 
 

@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 import adparm
+from adparm import _core
+from adparm.simulation import core_settings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 
@@ -280,3 +282,47 @@ def test_numpy_pinocchio_loop_matches_core_with_the_structured_basis(points: int
         assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
     # the critic learns (its e1 block moves towards K = diag(2, 1, 0.5))
     assert np.abs(states[-1, 2 * n : 2 * n + 6] - states[0, 2 * n : 2 * n + 6]).max() > 0.01
+
+
+def test_numpy_pinocchio_loop_matches_core_through_low_rank_steps() -> None:
+    # examples/ur5.toml's structured basis has 55 functions: without points the core takes
+    # low-rank RK4 steps (ClosedLoop::step, more than 24 functions: each stage's rank-one dGamma
+    # kept as a vector, Gamma formed once per step); the NumPy loop forms every stage's Gamma
+    ur5 = TWO_LINK_URDF.parents[1] / "ur5.toml"
+    steps = 150
+    config = adparm.load_config(ur5).updated(
+        {
+            "actor": {"positive_e2": False},
+            "controller": {"rise": False},
+            "extrapolation": {"points": 0},
+            "sim": {"T": steps * 1e-3},
+        }
+    )
+    n = config.dof
+    K = len(adparm.basis_names(config))
+    assert K == 55
+    states = structured_loop_of(config).run(steps)
+    result = adparm.simulate(config)
+    index = np.rint(np.asarray(result.t) / config.sim.dt).astype(int)
+    assert index[-1] == steps
+    fields = {
+        "q": slice(0, n),
+        "dq": slice(n, 2 * n),
+        "critic_weights": slice(2 * n, 2 * n + K),
+        "actor_weights": slice(2 * n + K, 2 * n + 2 * K),
+        "cost": -1,
+    }
+    for name, entries in fields.items():
+        ours, core = states[index][..., entries], np.asarray(getattr(result, name))
+        scale = max(1.0, float(np.abs(core).max()))
+        difference = float(np.abs(ours - core).max())
+        assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
+    # Gamma at the end: the same state layout [q, dq, Wc, Wa, Gamma, nu, J] in both loops
+    simulation = _core.Simulation(core_settings(config))
+    simulation.advance(steps)
+    gamma = slice(2 * n + 2 * K, 2 * n + 2 * K + K * K)
+    core_gamma = np.asarray(simulation.state)[gamma]
+    difference = float(np.abs(states[-1, gamma] - core_gamma).max())
+    assert difference <= 1e-8 * max(1.0, float(np.abs(core_gamma).max()))
+    # the critic learns
+    assert np.abs(states[-1, 2 * n : 2 * n + 21] - states[0, 2 * n : 2 * n + 21]).max() > 1e-3

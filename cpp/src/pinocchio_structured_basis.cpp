@@ -312,4 +312,27 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
   }
 }
 
+void PinocchioStructuredBasis::pinocchio_passes(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                                Workspace& workspace) const {
+  const Eigen::Index n = joints_;
+  check_size(x, 2 * n, 1, "x");
+  check_size(qd, n, 1, "qd");
+  const Impl& s = *impl_;
+  const PinocchioArm::Impl& arm = *s.arm;
+  WorkspaceData& w = *workspace;
+  pinocchio::Data& data = w.arm.data;
+  w.position = qd - x.head(n);  // as evaluate_at
+  arm.set_configuration(w.position, w.arm.configuration);
+  w.arm.velocity = x.tail(n);
+  pinocchio::computeForwardKinematicsDerivatives(arm.model, data, w.arm.configuration,
+                                                 w.arm.velocity, w.acceleration);
+  for (const Group& group : s.groups) {
+    w.dv_dq.setZero();
+    w.dv_dv.setZero();
+    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, w.dv_dq,
+                                           w.dv_dv);
+  }
+}
+
 }  // namespace adparm

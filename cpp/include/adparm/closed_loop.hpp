@@ -52,6 +52,7 @@
 #include "adparm/identifier.hpp"
 #include "adparm/positive_block.hpp"
 #include "adparm/rise.hpp"
+#include "adparm/rk4.hpp"
 #include "adparm/settings.hpp"
 #include "adparm/trajectory.hpp"
 
@@ -136,6 +137,14 @@ class ClosedLoop {
     // (optional: a URDF arm has no default)
     std::conditional_t<kIdentifies, std::optional<ErrorSystem<Arm>>, NoTerms> believed;
     Joint no_probe;  // zero: the probe once the identifier stopped it (identifier.stop_probe)
+    // The low-rank RK4 step (step(), low_rank_steps()): each stage's u_s = Gamma_s omega_s
+    // (K x 4) and gain g_s, the stage being evaluated (-1: an ordinary evaluation), the previous
+    // stage's scale c (Gamma_s = Gamma - c g_p u_p u_p^T) and the step's Gamma.
+    Eigen::MatrixXd stage_vectors;
+    Eigen::Vector4d stage_gains = Eigen::Vector4d::Zero();
+    int stage = -1;
+    double stage_scale = 0.0;
+    const double* step_covariance = nullptr;
   };
 
   struct Outputs {
@@ -174,7 +183,9 @@ class ClosedLoop {
         anti_windup_(settings.control.anti_windup),
         gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)),
         identifier_(make_identifier(settings, model)),
-        identifies_(identifier_.enabled()) {
+        identifies_(identifier_.enabled()),
+        low_rank_(kBasisSize == Dynamic && !extrapolation_.enabled() && controller_.learns() &&
+                  basis_size_ > 24) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -217,6 +228,7 @@ class ClosedLoop {
     error_system_.model().init_terms(data.point_terms);
     data.critic = critic_.workspace();
     data.basis = basis_workspace(basis_);
+    if (low_rank_) data.stage_vectors.setZero(basis_size(), 4);
     if (kBasisSize == Dynamic && extrapolation_.enabled()) {
       data.point_products.setZero(dof() * extrapolation_.size(), 2);
       data.point_coefficients.setZero(dof() * extrapolation_.size());
@@ -292,6 +304,28 @@ class ClosedLoop {
                               data.basis);
   }
 
+  // Whether step() takes low-rank steps: dynamic sizes, a learning controller, no extrapolation
+  // points (one sample per evaluation, so each stage's dGamma is rank one) and more than 24
+  // functions (measured: faster on the UR5's 55 and 78; at 8-21 within the noise or slower in
+  // wall time, where add_rates' unrolled products are cheap; those keep rk4_step, bit for bit).
+  bool low_rank_steps() const { return low_rank_; }
+
+  // One RK4 step from (t_begin, x) to (t_end, x_next) (x_next not x): rk4_step (rk4.hpp), or with
+  // low_rank_steps() the same step with each stage's dGamma kept as (u_s, g_s) (Critic::
+  // stage_rates): the stages' K x K rates and covariances are never formed, and Gamma_next is one
+  // pass (Critic::low_rank_update). Equal to rk4_step up to round-off (the products associate
+  // differently: the last bits of a run differ).
+  void step(double t_begin, double t_end, const State& x, State& x_next,
+            Rk4Workspace<ClosedLoop>& w, Outputs* outputs, Data& data) const {
+    if constexpr (kBasisSize == Dynamic) {
+      if (low_rank_) {
+        low_rank_step(t_begin, t_end, x, x_next, w, outputs, data);
+        return;
+      }
+    }
+    rk4_step(*this, t_begin, t_end, x, x_next, w, outputs, data);
+  }
+
   void derivative(const TimeSignals& signals, const State& state, State& rate, Outputs* outputs,
                   Data& data) const {
     const Eigen::Index n = dof(), k = basis_size();
@@ -324,14 +358,17 @@ class ClosedLoop {
 
     Weights critic_rate = Weights::Zero(k);
     CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
-    gamma_rate.setZero();
+    const bool low_rank = kBasisSize == Dynamic && data.stage >= 0;  // step(): no K x K rate
+    if (!low_rank) gamma_rate.setZero();
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
       const Weights difference = actor_weights - critic_weights;
       Weights actor_gradient = Weights::Zero(k);
       const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
         if constexpr (kBasisSize == Dynamic) {  // (23)-(24), gathered in blocks (critic.hpp)
-          if (gathers_)
+          if (low_rank)
+            low_rank_stage(e.omega, e.error, weight, critic_rate, data);
+          else if (gathers_)
             critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, data.critic);
           else
             critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
@@ -353,10 +390,25 @@ class ClosedLoop {
         extrapolation_.for_each(basis_, system, cost_, desired, critic_weights, actor_weights,
                                 data.point_terms, data.basis, learn);
       if constexpr (kBasisSize == Dynamic)
-        critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
-      if (actor_.settings().positive_e2)  // not in the paper: positive_block.hpp
-        critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
-                                             actor_.settings().e2_margin, gamma);
+        if (!low_rank) critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
+      if (actor_.settings().positive_e2) {  // not in the paper: positive_block.hpp
+        if constexpr (kBasisSize == Dynamic) {
+          if (low_rank) {
+            const ConstCovarianceMap step_gamma(data.step_covariance, k, k);
+            const auto previous = data.stage_vectors.col(data.stage > 0 ? data.stage - 1 : 0);
+            const double scale =
+                data.stage > 0 ? data.stage_scale * data.stage_gains[data.stage - 1] : 0.0;
+            using Metric = typename Critic<Basis>::template StageCovariance<ConstCovarianceMap,
+                                                                            decltype(previous)>;
+            critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
+                                                 actor_.settings().e2_margin,
+                                                 Metric{step_gamma, previous, scale});
+          }
+        }
+        if (!low_rank)
+          critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
+                                               actor_.settings().e2_margin, gamma);
+      }
       rate.template segment<kBasisSize>(actor_offset(), k) =
           actor_.weight_rate(basis_, actor_gradient, difference, actor_weights);  // eq. (26)
     } else {
@@ -442,6 +494,61 @@ class ClosedLoop {
   }
 
  private:
+  // A low-rank stage's shares of eqs. (23)-(24) (Critic::stage_rates), its (u_s, g_s) kept.
+  void low_rank_stage(const Weights& omega, double error, double weight, Weights& critic_rate,
+                      Data& data) const {
+    const Eigen::Index k = basis_size();
+    const ConstCovarianceMap gamma(data.step_covariance, k, k);
+    const int s = data.stage;
+    const auto previous = data.stage_vectors.col(s > 0 ? s - 1 : 0);
+    const double scale = s > 0 ? data.stage_scale * data.stage_gains[s - 1] : 0.0;
+    data.stage_gains[s] = critic_.stage_rates(omega, error, gamma, previous, scale, weight,
+                                              critic_rate, data.stage_vectors.col(s));
+  }
+
+  // step() with low-rank stages: rk4_step's stages and sum on the state apart from Gamma
+  // ([q, dq, Wc, Wa] before it, [nu, J] after it), Gamma's through (u_s, g_s).
+  void low_rank_step(double t_begin, double t_end, const State& x, State& x_next,
+                     Rk4Workspace<ClosedLoop>& w, Outputs* outputs, Data& data) const {
+    const double h = t_end - t_begin;
+    if (!(w.begin_time == t_begin)) time_signals(t_begin, w.begin);
+    time_signals(t_begin + 0.5 * h, w.middle);
+    time_signals(t_end, w.end);
+    const Eigen::Index head = gamma_offset(), tail = nu_offset(), rest = state_size() - tail;
+    const auto stage = [&](const State& k, double c) {
+      w.stage.head(head) = x.head(head) + c * k.head(head);
+      w.stage.segment(tail, rest) = x.segment(tail, rest) + c * k.segment(tail, rest);
+    };
+    data.step_covariance = x.data() + gamma_offset();
+    data.stage = 0;
+    derivative(w.begin, x, w.k1, outputs, data);
+    data.stage = 1;
+    data.stage_scale = 0.5 * h;
+    stage(w.k1, 0.5 * h);
+    derivative(w.middle, w.stage, w.k2, nullptr, data);
+    data.stage = 2;
+    stage(w.k2, 0.5 * h);
+    derivative(w.middle, w.stage, w.k3, nullptr, data);
+    data.stage = 3;
+    data.stage_scale = h;
+    stage(w.k3, h);
+    derivative(w.end, w.stage, w.k4, nullptr, data);
+    data.stage = -1;
+    const auto sum = [&](Eigen::Index begin, Eigen::Index size) {
+      x_next.segment(begin, size) =
+          x.segment(begin, size) +
+          (h / 6.0) * (w.k1.segment(begin, size) + 2.0 * w.k2.segment(begin, size) +
+                       2.0 * w.k3.segment(begin, size) + w.k4.segment(begin, size));
+    };
+    sum(0, head);
+    sum(tail, rest);
+    const Eigen::Vector4d& g = data.stage_gains;
+    const Eigen::Vector4d c = (h / 6.0) * Eigen::Vector4d(g[0], 2.0 * g[1], 2.0 * g[2], g[3]);
+    critic_.low_rank_update(covariance(x), data.stage_vectors, c, covariance(x_next), data.critic);
+    std::swap(w.begin, w.end);
+    w.begin_time = t_end;
+  }
+
   // Dynamic sizes, prepared extrapolation points (Extrapolation::stacked()): each point's shares
   // of eqs. (20)-(21), (23)-(24) and (26) as the trajectory's (learn in derivative()), with the
   // products of the points' B = [B_1 ... B_N] (K x nN) stacked: [B^T Wa, B^T (Wa - Wc)] is two
@@ -564,6 +671,7 @@ class ClosedLoop {
   bool gathers_;
   IdentifierType identifier_;  // the online identifier (identifier.hpp; disabled by default)
   bool identifies_;
+  bool low_rank_;  // step() takes low-rank steps (low_rank_steps())
   State initial_state_;
 };
 

@@ -13,6 +13,9 @@
 // sums up to round-off; the fixed-size path keeps add_rates). Those products run in the dense
 // kernels chosen at run time for the CPU (dense_kernels.hpp: AVX2 or AVX-512), or, with
 // ADPARM_KERNELS=portable or on a CPU without them, in Eigen's portable products.
+// Without extrapolation points (one sample per evaluation) the dynamic-size loop's RK4 step keeps
+// each stage's rank-one dGamma as (Gamma omega, gain) instead of a K x K rate (stage_rates,
+// low_rank_update; ClosedLoop::step).
 #pragma once
 
 #include <algorithm>
@@ -53,6 +56,10 @@ class Critic {
     Eigen::VectorXd coefficients, weights;
     Eigen::Index gathered = 0;
     bool lower_only = false;  // gamma_rate holds blocks in its lower triangle only (flush)
+    // low_rank_update's column of Gamma_next - Gamma, and its ||.||_F for the next
+    // needs_reset(previous, gamma, w) (negative: none; that call sums it from the matrices).
+    Vector change_column;
+    double step_change = -1.0;
     // needs_reset(previous, gamma, w)'s evolving state: lambda_min(Gamma) >= epsilon_T + bound -
     // bound_used; the margin of its next test above epsilon_T (0: none).
     double bound = 0.0, bound_used = 0.0, margin = 0.0;
@@ -86,6 +93,7 @@ class Critic {
       w.scaled.setZero(size_, kBlock);
       w.coefficients.setZero(kBlock);
       w.weights.setZero(kBlock);
+      w.change_column.setZero(size_);
     }
     w.margin = 0.5 * (settings_.gamma0 - settings_.epsilon_T);  // needs_reset(previous, ...)'s
     return w;
@@ -160,15 +168,19 @@ class Critic {
   bool needs_reset(const PreviousIn& previous_gamma, const CovarianceIn& gamma,
                    Workspace& w) const {
     const Eigen::Index n = gamma.rows();
-    double change = 0.0;  // ||Gamma - previous||_F of the symmetric matrices (lower triangles)
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const double diagonal = gamma(j, j) - previous_gamma(j, j);
-      change +=
-          diagonal * diagonal +
-          2.0 *
-              (gamma.col(j).tail(n - j - 1) - previous_gamma.col(j).tail(n - j - 1)).squaredNorm();
+    if (w.step_change >= 0.0) {  // summed by low_rank_update
+      w.bound_used += w.step_change;
+      w.step_change = -1.0;
+    } else {
+      double change = 0.0;  // ||Gamma - previous||_F of the symmetric matrices (lower triangles)
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const double diagonal = gamma(j, j) - previous_gamma(j, j);
+        change += diagonal * diagonal +
+                  2.0 * (gamma.col(j).tail(n - j - 1) - previous_gamma.col(j).tail(n - j - 1))
+                            .squaredNorm();
+      }
+      w.bound_used += std::sqrt(change);
     }
-    w.bound_used += std::sqrt(change);
     if (w.bound_used < w.bound) return false;  // lambda_min > epsilon_T (also false for NaN)
     w.bound = 0.0;
     w.bound_used = 0.0;
@@ -231,6 +243,63 @@ class Critic {
       }
     }
     return false;
+  }
+
+  // The low-rank RK4 step (dynamic sizes, one sample per evaluation: no extrapolation points;
+  // ClosedLoop::step). Each stage's dGamma = -g u u^T is rank one (eq. 24, u = Gamma_s omega), so
+  // a stage's covariance Gamma_s = Gamma - c g_p u_p u_p^T (Gamma the step's, (u_p, g_p) the
+  // previous stage's, c = h/2 or h) is never formed:
+  //   u = Gamma omega - c g_p (u_p^T omega) u_p,   g = w eta_c / (1 + nu omega^T u),
+  //   weight_rate -= g eps u                                       (eqs. 23-24)
+  // Writes u, returns g; previous_scale = c g_p (0 at the first stage: Gamma_s = Gamma).
+  template <class CovarianceIn, class Previous, class Column>
+  double stage_rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma,
+                     const Previous& previous, double previous_scale, double weight,
+                     Vector& weight_rate, Column&& u) const {
+    const Eigen::Index k = gamma.rows();
+    if (kernels_ != nullptr)
+      kernels_->product(k, 1, k, gamma.data(), gamma.outerStride(), omega.data(), 1, k, u.data(), k,
+                        false);
+    else
+      u.noalias() = gamma * omega;
+    if (previous_scale != 0.0) u -= (previous_scale * previous.dot(omega)) * previous;
+    const double gain = weight * settings_.eta_c / (1.0 + settings_.nu * omega.dot(u));
+    weight_rate.noalias() -= (gain * hjb_error) * u;
+    return gain;
+  }
+
+  // A low-rank stage's Gamma_s as a metric (positive_block.hpp's projection): Gamma_s v.
+  template <class CovarianceIn, class Previous>
+  struct StageCovariance {
+    const CovarianceIn& gamma;
+    const Previous& previous;
+    double scale;  // c g_p
+    Vector operator*(const Vector& v) const {
+      Vector product = gamma * v;
+      if (scale != 0.0) product -= (scale * previous.dot(v)) * previous;
+      return product;
+    }
+  };
+
+  // The step's end: Gamma_next = Gamma - sum_s c_s u_s u_s^T over the four stages' u_s (columns
+  // of `u`; c_s = h/6 {1, 2, 2, 1} g_s, RK4's weights), in one pass over the columns that also
+  // sums ||Gamma_next - Gamma||_F (the symmetric matrix of its lower triangle, as
+  // needs_reset(previous, gamma, w)) for the covariance test's next call. (The stored
+  // Gamma_next differs from Gamma - D by the subtraction's round-off, about 1e-16 gamma0 per
+  // entry and step: far inside the bound's tolerance, 1e-12 K^2 gamma0.)
+  template <class CovarianceIn, class Vectors, class CovarianceOut>
+  void low_rank_update(const CovarianceIn& gamma, const Vectors& u, const Eigen::Vector4d& c,
+                       CovarianceOut&& gamma_next, Workspace& w) const {
+    const Eigen::Index n = gamma.rows();
+    Vector& d = w.change_column;
+    double change = 0.0;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      d.noalias() = (c[0] * u(j, 0)) * u.col(0) + (c[1] * u(j, 1)) * u.col(1) +
+                    (c[2] * u(j, 2)) * u.col(2) + (c[3] * u(j, 3)) * u.col(3);
+      gamma_next.col(j) = gamma.col(j) - d;
+      change += d[j] * d[j] + 2.0 * d.tail(n - j - 1).squaredNorm();
+    }
+    w.step_change = std::sqrt(change);
   }
 
   // Gamma(0) = gamma0 I (also the reset value), written into `gamma` (a Map into the state).

@@ -129,6 +129,12 @@ class PinocchioStructuredBasis {
                    Eigen::Ref<Eigen::MatrixXd> jacobian, Eigen::Ref<Eigen::VectorXd> desired_rate,
                    Workspace& workspace) const;
 
+  // Only the Pinocchio passes of evaluate_at (forward kinematics derivatives at q = qd - e1,
+  // v = e2, then each body's joint velocity derivatives), without the basis' own products: the
+  // bench times them for the share of a loop step spent in Pinocchio. No heap allocation.
+  void pinocchio_passes(const Eigen::Ref<const Eigen::VectorXd>& x,
+                        const Eigen::Ref<const Eigen::VectorXd>& qd, Workspace& workspace) const;
+
   // The loop's seam (bounded storage: resizing allocates nothing).
   template <class Desired>
   void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,

@@ -162,8 +162,8 @@ class Simulation {
       const bool row_due = row_due_;
       const bool limited = system_.limited();        // the step's start outputs give the clip
       const bool identifies = system_.identifies();  // the identifier samples the applied torque
-      rk4_step(system_, t_begin, t_end, previous, state, workspace_,
-               row_due || limited || identifies ? &row_outputs_ : nullptr, data_);
+      system_.step(t_begin, t_end, previous, state, workspace_,
+                   row_due || limited || identifies ? &row_outputs_ : nullptr, data_);
       row_due_ = false;
       if (row_due && !record(t_begin, previous, row_outputs_)) {
         stop_diverged(t_begin);  // the step is not taken: state() stays at t_begin
