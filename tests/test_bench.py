@@ -246,6 +246,24 @@ def structured_loop_of(config: adparm.Config) -> numpy_pinocchio_loop.NumpyPinoc
     return numpy_pinocchio_loop.NumpyPinocchioLoop(arm, basis, settings)
 
 
+def assert_loop_states_match(states, result, n: int, K: int) -> None:
+    """The NumPy loop's states [q, dq, Wc, Wa, ...] at the core's recorded rows match its q, dq,
+    critic and actor weights and cost to 1e-8 of each array's scale."""
+    index = np.rint(np.asarray(result.t) / result.config.sim.dt).astype(int)
+    fields = {
+        "q": slice(0, n),
+        "dq": slice(n, 2 * n),
+        "critic_weights": slice(2 * n, 2 * n + K),
+        "actor_weights": slice(2 * n + K, 2 * n + 2 * K),
+        "cost": -1,
+    }
+    for name, entries in fields.items():
+        ours, core = states[index][..., entries], np.asarray(getattr(result, name))
+        scale = max(1.0, float(np.abs(core).max()))
+        difference = float(np.abs(ours - core).max())
+        assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
+
+
 @pytest.mark.parametrize("points", [0, 10])
 def test_numpy_pinocchio_loop_matches_core_with_the_structured_basis(points: int) -> None:
     # examples/planar_3link.toml (structured basis, default weights K = I and the arm's base
@@ -268,18 +286,7 @@ def test_numpy_pinocchio_loop_matches_core_with_the_structured_basis(points: int
     assert index[-1] == steps
     K = len(adparm.basis_names(config))
     assert K == 13
-    fields = {
-        "q": slice(0, n),
-        "dq": slice(n, 2 * n),
-        "critic_weights": slice(2 * n, 2 * n + K),
-        "actor_weights": slice(2 * n + K, 2 * n + 2 * K),
-        "cost": -1,
-    }
-    for name, entries in fields.items():
-        ours, core = states[index][..., entries], np.asarray(getattr(result, name))
-        scale = max(1.0, float(np.abs(core).max()))
-        difference = float(np.abs(ours - core).max())
-        assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
+    assert_loop_states_match(states, result, n, K)
     # the critic learns (its e1 block moves towards K = diag(2, 1, 0.5))
     assert np.abs(states[-1, 2 * n : 2 * n + 6] - states[0, 2 * n : 2 * n + 6]).max() > 0.01
 
@@ -305,18 +312,7 @@ def test_numpy_pinocchio_loop_matches_core_through_low_rank_steps() -> None:
     result = adparm.simulate(config)
     index = np.rint(np.asarray(result.t) / config.sim.dt).astype(int)
     assert index[-1] == steps
-    fields = {
-        "q": slice(0, n),
-        "dq": slice(n, 2 * n),
-        "critic_weights": slice(2 * n, 2 * n + K),
-        "actor_weights": slice(2 * n + K, 2 * n + 2 * K),
-        "cost": -1,
-    }
-    for name, entries in fields.items():
-        ours, core = states[index][..., entries], np.asarray(getattr(result, name))
-        scale = max(1.0, float(np.abs(core).max()))
-        difference = float(np.abs(ours - core).max())
-        assert difference <= 1e-8 * scale, f"{name}: max |difference| {difference:.3e}"
+    assert_loop_states_match(states, result, n, K)
     # Gamma at the end: the same state layout [q, dq, Wc, Wa, Gamma, nu, J] in both loops
     simulation = _core.Simulation(core_settings(config))
     simulation.advance(steps)
