@@ -88,11 +88,8 @@ def main() -> None:
         over = np.flatnonzero(series > 0.01)
         if over.size and over[-1] + 1 < result.t.size:
             print(f"{name} within 1 % from t = {result.t[over[-1] + 1]:.2f} s")
-    informative = np.flatnonzero(
-        result.stack_singular_value >= config.identifier.singular_value_threshold
-    )
-    if informative.size:
-        print(f"stack informative from t = {result.t[informative[0]]:.2f} s")
+    if diagnosis["informative_time"] is not None:  # full rank, its equations in agreement
+        print(f"stack informative from t = {diagnosis['informative_time']:.2f} s")
     outside = np.flatnonzero((beta_error > 0.01) | (critic > 0.01))
     if outside.size == 0:
         print("both within 1 % throughout")

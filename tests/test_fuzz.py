@@ -370,11 +370,11 @@ def field_cases(data: dict, section: str, key: str) -> list[Any]:
     values = data.get(section, {})
     value = values.get(key, default(section, key))
     if section == "identifier":
-        if key in ("enabled", "inertia", "gravity", "friction"):
+        if key in ("enabled", "gradient_term", "inertia", "gravity", "friction", "stop_probe"):
             return ["true", 1, 0, 1.0, None, [True]]
         if key == "history_size":
             return [0, -1, 100001, 10**30, 2.5, "3", None, True]
-        return scalar_cases("pos" if key in ("gain", "window") else "nonneg")
+        return scalar_cases("pos" if key in ("gain", "window", "max_uncertainty") else "nonneg")
     if key == "e2_cost":  # "logcosh" needs cost.input_bound
         return ["quadraticx", "", "QUADRATIC", 1, None, True, ["quadratic"], "logcosh"]
     if key == "anti_windup":

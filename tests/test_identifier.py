@@ -276,10 +276,20 @@ RECORDED = ("q", "dq", "tau", "critic_weights", "actor_weights", "model_paramete
 
 
 def assert_same_recordings(a, b, atol: float) -> None:
-    for name in (*RECORDED, "stack_singular_value"):
+    for name in RECORDED:
         x, y = getattr(a, name), getattr(b, name)
         scale = max(np.abs(x).max(), 1.0)
         np.testing.assert_allclose(y, x, rtol=0, atol=atol * scale, err_msg=name)
+    # sigma_min = sqrt(lambda_min): a singular stack's round-off in lambda_min (1e-16) is 1e-8
+    # in sigma_min, so the squares are compared
+    x, y = a.stack_singular_value**2, b.stack_singular_value**2
+    scale = max(np.abs(x).max(), 1.0)
+    np.testing.assert_allclose(y, x, rtol=0, atol=atol * scale, err_msg="stack_singular_value")
+    # the predicted error: infinite at the same rows (undetermined), else close
+    x, y = a.stack_uncertainty, b.stack_uncertainty
+    np.testing.assert_array_equal(np.isinf(y), np.isinf(x), err_msg="stack_uncertainty")
+    finite = np.isfinite(x)
+    np.testing.assert_allclose(y[finite], x[finite], rtol=1e-6, err_msg="stack_uncertainty")
 
 
 def test_an_expression_basis_identifies_as_the_built_in_basis() -> None:
@@ -323,6 +333,11 @@ def test_the_dynamic_size_loop_identifies_as_the_fixed_size_one() -> None:
         scale = max(np.abs(fixed[name]).max(), 1.0)
         np.testing.assert_allclose(dynamic[name], fixed[name], rtol=0, atol=1e-9 * scale)
     assert np.abs(fixed["model_parameters"][-1] - fixed["model_parameters"][0]).max() > 0.1
+    finite = np.isfinite(fixed["stack_uncertainty"])
+    np.testing.assert_array_equal(np.isfinite(dynamic["stack_uncertainty"]), finite)
+    np.testing.assert_allclose(
+        dynamic["stack_uncertainty"][finite], fixed["stack_uncertainty"][finite], rtol=1e-6
+    )
 
 
 def test_base_parameters_of_a_urdf_arm_are_the_structured_basis_ones() -> None:
@@ -347,15 +362,20 @@ def test_save_and_load_keep_the_identifier_series(tmp_path, suffix) -> None:
     back = adparm.load_result(path)
     np.testing.assert_array_equal(back.model_parameters, result.model_parameters)
     np.testing.assert_array_equal(back.stack_singular_value, result.stack_singular_value)
+    np.testing.assert_array_equal(back.stack_uncertainty, result.stack_uncertainty)
     if suffix == ".csv":
         names = adparm.storage.columns(6, 2, 7)
-        assert names[-8:] == [f"beta_hat{p}" for p in range(1, 8)] + ["stack_singular_value"]
+        assert names[-9:] == [f"beta_hat{p}" for p in range(1, 8)] + [
+            "stack_singular_value",
+            "stack_uncertainty",
+        ]
 
 
 def test_a_run_without_identification_saves_no_identifier_series(tmp_path) -> None:
     result = adparm.simulate(base(sim={"T": 0.05}), diagnose=False)
     back = adparm.load_result(result.save(tmp_path / "run.csv"))
     assert back.model_parameters is None and back.stack_singular_value is None
+    assert back.stack_uncertainty is None
 
 
 def _identifying_run() -> adparm.SimulationResult:
@@ -397,7 +417,11 @@ def test_the_model_parameters_figure_draws_the_estimate_over_the_plant() -> None
     assert threshold.get_ydata()[0] == config.identifier.singular_value_threshold
     time = adparm.diagnose(result)["identifier"]["informative_time"]
     assert time is not None and informative.get_xdata()[0] == time
-    first = result.t[np.flatnonzero(result.stack_singular_value >= threshold.get_ydata()[0])[0]]
+    # the rank condition and the predicted error of the stack's estimate (max_uncertainty)
+    agreed = result.stack_uncertainty <= config.identifier.max_uncertainty
+    first = result.t[
+        np.flatnonzero((result.stack_singular_value >= threshold.get_ydata()[0]) & agreed)[0]
+    ]
     assert time == first
     # like the other figures: into given axes (the first panel alone) or a given figure
     from matplotlib.figure import Figure

@@ -572,10 +572,11 @@ class ExtrapolationSettings:
         ...
 class IdentifierSettings:
     """
-    The online identifier of beta (identifier.hpp): enabled, gain, concurrent_gain, history_size, window, singular_value_threshold, inertia, gravity, friction, stop_probe, tolerance.
+    The online identifier of beta (identifier.hpp): enabled, gain, gradient_term, concurrent_gain, history_size, window, singular_value_threshold, max_uncertainty, inertia, gravity, friction, stop_probe, tolerance.
     """
     enabled: bool
     friction: bool
+    gradient_term: bool
     gravity: bool
     inertia: bool
     stop_probe: bool
@@ -598,6 +599,12 @@ class IdentifierSettings:
         ...
     @history_size.setter
     def history_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_uncertainty(self) -> float:
+        ...
+    @max_uncertainty.setter
+    def max_uncertainty(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def singular_value_threshold(self) -> float:
@@ -1100,5 +1107,5 @@ def urdf_parse_count() -> int:
     """
     How many URDF texts the core has parsed so far, in every thread.
     """
-RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('tau_commanded', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'), ('model_parameters', 'parameters'), ('stack_singular_value', 'identifier'))
+RECORDED_SERIES: tuple = (('t', 'one'), ('q', 'joints'), ('dq', 'joints'), ('qd', 'joints'), ('e1', 'joints'), ('e2', 'joints'), ('tau', 'joints'), ('tau_commanded', 'joints'), ('u', 'joints'), ('u_hat', 'joints'), ('mu', 'joints'), ('probe', 'joints'), ('critic_weights', 'basis'), ('actor_weights', 'basis'), ('hjb_error', 'one'), ('cost', 'one'), ('model_parameters', 'parameters'), ('stack_singular_value', 'identifier'), ('stack_uncertainty', 'identifier'))
 STATE_SIZE: int = 87

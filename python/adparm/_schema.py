@@ -286,6 +286,18 @@ class ConfigSchema:
             return self.critic.epsilon_T
         return EPSILON_T_EXTRAPOLATION if self.extrapolation.points > 0 else EPSILON_T_PROBING
 
+    def believing_the_plant(self) -> Any:
+        """This config with the controller believing the plant (``[model]`` emptied) and every
+        setting a URDF arm derived from the believed model (the cost, gains, dt ...) kept at this
+        config's value: the run an identifying or model-off run is judged against is the same
+        problem, not the one the plant's own defaults would pose."""
+        frozen: dict[str, dict[str, Any]] = {}
+        for key in self._derived:
+            section, name = key.split(".")
+            frozen.setdefault(section, {})[name] = getattr(getattr(self, section), name)
+        fixed = self.updated(frozen) if frozen else self
+        return dataclasses.replace(fixed, model=type(self.model)())
+
     def updated(self, changes: Mapping[str, Any]) -> Any:
         """A copy with ``changes`` (``{section: {key: value}}``) applied, e.g.
         ``config.updated({"critic": {"eta_c": 100}})``."""

@@ -5,12 +5,11 @@ diagnose reports it."""
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 import numpy as np
 
-from .config import Config, ModelConfig
+from .config import Config
 from .dynamics import base_parameter_groups, base_parameter_names
 from .optimal import base_parameters, optimal_weights
 from .result import SimulationResult
@@ -28,7 +27,7 @@ __all__ = [
 def plant_model_config(config: Config) -> Config:
     """``config`` with the controller believing the plant (``[model]`` emptied): the config whose
     W* an identifying run's critic should reach."""
-    return dataclasses.replace(config, model=ModelConfig())
+    return config.believing_the_plant()
 
 
 def judged_config(config: Config) -> Config:
@@ -70,8 +69,10 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
       worst_parameter, its name;
     - parameter_norm_error: ||beta_hat - beta|| / ||beta|| over the identified parameters (a
       small parameter's relative error can be large while this is small: URDF arms);
-    - ever_informative, informative_time (s, the first recorded row at the threshold, or None),
-      max_singular_value (the largest minimum singular value recorded);
+    - ever_informative, informative_time (s, the first recorded row at the threshold and within
+      identifier.max_uncertainty, or None), max_singular_value (the largest minimum singular
+      value recorded), min_uncertainty (the smallest predicted error of the stack's estimate
+      while at the threshold, inf if never);
     - probe_stopped_time: the first recorded row from which identifier.stop_probe switched the
       probe off (s), or None (not stopped, or no probe);
     - text: what the verdict says."""
@@ -88,9 +89,17 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
     norm_error = float(np.linalg.norm(difference) / max(float(np.linalg.norm(size)), 1e-300))
     sigma = np.asarray(result.stack_singular_value, dtype=float)
     threshold = config.identifier.singular_value_threshold
-    informative = np.flatnonzero((sigma >= threshold) & (sigma > 0.0))
+    limit = config.identifier.max_uncertainty
+    uncertainty = (
+        np.full(sigma.shape, 0.0)  # a result saved before the uncertainty was recorded
+        if result.stack_uncertainty is None
+        else np.asarray(result.stack_uncertainty, dtype=float)
+    )
+    ranked = (sigma >= threshold) & (sigma > 0.0)
+    informative = np.flatnonzero(ranked & (uncertainty <= limit))
     ever = bool(informative.size > 0)
     largest = float(np.max(sigma)) if sigma.size else 0.0
+    least = float(np.min(uncertainty[ranked])) if ranked.any() else float("inf")
     stopped = _probe_stopped_time(result)
     if ever:
         text = (
@@ -100,12 +109,21 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
         )
         if stopped is not None:
             text += f"; the probe stopped at t = {stopped:.3g} s (identifier.stop_probe)"
+    elif ranked.any():
+        text = (
+            "the identifier's history stack never became informative: its equations disagree "
+            f"(the predicted error of its estimate was at best {least:.3g}, above "
+            f"identifier.max_uncertainty = {limit:g}; an unmodelled torque such as the "
+            "disturbance or friction not identified biases them), so the model is not "
+            f"identified (beta_hat ends {error:.3g} from the plant's beta); "
+            + _excitation_advice(config)
+        )
     else:
         text = (
             "the identifier's history stack never became informative (its minimum singular value "
             f"peaked at {largest:.3g}, below identifier.singular_value_threshold = {threshold:g}): "
             f"the model is not identified (beta_hat ends {error:.3g} from the plant's beta); "
-            "excite the arm (probe) or lower the threshold"
+            + _excitation_advice(config)
         )
     return {
         "beta_plant": [float(v) for v in beta],
@@ -116,9 +134,28 @@ def identifier_diagnosis(result: SimulationResult) -> dict[str, Any] | None:
         "ever_informative": ever,
         "informative_time": float(result.t[informative[0]]) if ever else None,
         "max_singular_value": largest,
+        "min_uncertainty": least,
         "probe_stopped_time": stopped,
         "text": text,
     }
+
+
+def _excitation_advice(config: Config) -> str:
+    """What excites the arm more, for a run whose stack never became informative: the probe
+    (on, or 10 times larger) for a learning controller, a moving desired trajectory for the
+    others (the probe acts only while the controller learns)."""
+    if config.controller.kind != "adp":  # only adp learns and probes
+        return (
+            f"a {config.controller.kind!r} controller applies no probe: excite the arm with a "
+            "moving desired trajectory (task.qd, e.g. a sinusoid)"
+        )
+    if config.probe.until <= 0.0:
+        return (
+            "switch the probe on (probe.until = 100; identifier.stop_probe ends it once "
+            "beta_hat settles)"
+        )
+    larger = 10.0 * float(np.max(np.abs(config.probe.amplitude)))
+    return f"excite the arm more: a larger probe (e.g. probe.amplitude = {larger:.3g}, 10 times)"
 
 
 def _probe_stopped_time(result: SimulationResult) -> float | None:

@@ -132,6 +132,9 @@ class SimulationResult:
     stack_singular_value : ndarray, shape (n,), or None
         With ``identifier.enabled``: the history stack's minimum singular value (over the
         identified parameters); None without.
+    stack_uncertainty : ndarray, shape (n,), or None
+        With ``identifier.enabled``: the predicted relative error of the stack's least-squares
+        estimate (``identifier.max_uncertainty``; inf while undetermined); None without.
     """
 
     t: np.ndarray
@@ -157,6 +160,7 @@ class SimulationResult:
     saturated_time: np.ndarray | None = None
     model_parameters: np.ndarray | None = None
     stack_singular_value: np.ndarray | None = None
+    stack_uncertainty: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1

@@ -179,12 +179,12 @@ def _point_bytes(config: Config) -> int:
 def _recording_bytes(config: Config) -> int:
     """Bytes of one copy of the recording of ``config`` (all its rows): t, hjb_error, cost, n
     values of each joint series and the K critic and K actor weights per row (with
-    identification, beta_hat's 7 values and the stack's singular value too)."""
+    identification, beta_hat's 7 values, the stack's singular value and uncertainty too)."""
     steps = math.ceil(config.sim.T / config.sim.dt * (1.0 - 1e-12))
     rows = steps // config.sim.record_every + 2
     width = len(ARRAYS_1) + config.dof * len(ARRAYS_2) + config.basis_size * len(ARRAYS_N)
-    if config.identifier.enabled:  # beta_hat (7 on the two-link arm) and sigma_min
-        width += 8 if config.plant.urdf is None else 10 * config.dof + 2 * config.dof + 1
+    if config.identifier.enabled:  # beta_hat (7 on the two-link arm), sigma_min, uncertainty
+        width += 9 if config.plant.urdf is None else 10 * config.dof + 2 * config.dof + 2
     return 8 * rows * width
 
 

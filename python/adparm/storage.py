@@ -76,8 +76,8 @@ def _columns(
 def columns(basis_size: int = 8, joints: int = 2, parameters: int = 0) -> list[str]:
     """Column names of :func:`table`, the CSV file and ``to_dataframe()`` for a basis of
     ``basis_size`` functions (8; 6 for the structured basis) and an arm of ``joints`` joints;
-    with identification (``parameters`` > 0 identified parameters) also beta_hat1 ... and
-    stack_singular_value."""
+    with identification (``parameters`` > 0 identified parameters) also beta_hat1 ...,
+    stack_singular_value and stack_uncertainty."""
     return [name for _, names in _columns(basis_size, joints, parameters) for name in names]
 
 
@@ -363,6 +363,7 @@ def _check_npz_sizes(path: Path, archive: zipfile.ZipFile, config: Config) -> No
     if config.identifier.enabled:
         expected["model_parameters"] = (rows, len(base_parameter_names(config)))
         expected["stack_singular_value"] = (rows,)
+        expected["stack_uncertainty"] = (rows,)
     unknown = [
         member
         for member in archive.namelist()

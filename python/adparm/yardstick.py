@@ -5,7 +5,6 @@ adparm.truth re-exports them."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import signal
 import threading
@@ -15,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from ._arm_sections import ModelConfig
 from .config import Config
 from .desired import desired_state
 from .dynamics import check_config, initial_error_state, linearisation, lqr_value
@@ -121,8 +119,9 @@ def default_horizon(config: Config) -> float:
 
 
 def plant_config(config: Config) -> Config:
-    """``config`` with the model the plant itself (an exact model)."""
-    return dataclasses.replace(config, model=ModelConfig())
+    """``config`` with the model the plant itself (an exact model; the settings derived from the
+    believed model kept: Config.believing_the_plant)."""
+    return config.believing_the_plant()
 
 
 def _count(value: Any, name: str) -> int:

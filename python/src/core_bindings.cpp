@@ -189,18 +189,20 @@ void bind_settings(py::module_& m) {
       .def_readwrite("centre", &ExtrapolationSettings::centre)
       .def_readwrite("mode", &ExtrapolationSettings::mode)
       .def_readwrite("seed", &ExtrapolationSettings::seed);
-  py::class_<IdentifierSettings>(m, "IdentifierSettings",
-                                 "The online identifier of beta (identifier.hpp): enabled, gain, "
-                                 "concurrent_gain, history_size, window, "
-                                 "singular_value_threshold, inertia, gravity, friction, "
-                                 "stop_probe, tolerance.")
+  py::class_<IdentifierSettings>(
+      m, "IdentifierSettings",
+      "The online identifier of beta (identifier.hpp): enabled, gain, gradient_term, "
+      "concurrent_gain, history_size, window, singular_value_threshold, max_uncertainty, "
+      "inertia, gravity, friction, stop_probe, tolerance.")
       .def(py::init<>())
       .def_readwrite("enabled", &IdentifierSettings::enabled)
       .def_readwrite("gain", &IdentifierSettings::gain)
+      .def_readwrite("gradient_term", &IdentifierSettings::gradient_term)
       .def_readwrite("concurrent_gain", &IdentifierSettings::concurrent_gain)
       .def_readwrite("history_size", &IdentifierSettings::history_size)
       .def_readwrite("window", &IdentifierSettings::window)
       .def_readwrite("singular_value_threshold", &IdentifierSettings::singular_value_threshold)
+      .def_readwrite("max_uncertainty", &IdentifierSettings::max_uncertainty)
       .def_readwrite("inertia", &IdentifierSettings::inertia)
       .def_readwrite("gravity", &IdentifierSettings::gravity)
       .def_readwrite("friction", &IdentifierSettings::friction)

@@ -37,7 +37,7 @@ struct Recording {
   Rows cost;                                         // accumulated cost of eq. (10) from t = 0
   // With identification (identifier.hpp), else no columns: beta_hat, one column per parameter,
   // and the history stack's minimum singular value.
-  Rows model_parameters, stack_singular_value;
+  Rows model_parameters, stack_singular_value, stack_uncertainty;
   Eigen::Index rows = 0;
 
   inline void allocate(Eigen::Index capacity, int dof, int basis_size, int parameters = 0);
@@ -73,7 +73,7 @@ struct RecordedSeries {
 
 // The one table of the recorded series, in the order Python shows them (adparm._core's
 // RECORDED_SERIES and Simulation.recording() iterate it).
-inline constexpr std::array<RecordedSeries, 18> kRecordedSeries = {{
+inline constexpr std::array<RecordedSeries, 19> kRecordedSeries = {{
     {"t", SeriesWidth::one, &Recording::t},
     {"q", SeriesWidth::joints, &Recording::q},
     {"dq", SeriesWidth::joints, &Recording::dq},
@@ -92,6 +92,7 @@ inline constexpr std::array<RecordedSeries, 18> kRecordedSeries = {{
     {"cost", SeriesWidth::one, &Recording::cost},
     {"model_parameters", SeriesWidth::parameters, &Recording::model_parameters},
     {"stack_singular_value", SeriesWidth::identifier, &Recording::stack_singular_value},
+    {"stack_uncertainty", SeriesWidth::identifier, &Recording::stack_uncertainty},
 }};
 
 void Recording::allocate(Eigen::Index capacity, int dof, int basis_size, int parameters) {
@@ -273,6 +274,7 @@ class Simulation {
       if (system_.identifies()) {
         r.model_parameters.row(i) = data_.identifier.estimate.transpose();
         r.stack_singular_value(i, 0) = data_.identifier.min_singular_value;
+        r.stack_uncertainty(i, 0) = data_.identifier.uncertainty;
       }
     }
     return true;
