@@ -9,10 +9,10 @@ identifies the arm's base parameters online (:doc:`/guide/unknown-dynamics`) fro
 m per joint, switches the probe off once the estimate has settled (``identifier.stop_probe``),
 and the critic then learns the plant's W*. (The next example shows the same on the UR5 with a
 2 kg payload, in about 20 s of computing; this 3-joint arm takes seconds, so it also runs
-without identification for comparison.) Measured (12 s): the stack is informative at 1.22 s, the probe
-stops at 5.42 s, the critic ends 0.18 % from the plant's W* (the W* of beta_hat to round-off)
-and the policy applied within 1e-9 of the plant's u*; beta_hat is 0.44 % from beta by norm, its
-worst parameter 0.66 % off its own value (the guide: "The probe and the critic").
+without identification for comparison.) Measured (12 s): the stack is informative at 1.22 s,
+the probe stops at 5.42 s, the critic ends 0.18 % from the plant's W* (the W* of beta_hat to
+round-off) and the policy applied within 1e-9 of the plant's u*; beta_hat is 0.44 % from beta
+by norm, its worst parameter 0.66 % off its own value (the guide: "The probe and the critic").
 """
 
 import tempfile
