@@ -1,7 +1,7 @@
 """Identification on arms the other identifier tests do not use (issue 25): a light random chain
 (bench/every_arm.py's random_chain_urdf), the config an identifying URDF run is judged by when
 its settings are derived from the believed model, the probe an identifying URDF run gets by
-default, and the advice of a verdict whose history stack never became informative."""
+default (none), and the advice of a verdict whose history stack never became informative."""
 
 from __future__ import annotations
 
@@ -97,12 +97,11 @@ def test_the_judged_config_keeps_the_settings_derived_from_the_model(tmp_path) -
     assert adparm.yardstick.plant_config(config).cost == config.cost
 
 
-def test_an_identifying_urdf_run_probes_by_default(tmp_path) -> None:
+def test_an_identifying_urdf_run_leaves_the_probe_off_by_default(tmp_path) -> None:
+    # the derived probe alone can break a large arm's critic (docs: URDF arms, the UR10): the
+    # verdict suggests it instead (below)
     config = chain_config(tmp_path, 2, 3)
-    assert config.probe.until == 100.0
-    assert "identifier needs excitation" in config.derived["probe.until"]
-    still = config.updated({"identifier": {"enabled": False}})
-    assert still.probe.until == 0.0
+    assert config.probe.until == 0.0 and "probe.until" in config.derived
     given = config.updated({"probe": {"until": 3.0}})
     assert given.probe.until == 3.0 and "probe.until" not in given.derived
 
@@ -124,7 +123,7 @@ def test_the_advice_for_an_uninformative_stack_works(tmp_path) -> None:
     probed = adparm.simulate(rest.updated({"probe": {"until": 100.0}}))
     assert probed.diagnostics["identifier"]["ever_informative"]
     # a 4-joint chain whose derived probe is too weak: ten times larger fills the stack
-    weak = chain_config(tmp_path, 2, 4, sim={"T": 4.0})
+    weak = chain_config(tmp_path, 2, 4, probe={"until": 100.0}, sim={"T": 4.0})
     verdict = adparm.simulate(weak).diagnostics["verdict"]
     larger = 10.0 * float(np.max(weak.probe.amplitude))
     assert f"a larger probe (e.g. probe.amplitude = {larger:.3g}, 10 times)" in verdict
@@ -198,7 +197,14 @@ def test_a_stack_whose_equations_disagree_is_not_used(tmp_path) -> None:
     # the stack reaches full rank at 4.6 s, but the disturbance biases it (its estimate would be
     # 2.1 times off by norm, and beta_hat jumped there before max_uncertainty): beta_hat stays
     # at the model and the verdict says why
-    config = chain_config(tmp_path, [1, 99], 3, plant={"disturbance": [0.1] * 3}, sim={"T": 6.0})
+    config = chain_config(
+        tmp_path,
+        [1, 99],
+        3,
+        plant={"disturbance": [0.1] * 3},
+        probe={"until": 100.0},
+        sim={"T": 6.0},
+    )
     result = adparm.simulate(config)
     threshold = config.identifier.singular_value_threshold
     assert (result.stack_singular_value >= threshold).any()

@@ -142,8 +142,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     limits, q0 = qd + 0.1 rad), plant.disturbance, plant.torque_limits (``<limit effort>``),
     control.alpha1 = 2 I, control.ks (:func:`rise_ks`), the cost (R = diag(1 / (POLICY_RATE
     M_ii(qd))), Q = solvable_cost(alpha / 2 R^-1, alpha1, R)), actor.e2_margin, .weight_bound,
-    the learning (extrapolation points and :func:`extrapolation_box`, no probing unless the
-    identifier is enabled, epsilon_T,
+    the learning (extrapolation points and :func:`extrapolation_box`, no probing, epsilon_T,
     eta_a1, eta_a2), sim.T = 10 s and sim.dt = "auto".
     """
     from .optimal import solvable_cost
@@ -240,10 +239,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         0.1 * (ks + 1.0 + 1.0 / r_min),
         "0.1 (ks + 1 + 1/r) N m: moves e2 by about 0.1 rad/s",
     )
-    if config.identifier.enabled:  # the identifier's stack needs excitation
-        put("probe.until", 100.0, "the identifier needs excitation (identifier.stop_probe ends it)")
-    else:
-        put("probe.until", 0.0, "no probing: Bellman-error extrapolation excites the critic")
+    put("probe.until", 0.0, "no probing: Bellman-error extrapolation excites the critic")
     # the actor's ball ||Wa|| <= weight_bound must hold W*: about [K; beta] (K = -Q12 of the
     # exact family, beta the model's base parameters), and the initial weights
     Q = np.array(values.get(("cost", "Q"), config.cost.Q), dtype=float)
