@@ -110,7 +110,7 @@ void rank_update(long n, long depth, const double* a, long lda, const double* b,
   blocked_product<true>(n, n, depth, a, lda, b, ldb, 1, c, ldc, lower);
 }
 
-// y0[j] = A(:, j) . x0, y1[j] = A(:, j) . x1, four columns at a time.
+// y0[j] = A(:, j) . x0, y1[j] = A(:, j) . x1, four columns at a time (then two, then one).
 template <int kColumnCount>
 inline void transposed_block(long m, const double* a, long lda, const double* x0, const double* x1,
                              double* y0, double* y1, Isa::Mask tail) {
@@ -145,5 +145,6 @@ void transposed_products(long m, long n, const double* a, long lda, const double
   const Isa::Mask tail = Isa::mask(m % Isa::kWidth);
   long j = 0;
   for (; j + 4 <= n; j += 4) transposed_block<4>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
+  for (; j + 2 <= n; j += 2) transposed_block<2>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
   for (; j < n; ++j) transposed_block<1>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
 }
