@@ -64,10 +64,11 @@ class QuadraticCostT {
                                 2.0 * (Q_.template topRightCorner<N, N>(n, n) * e2);
     return e1.dot(Q1_x) + bound_.e2_cost(e2);
   }
-  // u^T R u, or U(u) with an input bound
+  // u^T R u, or U(u) with an input bound. R u coefficient-based (lazyProduct): for dynamic sizes
+  // no call of Eigen's matrix-vector kernel, once per extrapolation point.
   double input_cost(const JointVector<N>& u) const {
     if (bound_.bounded()) return bound_.input_cost(u);
-    return u.dot(R_ * u);
+    return u.dot(R_.lazyProduct(u));
   }
   double operator()(const ErrorVector<N>& x, const JointVector<N>& u) const {
     return state_cost(x) + input_cost(u);

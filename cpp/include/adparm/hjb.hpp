@@ -86,7 +86,7 @@ void evaluate_hjb_from_product(const HjbPoint<Basis, Dof>& point, const Quadrati
                                HjbEvaluation<Basis, Dof>& out,
                                const DenseKernels* kernels = nullptr,
                                const double* input_gradient = nullptr) {
-  out.u_hat = -0.5 * (cost.R_inverse() * input_gradient_times_actor_weights);  // eq. (20)
+  out.u_hat = -0.5 * cost.R_inverse().lazyProduct(input_gradient_times_actor_weights);  // eq. (20)
   const double input_cost =
       cost.bounded() ? cost.bound().bound_policy(out.u_hat) : cost.input_cost(out.u_hat);
   out.omega = point.drift_rate;
