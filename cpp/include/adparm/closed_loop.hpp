@@ -359,7 +359,13 @@ class ClosedLoop {
     Weights critic_rate = Weights::Zero(k);
     CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
     const bool low_rank = kBasisSize == Dynamic && data.stage >= 0;  // step(): no K x K rate
-    if (!low_rank) gamma_rate.setZero();
+    // gathered with the kernels: flush() writes the whole rate (Critic::leave_rate_to_flush)
+    const bool rate_by_flush =
+        kBasisSize == Dynamic && gathers_ && controller_.learns() && critic_.kernels() != nullptr;
+    if (rate_by_flush && !low_rank)
+      critic_.leave_rate_to_flush(data.critic);
+    else if (!low_rank)
+      gamma_rate.setZero();
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
       const Weights difference = actor_weights - critic_weights;
