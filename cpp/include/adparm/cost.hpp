@@ -64,11 +64,12 @@ class QuadraticCostT {
                                 2.0 * (Q_.template topRightCorner<N, N>(n, n) * e2);
     return e1.dot(Q1_x) + bound_.e2_cost(e2);
   }
-  // u^T R u, or U(u) with an input bound. R u coefficient-based (lazyProduct): for dynamic sizes
-  // no call of Eigen's matrix-vector kernel, once per extrapolation point.
+  // u^T R u, or U(u) with an input bound. Dynamic sizes: R u coefficient-based (lazyProduct), no
+  // call of Eigen's matrix-vector kernel (once per extrapolation point); fixed sizes as before.
   double input_cost(const JointVector<N>& u) const {
     if (bound_.bounded()) return bound_.input_cost(u);
-    return u.dot(R_.lazyProduct(u));
+    if constexpr (N == Dynamic) return u.dot(R_.lazyProduct(u));
+    return u.dot(R_ * u);
   }
   double operator()(const ErrorVector<N>& x, const JointVector<N>& u) const {
     return state_cost(x) + input_cost(u);
