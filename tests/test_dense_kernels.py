@@ -6,9 +6,10 @@ portable, avx2, avx512), read when a loop is built, forces a choice.
 - Each kernel set this CPU runs against the portable path (Eigen's products: the code, and the
   bits, of the loop before the kernels), an independent implementation of the same products: the
   same covariance resets at the same steps and the same recordings to round-off, on the planar
-  3-link arm with both bases and extrapolation points and on the UR5 example. The kernels sum in
-  another order and with fused multiply-adds, so single products differ in the last bits, which
-  the learning laws amplify (as between the fixed and dynamic paths, test_dynamic_sizes.py).
+  3-link arm with both bases and extrapolation points (also with an input bound) and on the UR5
+  example (110 points: two gathered blocks). The kernels sum in another order and with fused
+  multiply-adds, so single products differ in the last bits, which the learning laws amplify (as
+  between the fixed and dynamic paths, test_dynamic_sizes.py).
 - Each is deterministic: bit for bit the same run after run and on 1 or 2 threads.
 - A value the CPU cannot run or that is not known is refused, naming the variable."""
 
@@ -56,6 +57,8 @@ def _planar(basis: str) -> adparm.Config:
 CONFIGS = {
     "planar_quadratic": lambda: _planar("quadratic"),
     "planar_structured": lambda: _planar("structured"),
+    # an input bound: the points' bounded policy and its slopes in the actor's gradient
+    "planar_bounded": lambda: _planar("quadratic").updated({"cost": {"input_bound": [4.0] * 3}}),
     "ur5": lambda: adparm.load_config("examples/ur5.toml").updated({"sim": {"T": 0.2}}),
 }
 

@@ -11,10 +11,13 @@
 //
 // Register blocks: C's rows in kRowVectors vectors (then 1, then a masked one) x kColumns columns
 // (a single column: 4 vectors, four independent sums), each entry's products summed in the order
-// of the depth index from zero, then stored (C = sum) or subtracted (C -= sum): a fixed order,
+// of the depth index from zero, then stored (C = sum), subtracted (C -= sum) or stored negated
+// (C = 0 - sum: the bits of C -= sum on a zeroed C, without reading C): a fixed order,
 // the same result on every call.
 
-template <int kRowVectors, int kColumnCount, bool kSubtract, bool kMasked>
+enum Mode { kStore, kSubtract, kNegate };
+
+template <int kRowVectors, int kColumnCount, Mode kMode, bool kMasked>
 inline void block(long depth, const double* a, long lda, const double* b, long b_depth_stride,
                   long b_column_stride, double* c, long ldc, Isa::Mask mask) {
   constexpr long w = Isa::kWidth;
@@ -36,18 +39,22 @@ inline void block(long depth, const double* a, long lda, const double* b, long b
     for (int r = 0; r < kRowVectors; ++r) {
       double* out = c + j * ldc + r * w;
       if (kMasked) {
-        const Isa::V value =
-            kSubtract ? Isa::subtract(Isa::load(out, mask), sums[r][j]) : sums[r][j];
+        const Isa::V value = kMode == kSubtract ? Isa::subtract(Isa::load(out, mask), sums[r][j])
+                             : kMode == kNegate ? Isa::subtract(Isa::zero(), sums[r][j])
+                                                : sums[r][j];
         Isa::store(out, value, mask);
       } else {
-        Isa::store(out, kSubtract ? Isa::subtract(Isa::load(out), sums[r][j]) : sums[r][j]);
+        const Isa::V value = kMode == kSubtract ? Isa::subtract(Isa::load(out), sums[r][j])
+                             : kMode == kNegate ? Isa::subtract(Isa::zero(), sums[r][j])
+                                                : sums[r][j];
+        Isa::store(out, value);
       }
     }
   }
 }
 
 // kColumnCount columns of C, rows row_begin ... m - 1.
-template <int kColumnCount, bool kSubtract>
+template <int kColumnCount, Mode kMode>
 inline void column_block(long m, long row_begin, long depth, const double* a, long lda,
                          const double* b, long b_depth_stride, long b_column_stride, double* c,
                          long ldc) {
@@ -55,62 +62,66 @@ inline void column_block(long m, long row_begin, long depth, const double* a, lo
   constexpr int rows = kColumnCount == 1 ? 4 : Isa::kRowVectors;  // vectors per block
   long i = row_begin;
   for (; i + rows * w <= m; i += rows * w)
-    block<rows, kColumnCount, kSubtract, false>(depth, a + i, lda, b, b_depth_stride,
-                                                b_column_stride, c + i, ldc, Isa::Mask());
+    block<rows, kColumnCount, kMode, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                            c + i, ldc, Isa::Mask());
   for (; i + w <= m; i += w)
-    block<1, kColumnCount, kSubtract, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
-                                             c + i, ldc, Isa::Mask());
+    block<1, kColumnCount, kMode, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                         c + i, ldc, Isa::Mask());
   if (i < m)
-    block<1, kColumnCount, kSubtract, true>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
-                                            c + i, ldc, Isa::mask(m - i));
+    block<1, kColumnCount, kMode, true>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                        c + i, ldc, Isa::mask(m - i));
 }
 
 // The last n < kColumns columns: column_block<n>.
-template <int kColumnCount, bool kSubtract>
+template <int kColumnCount, Mode kMode>
 inline void last_columns(long n, long m, long row_begin, long depth, const double* a, long lda,
                          const double* b, long b_depth_stride, long b_column_stride, double* c,
                          long ldc) {
   if constexpr (kColumnCount > 0) {
     if (n == kColumnCount)
-      column_block<kColumnCount, kSubtract>(m, row_begin, depth, a, lda, b, b_depth_stride,
-                                            b_column_stride, c, ldc);
+      column_block<kColumnCount, kMode>(m, row_begin, depth, a, lda, b, b_depth_stride,
+                                        b_column_stride, c, ldc);
     else
-      last_columns<kColumnCount - 1, kSubtract>(n, m, row_begin, depth, a, lda, b, b_depth_stride,
-                                                b_column_stride, c, ldc);
+      last_columns<kColumnCount - 1, kMode>(n, m, row_begin, depth, a, lda, b, b_depth_stride,
+                                            b_column_stride, c, ldc);
   }
 }
 
 // C (m x n) = or -= A (m x depth) B (depth x n); lower: column j's rows from j's column block on.
-template <bool kSubtract>
+template <Mode kMode>
 void blocked_product(long m, long n, long depth, const double* a, long lda, const double* b,
                      long b_depth_stride, long b_column_stride, double* c, long ldc, bool lower) {
   long j = 0;
   for (; j + Isa::kColumns <= n; j += Isa::kColumns) {
     const long row_begin = lower ? j : 0;
-    column_block<Isa::kColumns, kSubtract>(m, row_begin, depth, a, lda, b + j * b_column_stride,
-                                           b_depth_stride, b_column_stride, c + j * ldc, ldc);
+    column_block<Isa::kColumns, kMode>(m, row_begin, depth, a, lda, b + j * b_column_stride,
+                                       b_depth_stride, b_column_stride, c + j * ldc, ldc);
   }
   if (j < n)
-    last_columns<Isa::kColumns - 1, kSubtract>(n - j, m, lower ? j : 0, depth, a, lda,
-                                               b + j * b_column_stride, b_depth_stride,
-                                               b_column_stride, c + j * ldc, ldc);
+    last_columns<Isa::kColumns - 1, kMode>(n - j, m, lower ? j : 0, depth, a, lda,
+                                           b + j * b_column_stride, b_depth_stride, b_column_stride,
+                                           c + j * ldc, ldc);
 }
 
 void product(long m, long n, long depth, const double* a, long lda, const double* b,
              long b_depth_stride, long b_column_stride, double* c, long ldc, bool subtract) {
   if (subtract)
-    blocked_product<true>(m, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc, false);
+    blocked_product<kSubtract>(m, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc,
+                               false);
   else
-    blocked_product<false>(m, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc, false);
+    blocked_product<kStore>(m, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc, false);
 }
 
-// C -= A B^T: B^T's entry (p, j) is b[j + p * ldb].
+// C -= A B^T (or C = -(A B^T), overwrite): B^T's entry (p, j) is b[j + p * ldb].
 void rank_update(long n, long depth, const double* a, long lda, const double* b, long ldb,
-                 double* c, long ldc, bool lower) {
-  blocked_product<true>(n, n, depth, a, lda, b, ldb, 1, c, ldc, lower);
+                 double* c, long ldc, bool lower, bool overwrite) {
+  if (overwrite)
+    blocked_product<kNegate>(n, n, depth, a, lda, b, ldb, 1, c, ldc, lower);
+  else
+    blocked_product<kSubtract>(n, n, depth, a, lda, b, ldb, 1, c, ldc, lower);
 }
 
-// y0[j] = A(:, j) . x0, y1[j] = A(:, j) . x1, four columns at a time.
+// y0[j] = A(:, j) . x0, y1[j] = A(:, j) . x1, four columns at a time (then two, then one).
 template <int kColumnCount>
 inline void transposed_block(long m, const double* a, long lda, const double* x0, const double* x1,
                              double* y0, double* y1, Isa::Mask tail) {
@@ -145,5 +156,6 @@ void transposed_products(long m, long n, const double* a, long lda, const double
   const Isa::Mask tail = Isa::mask(m % Isa::kWidth);
   long j = 0;
   for (; j + 4 <= n; j += 4) transposed_block<4>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
+  for (; j + 2 <= n; j += 2) transposed_block<2>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
   for (; j < n; ++j) transposed_block<1>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
 }

@@ -75,7 +75,7 @@ class Actor {
   Input gradient_coefficients(const Input& input_gradient_times_difference,
                               const InputWeight& R_inverse, const Bound& bound, const Input& u_hat,
                               const Vector& omega, double hjb_error, double weight) const {
-    Input projected = R_inverse * input_gradient_times_difference;
+    Input projected = R_inverse.lazyProduct(input_gradient_times_difference);  // no kernel call
     if (bound.bounded()) bound.scale_by_slope(u_hat, projected);
     return (weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
            projected;

@@ -359,7 +359,13 @@ class ClosedLoop {
     Weights critic_rate = Weights::Zero(k);
     CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
     const bool low_rank = kBasisSize == Dynamic && data.stage >= 0;  // step(): no K x K rate
-    if (!low_rank) gamma_rate.setZero();
+    // gathered with the kernels: flush() writes the whole rate (Critic::leave_rate_to_flush)
+    const bool rate_by_flush =
+        kBasisSize == Dynamic && gathers_ && controller_.learns() && critic_.kernels() != nullptr;
+    if (rate_by_flush && !low_rank)
+      critic_.leave_rate_to_flush(data.critic);
+    else if (!low_rank)
+      gamma_rate.setZero();
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
       const Weights difference = actor_weights - critic_weights;
@@ -551,9 +557,13 @@ class ClosedLoop {
 
   // Dynamic sizes, prepared extrapolation points (Extrapolation::stacked()): each point's shares
   // of eqs. (20)-(21), (23)-(24) and (26) as the trajectory's (learn in derivative()), with the
-  // products of the points' B = [B_1 ... B_N] (K x nN) stacked: [B^T Wa, B^T (Wa - Wc)] is two
-  // matrix-vector products, the actor's gradient one (gradient -= B [c_1; ...; c_N]); the critic
-  // gathers the points' omega (critic.hpp).
+  // points' B = [B_1 ... B_N] (K x nN) side by side; the critic gathers the points' omega
+  // (critic.hpp).
+  //   - With the dispatched kernels (dense_kernels.hpp): point by point, the three products with
+  //     B_i (B_i^T [Wa, Wa - Wc], omega_i = F_i + B_i u_i, gradient -= B_i c_i) one after the
+  //     other, while B_i (K x n) is in the first-level cache: one pass over B per evaluation.
+  //   - Eigen's portable products: [B^T Wa, B^T (Wa - Wc)] as two matrix-vector products over all
+  //     points, the actor's gradient one (gradient -= B [c_1; ...; c_N]).
   template <class Gamma, class GammaRate>
   void learn_from_stacked_points(const Weights& critic_weights, const Weights& actor_weights,
                                  const Weights& difference, const Gamma& gamma,
@@ -561,17 +571,32 @@ class ClosedLoop {
                                  Weights& actor_gradient, Data& data) const {
     const Eigen::Index n = dof();
     const Eigen::MatrixXd& stacked = extrapolation_.stacked_input_gradients();
+    const Eigen::Index k = stacked.rows();
     const DenseKernels* kernels = critic_.kernels();  // nullptr: Eigen's (dense_kernels.hpp)
-    if (kernels != nullptr)
-      kernels->transposed_products(
-          stacked.rows(), stacked.cols(), stacked.data(), stacked.rows(), actor_weights.data(),
-          difference.data(), data.point_products.col(0).data(), data.point_products.col(1).data());
-    else {
-      data.point_products.col(0).noalias() = stacked.transpose() * actor_weights;
-      data.point_products.col(1).noalias() = stacked.transpose() * difference;
-    }
     const double weight = 1.0 / static_cast<double>(extrapolation_.size());
     Evaluation e;
+    if (kernels != nullptr) {
+      for (long i = 0; i < extrapolation_.size(); ++i) {
+        const double* input_gradient = stacked.data() + i * n * k;  // B_i
+        double* times_actor_weights_data = data.point_products.col(0).data() + i * n;
+        double* times_difference_data = data.point_products.col(1).data() + i * n;
+        kernels->transposed_products(k, n, input_gradient, k, actor_weights.data(),
+                                     difference.data(), times_actor_weights_data,
+                                     times_difference_data);
+        const Joint times_actor_weights = data.point_products.col(0).segment(i * n, n);
+        evaluate_hjb_from_product(extrapolation_.prepared(i), cost_, critic_weights,
+                                  times_actor_weights, e, kernels, input_gradient);
+        critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, data.critic);
+        const Joint times_difference = data.point_products.col(1).segment(i * n, n);
+        const Joint coefficients = actor_.gradient_coefficients(
+            times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
+        kernels->product(k, 1, n, input_gradient, k, coefficients.data(), 1, n,
+                         actor_gradient.data(), k, true);  // (26), point i
+      }
+      return;
+    }
+    data.point_products.col(0).noalias() = stacked.transpose() * actor_weights;
+    data.point_products.col(1).noalias() = stacked.transpose() * difference;
     for (long i = 0; i < extrapolation_.size(); ++i) {
       const Point& p = extrapolation_.prepared(i);
       const Joint times_actor_weights = data.point_products.col(0).segment(i * n, n);
@@ -581,12 +606,7 @@ class ClosedLoop {
       data.point_coefficients.segment(i * n, n) = actor_.gradient_coefficients(
           times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
     }
-    if (kernels != nullptr)  // (26), all points
-      kernels->product(stacked.rows(), 1, stacked.cols(), stacked.data(), stacked.rows(),
-                       data.point_coefficients.data(), 1, 1, actor_gradient.data(),
-                       actor_gradient.size(), true);
-    else
-      actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
+    actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
   }
 
   template <class Local>

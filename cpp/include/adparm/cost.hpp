@@ -64,9 +64,11 @@ class QuadraticCostT {
                                 2.0 * (Q_.template topRightCorner<N, N>(n, n) * e2);
     return e1.dot(Q1_x) + bound_.e2_cost(e2);
   }
-  // u^T R u, or U(u) with an input bound
+  // u^T R u, or U(u) with an input bound. Dynamic sizes: R u coefficient-based (lazyProduct), no
+  // call of Eigen's matrix-vector kernel (once per extrapolation point); fixed sizes as before.
   double input_cost(const JointVector<N>& u) const {
     if (bound_.bounded()) return bound_.input_cost(u);
+    if constexpr (N == Dynamic) return u.dot(R_.lazyProduct(u));
     return u.dot(R_ * u);
   }
   double operator()(const ErrorVector<N>& x, const JointVector<N>& u) const {

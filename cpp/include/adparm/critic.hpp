@@ -55,7 +55,8 @@ class Critic {
     Block omegas, gamma_omegas, scaled;
     Eigen::VectorXd coefficients, weights;
     Eigen::Index gathered = 0;
-    bool lower_only = false;  // gamma_rate holds blocks in its lower triangle only (flush)
+    bool lower_only = false;      // gamma_rate holds blocks in its lower triangle only (flush)
+    bool rate_unwritten = false;  // gamma_rate not zeroed yet (leave_rate_to_flush)
     // low_rank_update's column of Gamma_next - Gamma, and its ||.||_F for the next
     // needs_reset(previous, gamma, w) (negative: none; that call sums it from the matrices).
     Vector change_column;
@@ -138,6 +139,10 @@ class Critic {
              Workspace& w) const {
     static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
     add_block(gamma, weight_rate, gamma_rate, w);
+    if (w.rate_unwritten) {  // nothing gathered (leave_rate_to_flush)
+      gamma_rate.setZero();
+      w.rate_unwritten = false;
+    }
     if (w.lower_only) {  // mirror the lower triangle (the blocks of this evaluation)
       w.lower_only = false;
       const Eigen::Index n = gamma_rate.rows();
@@ -145,6 +150,13 @@ class Critic {
         gamma_rate.col(j).head(j) = gamma_rate.row(j).head(j).transpose();
     }
   }
+
+  // Dynamic sizes with the dispatched kernels (kernels() not nullptr): instead of zeroing
+  // gamma_rate before an evaluation's gather/flush, the first gathered block's rank-s term is
+  // written into it (C = -(A B^T), the same bits as C -= A B^T on a zeroed C, without the pass
+  // that zeroes K^2 entries); flush() zeroes it if nothing was gathered. The caller then leaves
+  // gamma_rate as it was until flush().
+  void leave_rate_to_flush(Workspace& w) const { w.rate_unwritten = kernels_ != nullptr; }
 
   // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): below(gamma,
   // epsilon_T, w), a Cholesky factorisation.
@@ -345,7 +357,8 @@ class Critic {
                         w.coefficients.data(), 1, s, weight_rate.data(), k, true);
       kernels_->rank_update(k, s, scaled.data(), scaled.outerStride(), gamma_omegas.data(),
                             gamma_omegas.outerStride(), gamma_rate.data(), gamma_rate.outerStride(),
-                            s > 1);
+                            s > 1, w.rate_unwritten);
+      w.rate_unwritten = false;
       w.lower_only = w.lower_only || s > 1;
       return;
     }

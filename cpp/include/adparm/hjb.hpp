@@ -15,6 +15,7 @@
 #include "adparm/actor.hpp"
 #include "adparm/basis.hpp"
 #include "adparm/cost.hpp"
+#include "adparm/dense_kernels.hpp"
 #include "adparm/error_system.hpp"
 
 namespace adparm {
@@ -73,18 +74,30 @@ void evaluate_hjb(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& 
   out.error = point.state_cost + out.input_cost + critic_weights.dot(out.omega);
 }
 
-// The same as evaluate_hjb, given the product B^T Wa of eq. (20) (ClosedLoop computes it for all
-// prepared extrapolation points at once).
+// The same as evaluate_hjb, given the product B^T Wa of eq. (20) (ClosedLoop computes it for the
+// prepared extrapolation points). With `kernels` (dense_kernels.hpp; dynamic sizes) omega's
+// product B u_hat runs in them, B read from `input_gradient` (K x n, column-major, leading
+// dimension K: the point's B, e.g. its block of the stacked [B_1 ... B_N]); without, Eigen's
+// product of point.input_gradient.
 template <class Basis, int Dof>
 void evaluate_hjb_from_product(const HjbPoint<Basis, Dof>& point, const QuadraticCostT<Dof>& cost,
                                const typename Basis::Vector& critic_weights,
                                const JointVector<Dof>& input_gradient_times_actor_weights,
-                               HjbEvaluation<Basis, Dof>& out) {
-  out.u_hat = -0.5 * (cost.R_inverse() * input_gradient_times_actor_weights);  // eq. (20)
+                               HjbEvaluation<Basis, Dof>& out,
+                               const DenseKernels* kernels = nullptr,
+                               const double* input_gradient = nullptr) {
+  out.u_hat = -0.5 * cost.R_inverse().lazyProduct(input_gradient_times_actor_weights);  // eq. (20)
   const double input_cost =
       cost.bounded() ? cost.bound().bound_policy(out.u_hat) : cost.input_cost(out.u_hat);
   out.omega = point.drift_rate;
-  out.omega.noalias() += point.input_gradient * out.u_hat;
+  if (kernels != nullptr) {  // omega += B u_hat as omega -= B (-u_hat): the same sum, negated
+    const JointVector<Dof> negative_u_hat = -out.u_hat;
+    const Eigen::Index k = out.omega.size(), n = negative_u_hat.size();
+    kernels->product(k, 1, n, input_gradient, k, negative_u_hat.data(), 1, n, out.omega.data(), k,
+                     true);
+  } else {
+    out.omega.noalias() += point.input_gradient * out.u_hat;
+  }
   out.error = point.state_cost + input_cost + critic_weights.dot(out.omega);
 }
 
