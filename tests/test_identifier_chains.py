@@ -125,8 +125,9 @@ def test_the_advice_for_an_uninformative_stack_works(tmp_path) -> None:
     # a 4-joint chain whose derived probe is too weak: ten times larger fills the stack
     weak = chain_config(tmp_path, 2, 4, probe={"until": 100.0}, sim={"T": 4.0})
     verdict = adparm.simulate(weak).diagnostics["verdict"]
-    larger = 10.0 * float(np.max(weak.probe.amplitude))
-    assert f"a larger probe (e.g. probe.amplitude = {larger:.3g}, 10 times)" in verdict
+    larger = [10.0 * a for a in weak.probe.amplitude]  # per joint (derived)
+    text = ", ".join(f"{a:.3g}" for a in larger)
+    assert f"a larger probe (e.g. probe.amplitude = [{text}], 10 times)" in verdict
     stronger = adparm.simulate(weak.updated({"probe": {"amplitude": larger}}))
     assert stronger.diagnostics["identifier"]["ever_informative"]
     # a controller that does not learn applies no probe: the advice is a moving trajectory
@@ -193,7 +194,8 @@ def test_the_stack_uncertainty_is_the_least_squares_formula() -> None:
 
 
 def test_a_stack_whose_equations_disagree_is_not_used(tmp_path) -> None:
-    # a light random 3-joint chain with the paper's disturbance and its derived (weak) probe:
+    # a light random 3-joint chain with the paper's disturbance and a weak probe (0.759 N m on
+    # every joint, the amplitude derived before it was per joint):
     # the stack reaches full rank at 4.6 s, but the disturbance biases it (its estimate would be
     # 2.1 times off by norm, and beta_hat jumped there before max_uncertainty): beta_hat stays
     # at the model and the verdict says why
@@ -202,7 +204,7 @@ def test_a_stack_whose_equations_disagree_is_not_used(tmp_path) -> None:
         [1, 99],
         3,
         plant={"disturbance": [0.1] * 3},
-        probe={"until": 100.0},
+        probe={"until": 100.0, "amplitude": 0.759},
         sim={"T": 6.0},
     )
     result = adparm.simulate(config)

@@ -154,8 +154,14 @@ def _excitation_advice(config: Config) -> str:
             "switch the probe on (probe.until = 100; identifier.stop_probe ends it once "
             "beta_hat settles)"
         )
-    larger = 10.0 * float(np.max(np.abs(config.probe.amplitude)))
-    return f"excite the arm more: a larger probe (e.g. probe.amplitude = {larger:.3g}, 10 times)"
+    amplitude = np.asarray(config.probe.amplitude, dtype=float)
+    if amplitude.ndim == 0:
+        larger = f"{10.0 * float(amplitude):.3g}"
+    elif amplitude.ndim == 1:
+        larger = "[" + ", ".join(f"{10.0 * a:.3g}" for a in amplitude) + "]"
+    else:
+        return "excite the arm more: a larger probe (probe.amplitude 10 times larger)"
+    return f"excite the arm more: a larger probe (e.g. probe.amplitude = {larger}, 10 times)"
 
 
 def _probe_stopped_time(result: SimulationResult) -> float | None:

@@ -233,11 +233,11 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
             f"solvable_cost(K = diag({', '.join(f'{k:.3g}' for k in np.diag(K))}), alpha1, R): "
             "W* is known",
         )
-    r_min = float(np.linalg.eigvalsh(0.5 * (R + R.T)).min())
+    policy_gain = np.diag(np.linalg.inv(0.5 * (R + R.T)))  # (R^-1)_jj of u* = -R^-1 e2
     put(
         "probe.amplitude",
-        0.1 * (ks + 1.0 + 1.0 / r_min),
-        "0.1 (ks + 1 + 1/r) N m: moves e2 by about 0.1 rad/s",
+        tuple(float(a) for a in 0.1 * (ks + 1.0 + policy_gain)),
+        "0.1 (ks + 1 + (R^-1)_jj) N m on joint j: moves each e2_j by about 0.1 rad/s",
     )
     put("probe.until", 0.0, "no probing: Bellman-error extrapolation excites the critic")
     # the actor's ball ||Wa|| <= weight_bound must hold W*: about [K; beta] (K = -Q12 of the
