@@ -221,6 +221,9 @@ class Identifier {
   // P x P, bounded (no heap) for a dynamic count
   using ParameterMatrix =
       Eigen::Matrix<double, kParameters, kParameters, 0, kMaxParameters, kMaxParameters>;
+  // the identified parameters' square block of a ParameterMatrix (bounded: no heap)
+  using Block =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
   using Arm = typename Regressor::Arm;
   using Workspace = typename Regressor::Workspace;
 
@@ -474,24 +477,20 @@ class Identifier {
 
   // (I3) of the stack in `data` (information and projection current), the parameters not
   // identified held at beta_hat's values; infinity while m < 2 P or S is singular.
-  double uncertainty(Data& data) const {
-    using Block =
-        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
+  double uncertainty(const Data& data) const {
     using Column = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxParameters, 1>;
     const double infinite = std::numeric_limits<double>::infinity();
     const Eigen::Index n = initial_dof();
     const long equations = static_cast<long>(data.stack.size()) * static_cast<long>(n);
     if (data.min_singular_value <= 0.0 || equations < 2L * identified_) return infinite;
-    Block S(identified_, identified_);
     Column rhs(identified_);
     for (int a = 0; a < identified_; ++a) {
       const Eigen::Index i = index_[a];
       rhs[a] = data.projection[i];
       for (Eigen::Index j = 0; j < parameters(); ++j)
         if (!selected_[j]) rhs[a] -= data.information(i, j) * data.estimate[j];
-      for (int b = 0; b < identified_; ++b) S(a, b) = data.information(i, index_[b]);
     }
-    const Eigen::LLT<Block> factor(S);
+    const Eigen::LLT<Block> factor(identified_block(data.information));
     if (factor.info() != Eigen::Success) return infinite;
     const Column solution = factor.solve(rhs);
     double residual = 0.0;  // r, summed over the stack's equations
@@ -514,13 +513,16 @@ class Identifier {
 
   // sqrt(lambda_min) of S's block of the identified parameters (a bounded matrix: no heap).
   double min_singular_value(const ParameterMatrix& S) const {
-    using Block =
-        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
+    const Eigen::SelfAdjointEigenSolver<Block> solver(identified_block(S), Eigen::EigenvaluesOnly);
+    return std::sqrt(std::max(0.0, solver.eigenvalues()[0]));
+  }
+
+  // S's block of the identified parameters (both (I3) and sigma_min are over it).
+  Block identified_block(const ParameterMatrix& S) const {
     Block block(identified_, identified_);
     for (int a = 0; a < identified_; ++a)
       for (int b = 0; b < identified_; ++b) block(a, b) = S(index_[a], index_[b]);
-    const Eigen::SelfAdjointEigenSolver<Block> solver(block, Eigen::EigenvaluesOnly);
-    return std::sqrt(std::max(0.0, solver.eigenvalues()[0]));
+    return block;
   }
 
   IdentifierSettings settings_{};
