@@ -87,6 +87,7 @@
 #include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/urdf_loop_arm.hpp"
 #include "heap_counter.hpp"
+#include "plain_port.hpp"
 
 namespace {
 
@@ -542,6 +543,45 @@ void check_run(const char* name, const adparm::Settings& settings, adparm::RunSt
   if (!ok) fail(name);
 }
 
+// The plain port (bench/plain_port.cpp) against adparm's paper loop over max(horizon, 2 s): the
+// same reset times and, per block of the state (q, dq, Wc, Wa, Gamma, nu, J), the largest
+// difference relative to the block's largest entry at most 1e-9 (round-off of differently
+// written sums, amplified by the critic: Gamma falls from gamma0 = 100 to epsilon_T = 1e-6 within
+// about 43 ms before each reset; measured: 2e-15 after 20 steps, 4e-11 after 2000, 9e-10 after
+// 10000).
+void check_paper_port(double horizon) {
+  adparm::Settings settings = adparm::paper_settings();
+  settings.sim.T = std::max(horizon, 2.0);
+  adparm::AnySimulation simulation(settings);
+  simulation.advance(simulation.steps());
+  plain_port::Run port;
+  plain_port::run(settings.sim.T, port);
+  const Eigen::VectorXd state = simulation.state();
+  const int blocks[][2] = {{0, 2}, {2, 2}, {4, 8}, {12, 8}, {20, 64}, {84, 2}, {86, 1}};
+  double difference = 0.0;
+  for (const auto& block : blocks) {
+    double largest = 0.0, block_difference = 0.0;
+    for (int i = block[0]; i < block[0] + block[1]; ++i) {
+      largest = std::max(largest, std::abs(state[i]));
+      block_difference = std::max(block_difference, std::abs(state[i] - port.state[i]));
+    }
+    difference =
+        std::max(difference, largest > 0.0 ? block_difference / largest : block_difference);
+  }
+  const bool same_resets = port.reset_times == simulation.reset_times();
+  const bool ok = state.size() == plain_port::kStateSize &&
+                  simulation.status() == adparm::RunStatus::finished && !port.diverged &&
+                  port.steps == simulation.steps() && same_resets && difference <= 1e-9;
+  std::printf(
+      "bench=check run=paper_port status=%s steps=%ld port_steps=%ld port_diverged=%d resets=%zu "
+      "port_resets=%zu same_reset_times=%d difference=%.3g ok=%d\n",
+      status_name(simulation.status()), simulation.steps(), port.steps, port.diverged ? 1 : 0,
+      simulation.reset_times().size(), port.reset_times.size(), same_resets ? 1 : 0, difference,
+      ok ? 1 : 0);
+  std::fflush(stdout);
+  if (!ok) fail("paper_port");
+}
+
 // qd1 a cubic on [0, end/2] continued by a line with the same position and velocity on
 // [end/2, end] (two spline intervals); qd2 = -0.2.
 adparm::TrajectorySettings spline(double end) {
@@ -923,30 +963,34 @@ void check_invalid_settings() {
 void usage() {
   std::fprintf(stderr,
                "usage: adparm_bench [--checks] [simulated_seconds] [points ...]\n"
-               "       adparm_bench --urdf [simulated_seconds] [points ...]\n");
+               "       adparm_bench --urdf [simulated_seconds] [points ...]\n"
+               "       adparm_bench --paper-port [simulated_seconds] [pairs]\n");
 }
 
 }  // namespace
 
 int run(double horizon, std::vector<long> point_counts, bool checks);
 int run_urdf(double horizon, std::vector<long> point_counts);
+int run_paper_port(double horizon, long pairs);
 
 int main(int argc, char** argv) {
-  bool checks = false, urdf = false;
+  bool checks = false, urdf = false, port = false;
   std::vector<const char*> arguments;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--checks") == 0)
       checks = true;
     else if (std::strcmp(argv[i], "--urdf") == 0)
       urdf = true;
+    else if (std::strcmp(argv[i], "--paper-port") == 0)
+      port = true;
     else
       arguments.push_back(argv[i]);
   }
-  if (checks && urdf) {
+  if (checks + urdf + port > 1) {
     usage();
     return 2;
   }
-  double horizon = urdf ? kUrdfHorizon : 110.0;
+  double horizon = urdf ? kUrdfHorizon : port ? 10.0 : 110.0;
   std::vector<long> point_counts;
   for (std::size_t i = 0; i < arguments.size(); ++i) {
     char* end = nullptr;
@@ -960,7 +1004,12 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (port && point_counts.size() > 1) {
+    usage();
+    return 2;
+  }
   try {
+    if (port) return run_paper_port(horizon, point_counts.empty() ? 9 : point_counts[0]);
     return urdf ? run_urdf(horizon, point_counts) : run(horizon, point_counts, checks);
   } catch (const std::exception& error) {  // e.g. invalid_argument for a horizon <= 0
     std::fprintf(stderr, "adparm_bench: %s\n", error.what());
@@ -972,6 +1021,69 @@ int main(int argc, char** argv) {
 int run_urdf(double horizon, std::vector<long> point_counts) {
   if (point_counts.empty()) point_counts = {0, 50};
   return run_urdf_loops(horizon, point_counts, 3) ? 0 : 1;
+}
+
+// --paper-port: adparm's paper loop (N = 0, as bench=paper_loop) and the plain port
+// (bench/plain_port.cpp) in `pairs` interleaved pairs (A B, then B A, ...), each side the best of 3
+// runs of `horizon` simulated seconds within its pair; per pair and as medians: ns per step of each
+// and ratio = port / adparm (above 1: adparm is faster).
+int run_paper_port(double horizon, long pairs) {
+  if (pairs < 1) throw std::invalid_argument("--paper-port: pairs must be >= 1");
+  adparm::Settings settings = adparm::paper_settings();
+  settings.sim.T = horizon;
+  const auto time_adparm = [&] {
+    const LoopTiming timing = time_loop(settings);
+    if (timing.status != adparm::RunStatus::finished || timing.heap_allocations > 0)
+      throw std::runtime_error("--paper-port: adparm's run did not finish or allocated");
+    return 1e9 * timing.seconds / timing.steps;
+  };
+  plain_port::Run port;
+  const auto time_port = [&] {
+    const auto start = Clock::now();
+    plain_port::run(horizon, port);
+    const double seconds = seconds_since(start);
+    if (port.diverged) throw std::runtime_error("--paper-port: the port's run diverged");
+    return 1e9 * seconds / port.steps;
+  };
+  std::vector<double> adparm_ns, port_ns, ratios;
+  for (long pair = 0; pair < pairs; ++pair) {
+    double best_adparm = 0.0, best_port = 0.0;
+    for (int r = 0; r < 3; ++r) {
+      double a, b;
+      if (pair % 2 == 0) {
+        a = time_adparm();
+        b = time_port();
+      } else {
+        b = time_port();
+        a = time_adparm();
+      }
+      best_adparm = r == 0 ? a : std::min(best_adparm, a);
+      best_port = r == 0 ? b : std::min(best_port, b);
+    }
+    adparm_ns.push_back(best_adparm);
+    port_ns.push_back(best_port);
+    ratios.push_back(best_port / best_adparm);
+    std::printf(
+        "bench=paper_port pair=%ld order=%s steps=%ld adparm_ns_per_step=%.1f "
+        "port_ns_per_step=%.1f "
+        "ratio=%.3f\n",
+        pair + 1, pair % 2 == 0 ? "adparm,port" : "port,adparm", port.steps, best_adparm, best_port,
+        best_port / best_adparm);
+    std::fflush(stdout);
+  }
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  };
+  std::printf(
+      "bench=paper_port_median pairs=%ld adparm_ns_per_step=%.1f port_ns_per_step=%.1f "
+      "ratio=%.3f ratio_min=%.3f ratio_max=%.3f kernels=%s\n",
+      pairs, median(adparm_ns), median(port_ns), median(ratios),
+      *std::min_element(ratios.begin(), ratios.end()),
+      *std::max_element(ratios.begin(), ratios.end()),
+      adparm::dense_kernels_name(adparm::select_dense_kernels()));
+  return 0;
 }
 
 int run(double horizon, std::vector<long> point_counts, bool checks) {
@@ -1134,6 +1246,7 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
     arms_ok = run_urdf_loops(std::min(horizon, kUrdfHorizon), {0, 50}, 3) && arms_ok;
   if (checks) {
     check_runs(horizon);
+    check_paper_port(horizon);
     check_invalid_settings();
     std::fflush(stdout);
   }
