@@ -362,11 +362,9 @@ class ClosedLoop {
     // gathered with the kernels: flush() writes the whole rate (Critic::leave_rate_to_flush)
     const bool rate_by_flush =
         kBasisSize == Dynamic && gathers_ && controller_.learns() && critic_.kernels() != nullptr;
-    // fixed sizes, learning: the first sample's add_rates writes gamma_rate (no zeroing pass)
-    bool first_writes = kBasisSize != Dynamic && controller_.learns();
     if (rate_by_flush && !low_rank)
       critic_.leave_rate_to_flush(data.critic);
-    else if (!low_rank && !first_writes)
+    else if (!low_rank)
       gamma_rate.setZero();
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
@@ -381,8 +379,7 @@ class ClosedLoop {
           else
             critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         } else {
-          critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, first_writes);
-          first_writes = false;
+          critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         }
         actor_.add_gradient(p.input_gradient, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega,
                             e.error, difference, weight, actor_gradient);  // (26)

@@ -105,18 +105,13 @@ class Critic {
   //   gamma_rate  -= w eta_c Gamma omega omega^T Gamma / rho
   // with w = 1 for the trajectory and w = 1/N for each of N extrapolation points
   // (extrapolation.hpp). Gamma is symmetric: Gamma omega omega^T Gamma = (Gamma omega)(...)^T.
-  // overwrite: gamma_rate = -(...) instead, gamma_rate not read: the bits of -= on a zeroed
-  // gamma_rate (0 - p = -p; only a zero's sign may differ), without the pass that zeroes it.
   template <class CovarianceIn, class CovarianceOut>
   void add_rates(const Vector& omega, double hjb_error, const CovarianceIn& gamma, double weight,
-                 Vector& weight_rate, CovarianceOut&& gamma_rate, bool overwrite = false) const {
+                 Vector& weight_rate, CovarianceOut&& gamma_rate) const {
     const Vector gamma_omega = gamma.lazyProduct(omega);  // unrolled; no GEMV call for 8 x 8
     const double gain = weight * settings_.eta_c / (1.0 + settings_.nu * omega.dot(gamma_omega));
     weight_rate.noalias() -= (gain * hjb_error) * gamma_omega;
-    if (overwrite)  // (-g) a_i = -(g a_i) exactly
-      gamma_rate.noalias() = (-gain * gamma_omega).lazyProduct(gamma_omega.transpose());
-    else
-      gamma_rate.noalias() -= (gain * gamma_omega).lazyProduct(gamma_omega.transpose());
+    gamma_rate.noalias() -= (gain * gamma_omega).lazyProduct(gamma_omega.transpose());
   }
 
   // Dynamic sizes: the same shares as add_rates, gathered (omega, eps and w of one sample) and
