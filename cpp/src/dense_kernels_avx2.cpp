@@ -20,6 +20,8 @@ struct Isa {
   static V broadcast(const double* p) { return _mm256_broadcast_sd(p); }
   static V fma(V a, V b, V c) { return _mm256_fmadd_pd(a, b, c); }
   static V subtract(V a, V b) { return _mm256_sub_pd(a, b); }
+  static V add(V a, V b) { return _mm256_add_pd(a, b); }
+  static V multiply(V a, V b) { return _mm256_mul_pd(a, b); }
   // The first `count` lanes (0 <= count < 4).
   static Mask mask(long count) {
     return _mm256_cmpgt_epi64(_mm256_set1_epi64x(count), _mm256_setr_epi64x(0, 1, 2, 3));
@@ -32,7 +34,7 @@ struct Isa {
 
 #include "dense_kernels_impl.hpp"
 
-const adparm::DenseKernels kKernels{"avx2", product, rank_update, transposed_products};
+const adparm::DenseKernels kKernels{"avx2", product, rank_update, transposed_products, gains};
 
 }  // namespace
 

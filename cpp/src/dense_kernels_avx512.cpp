@@ -20,6 +20,8 @@ struct Isa {
   static V broadcast(const double* p) { return _mm512_set1_pd(*p); }
   static V fma(V a, V b, V c) { return _mm512_fmadd_pd(a, b, c); }
   static V subtract(V a, V b) { return _mm512_sub_pd(a, b); }
+  static V add(V a, V b) { return _mm512_add_pd(a, b); }
+  static V multiply(V a, V b) { return _mm512_mul_pd(a, b); }
   // The first `count` lanes (0 <= count < 8).
   static Mask mask(long count) { return static_cast<Mask>((1u << count) - 1u); }
   static double sum(V v) { return _mm512_reduce_add_pd(v); }
@@ -27,7 +29,7 @@ struct Isa {
 
 #include "dense_kernels_impl.hpp"
 
-const adparm::DenseKernels kKernels{"avx512", product, rank_update, transposed_products};
+const adparm::DenseKernels kKernels{"avx512", product, rank_update, transposed_products, gains};
 
 }  // namespace
 

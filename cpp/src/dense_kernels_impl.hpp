@@ -4,16 +4,17 @@
 //   V, Mask, kWidth (doubles per V), kRowVectors and kColumns (a register block of C: rows in
 //   vectors, columns),
 //   zero(), load(p), load(p, mask) (zero-filled), store(p, v), store(p, v, mask),
-//   broadcast(p), fma(a, b, c) = a b + c, subtract(a, b) = a - b, mask(count), sum(v).
+//   broadcast(p), fma(a, b, c) = a b + c, subtract(a, b) = a - b, add(a, b), multiply(a, b),
+//   mask(count), sum(v).
 // Nothing here has external linkage and no standard header is included: every function compiled
 // with the wider instruction set stays in its unit, so the linker can never hand it to a caller
 // built for the portable one.
 //
-// Register blocks: C's rows in kRowVectors vectors (then 1, then a masked one) x kColumns columns
-// (a single column: 4 vectors, four independent sums), each entry's products summed in the order
-// of the depth index from zero, then stored (C = sum), subtracted (C -= sum) or stored negated
-// (C = 0 - sum: the bits of C -= sum on a zeroed C, without reading C): a fixed order,
-// the same result on every call.
+// Register blocks: C's rows in kRowVectors vectors (then 2, the second one masked if the rows end
+// in it, then 1, then a masked one) x kColumns columns (one or two columns: 4 vectors), each
+// entry's products summed in the order of the depth index from zero, then stored (C = sum),
+// subtracted (C -= sum) or stored negated (C = 0 - sum: the bits of C -= sum on a zeroed C, without
+// reading C): a fixed order, the same result on every call.
 
 enum Mode { kStore, kSubtract, kNegate };
 
@@ -28,7 +29,8 @@ inline void block(long depth, const double* a, long lda, const double* b, long b
     const double* a_column = a + p * lda;
     Isa::V a_values[kRowVectors];
     for (int r = 0; r < kRowVectors; ++r)
-      a_values[r] = kMasked ? Isa::load(a_column + r * w, mask) : Isa::load(a_column + r * w);
+      a_values[r] = kMasked && r == kRowVectors - 1 ? Isa::load(a_column + r * w, mask)
+                                                    : Isa::load(a_column + r * w);
     const double* b_row = b + p * b_depth_stride;
     for (int j = 0; j < kColumnCount; ++j) {
       const Isa::V b_value = Isa::broadcast(b_row + j * b_column_stride);
@@ -38,7 +40,7 @@ inline void block(long depth, const double* a, long lda, const double* b, long b
   for (int j = 0; j < kColumnCount; ++j) {
     for (int r = 0; r < kRowVectors; ++r) {
       double* out = c + j * ldc + r * w;
-      if (kMasked) {
+      if (kMasked && r == kRowVectors - 1) {
         const Isa::V value = kMode == kSubtract ? Isa::subtract(Isa::load(out, mask), sums[r][j])
                              : kMode == kNegate ? Isa::subtract(Isa::zero(), sums[r][j])
                                                 : sums[r][j];
@@ -59,11 +61,21 @@ inline void column_block(long m, long row_begin, long depth, const double* a, lo
                          const double* b, long b_depth_stride, long b_column_stride, double* c,
                          long ldc) {
   constexpr long w = Isa::kWidth;
-  constexpr int rows = kColumnCount == 1 ? 4 : Isa::kRowVectors;  // vectors per block
+  constexpr int rows = kColumnCount <= 2 ? 4 : Isa::kRowVectors;  // vectors per block
   long i = row_begin;
   for (; i + rows * w <= m; i += rows * w)
     block<rows, kColumnCount, kMode, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
                                             c + i, ldc, Isa::Mask());
+  if constexpr (rows >= 2) {  // the last rows in blocks of two vectors, the second one masked
+    for (; i + 2 * w <= m; i += 2 * w)
+      block<2, kColumnCount, kMode, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                           c + i, ldc, Isa::Mask());
+    if (m - i > w) {
+      block<2, kColumnCount, kMode, true>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
+                                          c + i, ldc, Isa::mask(m - i - w));
+      return;
+    }
+  }
   for (; i + w <= m; i += w)
     block<1, kColumnCount, kMode, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
                                          c + i, ldc, Isa::Mask());
@@ -158,4 +170,35 @@ void transposed_products(long m, long n, const double* a, long lda, const double
   for (; j + 4 <= n; j += 4) transposed_block<4>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
   for (; j + 2 <= n; j += 2) transposed_block<2>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
   for (; j < n; ++j) transposed_block<1>(m, a + j * lda, lda, x0, x1, y0 + j, y1 + j, tail);
+}
+
+// Per column j: the dot product omega_j^T G_j in two vector sums (added, then summed across the
+// lanes), g_j = weight_j eta_c / (1 + nu dot), coefficient_j *= g_j, scaled_j = g_j G_j.
+void gains(long m, long n, const double* omega, long ldo, const double* gamma_omega, long ldg,
+           const double* weight, double eta_c, double nu, double* coefficient, double* scaled,
+           long lds) {
+  constexpr long w = Isa::kWidth;
+  const Isa::Mask tail = Isa::mask(m % w);
+  for (long j = 0; j < n; ++j) {
+    const double* o = omega + j * ldo;
+    const double* g = gamma_omega + j * ldg;
+    double* out = scaled + j * lds;
+    Isa::V sum0 = Isa::zero(), sum1 = Isa::zero();
+    long i = 0;
+    for (; i + 2 * w <= m; i += 2 * w) {
+      sum0 = Isa::fma(Isa::load(o + i), Isa::load(g + i), sum0);
+      sum1 = Isa::fma(Isa::load(o + i + w), Isa::load(g + i + w), sum1);
+    }
+    if (i + w <= m) {
+      sum0 = Isa::fma(Isa::load(o + i), Isa::load(g + i), sum0);
+      i += w;
+    }
+    if (i < m) sum1 = Isa::fma(Isa::load(o + i, tail), Isa::load(g + i, tail), sum1);
+    const double gain = weight[j] * eta_c / (1.0 + nu * Isa::sum(Isa::add(sum0, sum1)));
+    coefficient[j] *= gain;
+    const Isa::V gain_vector = Isa::broadcast(&gain);
+    for (i = 0; i + w <= m; i += w)
+      Isa::store(out + i, Isa::multiply(gain_vector, Isa::load(g + i)));
+    if (i < m) Isa::store(out + i, Isa::multiply(gain_vector, Isa::load(g + i, tail)), tail);
+  }
 }

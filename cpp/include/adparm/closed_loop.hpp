@@ -39,6 +39,7 @@
 #pragma once
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <limits>
 #include <optional>
 #include <string>
@@ -131,6 +132,9 @@ class ClosedLoop {
     // B_i^T (Wa - Wc)] of every point (nN x 2) and the actor's coefficients c_i (nN).
     Eigen::MatrixXd point_products;
     Eigen::VectorXd point_coefficients;
+    // The kernels' batched points (learn_from_points_batched): [Wa, Wa - Wc] (K x 2), R^-1 times
+    // point_products (n x 2N) and -u_hat_i (n x N).
+    Eigen::MatrixXd point_weights, point_projected, point_inputs;
     // With identification: beta_hat and the history stack, and the error system of the arm of
     // beta_hat (the believed model during the current step).
     typename IdentifierType::Data identifier;
@@ -232,6 +236,9 @@ class ClosedLoop {
     if (kBasisSize == Dynamic && extrapolation_.enabled()) {
       data.point_products.setZero(dof() * extrapolation_.size(), 2);
       data.point_coefficients.setZero(dof() * extrapolation_.size());
+      data.point_weights.setZero(basis_size(), 2);
+      data.point_projected.setZero(dof(), 2 * extrapolation_.size());
+      data.point_inputs.setZero(dof(), extrapolation_.size());
     }
     if constexpr (kIdentifies) {
       if (identifies_) {
@@ -576,6 +583,11 @@ class ClosedLoop {
     const double weight = 1.0 / static_cast<double>(extrapolation_.size());
     Evaluation e;
     if (kernels != nullptr) {
+      if (!cost_.bounded()) {
+        learn_from_points_batched(critic_weights, actor_weights, difference, gamma, critic_rate,
+                                  gamma_rate, actor_gradient, data);
+        return;
+      }
       for (long i = 0; i < extrapolation_.size(); ++i) {
         const double* input_gradient = stacked.data() + i * n * k;  // B_i
         double* times_actor_weights_data = data.point_products.col(0).data() + i * n;
@@ -607,6 +619,62 @@ class ClosedLoop {
           times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
     }
     actor_gradient.noalias() -= stacked * data.point_coefficients;  // (26), all points
+  }
+
+  // learn_from_stacked_points with the dense kernels and no input bound: the same shares, the
+  // products with B^T and R^-1 as one kernel call over all points:
+  //   [B_i^T Wa, B_i^T (Wa - Wc)] = [B_1 ... B_N]^T [Wa, Wa - Wc]         (one product, nN x 2)
+  //   R^-1 of both (n x 2N), -u_hat_i = 0.5 R^-1 B_i^T Wa                    (eq. 20)
+  // then point by point, B_i (K x n) in the first-level cache for both of its products:
+  //   omega_i = F_i - B_i (-u_hat_i), written straight into the critic's gathered block
+  //   Wc^T omega_i and ||omega_i||^2 (one pass over omega_i)
+  //   u_hat_i^T R u_hat_i = 0.5 (-u_hat_i)^T B_i^T Wa                      (R R^-1 = I)
+  //   eps_i = x_i^T Q x_i + u_hat_i^T R u_hat_i + Wc^T omega_i               (eq. 21)
+  //   gradient -= B_i c_i                                                    (eq. 26)
+  // Equal to the point-by-point path up to round-off (the sums associate differently).
+  template <class Gamma, class GammaRate>
+  void learn_from_points_batched(const Weights& critic_weights, const Weights& actor_weights,
+                                 const Weights& difference, const Gamma& gamma,
+                                 Weights& critic_rate, GammaRate& gamma_rate,
+                                 Weights& actor_gradient, Data& data) const {
+    typename Critic<Basis>::Workspace& block = data.critic;
+    const long points = extrapolation_.size();
+    const DenseKernels* kernels = critic_.kernels();
+    const Eigen::MatrixXd& stacked = extrapolation_.stacked_input_gradients();
+    const Eigen::MatrixXd& transposed = extrapolation_.stacked_transposed_input_gradients();
+    const Eigen::MatrixXd& drift_rates = extrapolation_.stacked_drift_rates();
+    const Eigen::VectorXd& state_costs = extrapolation_.stacked_state_costs();
+    const Eigen::Index n = dof(), k = stacked.rows(), columns = stacked.cols();
+    const double weight = 1.0 / static_cast<double>(points);
+    const double eta_a1 = actor_.settings().eta_a1;
+    data.point_weights.col(0) = actor_weights;
+    data.point_weights.col(1) = difference;
+    kernels->product(columns, 2, k, transposed.data(), columns, data.point_weights.data(), 1, k,
+                     data.point_products.data(), columns, false);
+    kernels->product(n, 2 * points, n, cost_.R_inverse().data(), n, data.point_products.data(), 1,
+                     n, data.point_projected.data(), n, false);
+    data.point_inputs = 0.5 * data.point_projected.leftCols(points);  // -u_hat_i
+    for (long i = 0; i < points; ++i) {  // B_i read once: omega_i, then the actor's B_i c_i
+      const double* input_gradient = stacked.data() + i * n * k;  // B_i
+      double* omega = block.omegas.col(block.gathered).data();
+      std::copy_n(drift_rates.col(i).data(), k, omega);
+      kernels->product(k, 1, n, input_gradient, k, data.point_inputs.col(i).data(), 1, n, omega, k,
+                       true);
+      double value = 0.0, norm = 0.0;  // Wc^T omega_i, ||omega_i||^2
+      kernels->transposed_products(k, 1, omega, k, critic_weights.data(), omega, &value, &norm);
+      const double input_cost =
+          0.5 * data.point_inputs.col(i).dot(data.point_products.col(0).segment(i * n, n));
+      const double error = state_costs[i] + input_cost + value;  // (21)
+      const double scale = weight * eta_a1 * error / std::sqrt(1.0 + norm);
+      double* coefficients = data.point_coefficients.data() + i * n;
+      for (Eigen::Index j = 0; j < n; ++j)
+        coefficients[j] = scale * data.point_projected(j, points + i);
+      kernels->product(k, 1, n, input_gradient, k, coefficients, 1, n, actor_gradient.data(), k,
+                       true);  // (26), point i
+      block.coefficients[block.gathered] = error;
+      block.weights[block.gathered] = weight;
+      critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
+    }
   }
 
   template <class Local>

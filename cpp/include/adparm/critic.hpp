@@ -127,6 +127,15 @@ class Critic {
     if (++w.gathered == kBlock) add_block(gamma, weight_rate, gamma_rate, w);
   }
 
+  // Dynamic sizes: gather() of a sample whose omega, eps and w the caller wrote straight into the
+  // block's next column (w.omegas, w.coefficients and w.weights at w.gathered).
+  template <class CovarianceIn, class CovarianceOut>
+  void gathered(const CovarianceIn& gamma, Vector& weight_rate, CovarianceOut&& gamma_rate,
+                Workspace& w) const {
+    static_assert(kSize == Dynamic, "gather/flush are for dynamic sizes; use add_rates");
+    if (++w.gathered == kBlock) add_block(gamma, weight_rate, gamma_rate, w);
+  }
+
   // Adds the gathered samples' shares (eqs. 23-24) to the rates, then empties the block:
   //   G = Gamma [omega_1 ... omega_s]                            (one product)
   //   g_i = w_i eta_c / (1 + nu omega_i^T G_i)
@@ -346,13 +355,10 @@ class Critic {
                         gamma_omegas.outerStride(), false);
     else
       gamma_omegas.noalias() = gamma * omegas;
-    for (Eigen::Index i = 0; i < s; ++i) {
-      const double gain = w.weights[i] * settings_.eta_c /
-                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
-      w.coefficients[i] *= gain;
-      scaled.col(i) = gain * gamma_omegas.col(i);
-    }
     if (kernels_ != nullptr) {  // the same products in the dispatched kernels
+      kernels_->gains(k, s, omegas.data(), omegas.outerStride(), gamma_omegas.data(),
+                      gamma_omegas.outerStride(), w.weights.data(), settings_.eta_c, settings_.nu,
+                      w.coefficients.data(), scaled.data(), scaled.outerStride());
       kernels_->product(k, 1, s, gamma_omegas.data(), gamma_omegas.outerStride(),
                         w.coefficients.data(), 1, s, weight_rate.data(), k, true);
       kernels_->rank_update(k, s, scaled.data(), scaled.outerStride(), gamma_omegas.data(),
@@ -361,6 +367,12 @@ class Critic {
       w.rate_unwritten = false;
       w.lower_only = w.lower_only || s > 1;
       return;
+    }
+    for (Eigen::Index i = 0; i < s; ++i) {
+      const double gain = w.weights[i] * settings_.eta_c /
+                          (1.0 + settings_.nu * omegas.col(i).dot(gamma_omegas.col(i)));
+      w.coefficients[i] *= gain;
+      scaled.col(i) = gain * gamma_omegas.col(i);
     }
     weight_rate.noalias() -= gamma_omegas * w.coefficients.head(s);
     if (s == 1) {  // an outer product, whole (no GEMM for one column; cheaper than a mirror)

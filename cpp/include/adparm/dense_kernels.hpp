@@ -5,6 +5,7 @@
 //   - rank_update: C (n x n) -= A (n x depth) B (n x depth)^T, the lower triangle (and entries
 //     up to a column block above it) or the whole matrix                  the rank-s dGamma
 //   - transposed_products: y0 = A^T x0, y1 = A^T x1 (one pass over A)      B^T Wa, B^T (Wa - Wc)
+//   - gains: the gathered samples' gains g_i and g_i Gamma omega_i           eqs. 23-24
 // All column-major on raw pointers: no Eigen or Pinocchio type crosses into the code built for
 // another instruction set (its inline functions would be merged with the portable build's at
 // link time). The portable path is no table at all (nullptr): the callers keep Eigen's products,
@@ -34,6 +35,12 @@ struct DenseKernels {
   // y0 = A^T x0, y1 = A^T x1 (A m x n).
   void (*transposed_products)(long m, long n, const double* a, long lda, const double* x0,
                               const double* x1, double* y0, double* y1);
+  // The critic's gains of n gathered samples (critic.hpp, eqs. 23-24): for each column j of
+  // omega and G = Gamma omega (m x n each), g_j = weight_j eta_c / (1 + nu omega_j^T G_j), then
+  // coefficient_j *= g_j and scaled_j = g_j G_j.
+  void (*gains)(long m, long n, const double* omega, long ldo, const double* gamma_omega, long ldg,
+                const double* weight, double eta_c, double nu, double* coefficient, double* scaled,
+                long lds);
 };
 
 // The kernels of ADPARM_KERNELS on this CPU (above); nullptr: the portable path. Throws

@@ -146,8 +146,14 @@ class Extrapolation {
         const Eigen::Index n = desired.q.size(), k = basis.size();
         if (settings_.mode != ExtrapolationMode::local && k * n * size() <= kMaxStacked) {
           stacked_input_gradients_.resize(k, n * size());
-          for (long i = 0; i < size(); ++i)
+          stacked_drift_rates_.resize(k, size());
+          stacked_state_costs_.resize(size());
+          for (long i = 0; i < size(); ++i) {
             stacked_input_gradients_.middleCols(i * n, n) = prepared_[i].input_gradient;
+            stacked_drift_rates_.col(i) = prepared_[i].drift_rate;
+            stacked_state_costs_[i] = prepared_[i].state_cost;
+          }
+          stacked_transposed_input_gradients_ = stacked_input_gradients_.transpose();
         }
       }
     }
@@ -158,6 +164,13 @@ class Extrapolation {
   // kMaxStacked coefficients), for ClosedLoop's stacked products.
   bool stacked() const { return prepared_valid_ && stacked_input_gradients_.size() > 0; }
   const Eigen::MatrixXd& stacked_input_gradients() const { return stacked_input_gradients_; }
+  // The same points' [B_1 ... B_N]^T (nN x K), [F_1 ... F_N] (K x N: each drift_rate) and
+  // [x_i^T Q x_i] (N), for ClosedLoop's batched products with the dense kernels.
+  const Eigen::MatrixXd& stacked_transposed_input_gradients() const {
+    return stacked_transposed_input_gradients_;
+  }
+  const Eigen::MatrixXd& stacked_drift_rates() const { return stacked_drift_rates_; }
+  const Eigen::VectorXd& stacked_state_costs() const { return stacked_state_costs_; }
   const Point& prepared(long i) const { return prepared_[i]; }
   static constexpr Eigen::Index kMaxStacked = Eigen::Index(1) << 22;  // 32 MB
 
@@ -200,7 +213,10 @@ class Extrapolation {
   bool prepared_valid_ = false;
   Points points_;
   std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
-  Eigen::MatrixXd stacked_input_gradients_;  // K x nN, [B_1 ... B_N] (stacked())
+  Eigen::MatrixXd stacked_input_gradients_;             // K x nN, [B_1 ... B_N] (stacked())
+  Eigen::MatrixXd stacked_transposed_input_gradients_;  // nN x K, its transpose
+  Eigen::MatrixXd stacked_drift_rates_;                 // K x N, [F_1 ... F_N]
+  Eigen::VectorXd stacked_state_costs_;                 // N, x_i^T Q x_i
 };
 
 }  // namespace adparm
