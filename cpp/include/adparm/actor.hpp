@@ -63,9 +63,7 @@ class Actor {
                     const Vector& difference, double weight, Vector& gradient) const {
     Input projected = R_inverse * (B.transpose() * difference);
     if (bound.bounded()) bound.scale_by_slope(u_hat, projected);
-    gradient.noalias() -=
-        (weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
-        (B * projected);
+    gradient.noalias() -= gradient_scale(hjb_error, omega.squaredNorm(), weight) * (B * projected);
   }
 
   // add_gradient's share as the coefficients c of B, gradient -= B c, given the product
@@ -77,8 +75,12 @@ class Actor {
                               const Vector& omega, double hjb_error, double weight) const {
     Input projected = R_inverse.lazyProduct(input_gradient_times_difference);  // no kernel call
     if (bound.bounded()) bound.scale_by_slope(u_hat, projected);
-    return (weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega.squaredNorm())) *
-           projected;
+    return gradient_scale(hjb_error, omega.squaredNorm(), weight) * projected;
+  }
+
+  // The scalar of eq. (26)'s share: w eta_a1 eps / sqrt(1 + omega^T omega).
+  double gradient_scale(double hjb_error, double omega_squared_norm, double weight) const {
+    return weight * settings_.eta_a1 * hjb_error / std::sqrt(1.0 + omega_squared_norm);
   }
 
   // eq. (26): dWa = proj{gradient - eta_a2 (Wa - Wc)}, difference = Wa - Wc.

@@ -646,7 +646,6 @@ class ClosedLoop {
     const Eigen::VectorXd& state_costs = extrapolation_.stacked_state_costs();
     const Eigen::Index n = dof(), k = stacked.rows(), columns = stacked.cols();
     const double weight = 1.0 / static_cast<double>(points);
-    const double eta_a1 = actor_.settings().eta_a1;
     data.point_weights.col(0) = actor_weights;
     data.point_weights.col(1) = difference;
     kernels->product(columns, 2, k, transposed.data(), columns, data.point_weights.data(), 1, k,
@@ -664,8 +663,8 @@ class ClosedLoop {
       kernels->transposed_products(k, 1, omega, k, critic_weights.data(), omega, &value, &norm);
       const double input_cost =
           0.5 * data.point_inputs.col(i).dot(data.point_products.col(0).segment(i * n, n));
-      const double error = state_costs[i] + input_cost + value;  // (21)
-      const double scale = weight * eta_a1 * error / std::sqrt(1.0 + norm);
+      const double error = state_costs[i] + input_cost + value;         // (21)
+      const double scale = actor_.gradient_scale(error, norm, weight);  // (26)
       double* coefficients = data.point_coefficients.data() + i * n;
       for (Eigen::Index j = 0; j < n; ++j)
         coefficients[j] = scale * data.point_projected(j, points + i);
