@@ -496,12 +496,18 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
   std::printf("bench=dense_kernels name=%s\n",
               adparm::dense_kernels_name(adparm::select_dense_kernels()));
   bool ok = true;
+  const char* only = std::getenv("ADPARM_BENCH_ONLY");  // e.g. "ur5:quadratic" (profiling one case)
+  const auto wanted = [&](const char* arm_name, const char* basis) {
+    return only == nullptr || std::string(only) == std::string(arm_name) + ":" + basis;
+  };
   for (const auto& [name, path] : arms) {
     const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),
                                    Eigen::VectorXd::Constant(1, 0.1));
     for (const long points : point_counts) {
-      ok = time_and_profile_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
-      ok = time_and_profile_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
+      if (wanted(name, "quadratic"))
+        ok = time_and_profile_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
+      if (wanted(name, "structured"))
+        ok = time_and_profile_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
     }
   }
   return ok;

@@ -12,6 +12,9 @@ struct Isa {
   static constexpr long kWidth = 8;
   static constexpr int kRowVectors = 2;
   static constexpr int kColumns = 6;  // 2 x 6 sums in 12 of the 32 registers
+  // Products of kColumns or more columns in panels of rows (dense_kernels_impl.hpp's
+  // blocked_product): measured 1.1-1.4x faster for K = 21..105, 51 samples.
+  static constexpr bool kRowPanels = true;
   static V zero() { return _mm512_setzero_pd(); }
   static V load(const double* p) { return _mm512_loadu_pd(p); }
   static V load(const double* p, Mask mask) { return _mm512_maskz_loadu_pd(mask, p); }
