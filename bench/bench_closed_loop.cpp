@@ -45,8 +45,9 @@
 //     passes (kinematics derivatives, PinocchioStructuredBasis::pinocchio_passes) at the same
 //     states (b; 0 for the quadratic basis), fastest of 3 each, divided by the loop's best step
 //     time x. Before them
-//   bench=dense_kernels name=avx512|avx2|portable
-//     the critic's dense kernels these loops run (dense_kernels.hpp; ADPARM_KERNELS chooses).
+//   bench=dense_kernels name=avx512|avx2|portable single_sample=avx512|avx2|portable
+//     the critic's dense kernels these loops run with points (name) and without (single_sample)
+//     (dense_kernels.hpp; ADPARM_KERNELS chooses).
 // ns_per_point_step = (ns_per_step(N) - ns_per_step(0)) / N, from the same invocation.
 // heap_allocations counts malloc calls during the timed loop (bench/heap_counter.hpp: glibc's
 // malloc interposed, or AddressSanitizer's allocation hook; -1 elsewhere).
@@ -493,8 +494,9 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
     std::printf("bench=urdf_loop arm=ur5 skipped=example-robot-data_not_found\n");
   else
     arms.emplace_back("ur5", robots + "/ur_description/urdf/ur5_robot.urdf");
-  std::printf("bench=dense_kernels name=%s\n",
-              adparm::dense_kernels_name(adparm::select_dense_kernels()));
+  std::printf("bench=dense_kernels name=%s single_sample=%s\n",
+              adparm::dense_kernels_name(adparm::select_dense_kernels(true)),
+              adparm::dense_kernels_name(adparm::select_dense_kernels(false)));
   bool ok = true;
   const char* only = std::getenv("ADPARM_BENCH_ONLY");  // e.g. "ur5:quadratic" (profiling one case)
   const auto wanted = [&](const char* arm_name, const char* basis) {

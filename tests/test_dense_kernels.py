@@ -7,11 +7,13 @@ portable, avx2, avx512), read when a loop is built, forces a choice.
   bits, of the loop before the kernels), an independent implementation of the same products: the
   same covariance resets at the same steps and the same recordings to round-off, on the planar
   3-link arm with both bases and extrapolation points (also with an input bound) and on the UR5
-  example (110 points: two gathered blocks). The kernels sum in another order and with fused
-  multiply-adds, so single products differ in the last bits, which the learning laws amplify (as
-  between the fixed and dynamic paths, test_dynamic_sizes.py).
+  example (110 points: two gathered blocks; and without points: the low-rank RK4 step). The
+  kernels sum in another order and with fused multiply-adds, so single products differ in the
+  last bits, which the learning laws amplify (as between the fixed and dynamic paths,
+  test_dynamic_sizes.py).
 - Each is deterministic: bit for bit the same run after run and on 1 or 2 threads.
-- A value the CPU cannot run or that is not known is refused, naming the variable."""
+- A value the CPU cannot run or that is not known is refused, naming the variable.
+- auto chooses AVX-512 for loops with points, AVX2 first for one sample per evaluation."""
 
 from __future__ import annotations
 
@@ -60,6 +62,11 @@ CONFIGS = {
     # an input bound: the points' bounded policy and its slopes in the actor's gradient
     "planar_bounded": lambda: _planar("quadratic").updated({"cost": {"input_bound": [4.0] * 3}}),
     "ur5": lambda: adparm.load_config("examples/ur5.toml").updated({"sim": {"T": 0.2}}),
+    # no points, 55 functions: one sample per evaluation, the low-rank RK4 step (its end in the
+    # kernels) and the trajectory's products with B
+    "ur5_no_points": lambda: adparm.load_config("examples/ur5.toml").updated(
+        {"extrapolation": {"points": 0}, "sim": {"T": 0.2}}
+    ),
 }
 
 
@@ -132,13 +139,23 @@ def test_a_kernel_set_the_cpu_cannot_run_is_refused(monkeypatch) -> None:
 
 
 def test_auto_is_the_default(configs, monkeypatch) -> None:
-    best = AVAILABLE[-1] if AVAILABLE else "portable"
-    _, automatic = run(configs["planar_structured"], "auto", monkeypatch)
-    monkeypatch.delenv("ADPARM_KERNELS")
-    simulation = _core.Simulation(core_settings(configs["planar_structured"]))
-    simulation.advance(10**9)
-    _, chosen = run(configs["planar_structured"], best, monkeypatch)
-    np.testing.assert_array_equal(
-        simulation.recording()["critic_weights"], chosen["critic_weights"]
-    )
-    np.testing.assert_array_equal(automatic["critic_weights"], chosen["critic_weights"])
+    """auto: AVX-512 (if the CPU has it) for a loop with extrapolation points, AVX2 first for one
+    sample per evaluation (dense_kernels.hpp), else the other set, else portable."""
+    blocks = AVAILABLE[-1] if AVAILABLE else "portable"
+    single = AVAILABLE[0] if AVAILABLE else "portable"
+    for case, best in (("planar_structured", blocks), ("ur5_no_points", single)):
+        _, automatic = run(configs[case], "auto", monkeypatch)
+        monkeypatch.delenv("ADPARM_KERNELS")
+        simulation = _core.Simulation(core_settings(configs[case]))
+        simulation.advance(10**9)
+        _, chosen = run(configs[case], best, monkeypatch)
+        np.testing.assert_array_equal(
+            simulation.recording()["critic_weights"], chosen["critic_weights"], err_msg=case
+        )
+        np.testing.assert_array_equal(
+            automatic["critic_weights"], chosen["critic_weights"], err_msg=case
+        )
+        if len(AVAILABLE) == 2:  # the other set gives other bits: the choice is observable
+            other = AVAILABLE[1] if best == AVAILABLE[0] else AVAILABLE[0]
+            _, different = run(configs[case], other, monkeypatch)
+            assert not np.array_equal(different["critic_weights"], chosen["critic_weights"]), case

@@ -54,11 +54,11 @@ const DenseKernels* avx512() {
 
 }  // namespace
 
-const DenseKernels* select_dense_kernels() {
+const DenseKernels* select_dense_kernels(bool blocks) {
   const char* variable = std::getenv("ADPARM_KERNELS");
   const std::string requested = variable == nullptr ? "" : variable;
-  if (requested.empty() || requested == "auto") {
-    if (has_avx512()) return avx512();
+  if (requested.empty() || requested == "auto") {  // dense_kernels.hpp: which set for which work
+    if (blocks && has_avx512()) return avx512();
     if (has_avx2()) return avx2();
     return nullptr;
   }

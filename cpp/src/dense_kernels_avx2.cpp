@@ -37,7 +37,8 @@ struct Isa {
 
 #include "dense_kernels_impl.hpp"
 
-const adparm::DenseKernels kKernels{"avx2", product, rank_update, transposed_products, gains};
+const adparm::DenseKernels kKernels{"avx2", product,        rank_update, transposed_products,
+                                    gains,  low_rank_update};
 
 }  // namespace
 

@@ -32,7 +32,8 @@ struct Isa {
 
 #include "dense_kernels_impl.hpp"
 
-const adparm::DenseKernels kKernels{"avx512", product, rank_update, transposed_products, gains};
+const adparm::DenseKernels kKernels{"avx512", product,        rank_update, transposed_products,
+                                    gains,    low_rank_update};
 
 }  // namespace
 

@@ -61,7 +61,7 @@ inline void column_block(long m, long row_begin, long depth, const double* a, lo
                          const double* b, long b_depth_stride, long b_column_stride, double* c,
                          long ldc) {
   constexpr long w = Isa::kWidth;
-  constexpr int rows = kColumnCount <= 2 ? 4 : Isa::kRowVectors;  // vectors per block
+  constexpr int rows = kColumnCount == 1 ? 8 : kColumnCount == 2 ? 4 : Isa::kRowVectors;
   long i = row_begin;
   for (; i + rows * w <= m; i += rows * w)
     block<rows, kColumnCount, kMode, false>(depth, a + i, lda, b, b_depth_stride, b_column_stride,
@@ -268,4 +268,45 @@ void gains(long m, long n, const double* omega, long ldo, const double* gamma_om
       Isa::store(out + i, Isa::multiply(gain_vector, Isa::load(g + i)));
     if (i < m) Isa::store(out + i, Isa::multiply(gain_vector, Isa::load(g + i, tail)), tail);
   }
+}
+
+// Gamma_next = Gamma - D, D = sum_s c_s u_s u_s^T over the four columns u_s of u (n x 4, leading
+// dimension ldu), column by column: d_j = sum_s (c_s u_s[j]) u_s in that order, the first term a
+// product, the others fused multiply-adds; next may be gamma itself. Returns ||D||_F^2 over every
+// entry, in two interleaved vector sums.
+double low_rank_update(long n, const double* u, long ldu, const double* c, const double* gamma,
+                       long ldg, double* next, long ldn) {
+  constexpr long w = Isa::kWidth;
+  const Isa::Mask tail = Isa::mask(n % w);
+  const double* u0 = u;
+  const double* u1 = u + ldu;
+  const double* u2 = u + 2 * ldu;
+  const double* u3 = u + 3 * ldu;
+  Isa::V squares[2] = {Isa::zero(), Isa::zero()};
+  for (long j = 0; j < n; ++j) {
+    const double a0 = c[0] * u0[j], a1 = c[1] * u1[j], a2 = c[2] * u2[j], a3 = c[3] * u3[j];
+    const Isa::V b0 = Isa::broadcast(&a0), b1 = Isa::broadcast(&a1);
+    const Isa::V b2 = Isa::broadcast(&a2), b3 = Isa::broadcast(&a3);
+    const double* g = gamma + j * ldg;
+    double* out = next + j * ldn;
+    long i = 0;
+    int parity = 0;
+    for (; i + w <= n; i += w, parity ^= 1) {
+      Isa::V d = Isa::multiply(b0, Isa::load(u0 + i));
+      d = Isa::fma(b1, Isa::load(u1 + i), d);
+      d = Isa::fma(b2, Isa::load(u2 + i), d);
+      d = Isa::fma(b3, Isa::load(u3 + i), d);
+      Isa::store(out + i, Isa::subtract(Isa::load(g + i), d));
+      squares[parity] = Isa::fma(d, d, squares[parity]);
+    }
+    if (i < n) {  // the last rows, masked (zero-filled lanes add nothing)
+      Isa::V d = Isa::multiply(b0, Isa::load(u0 + i, tail));
+      d = Isa::fma(b1, Isa::load(u1 + i, tail), d);
+      d = Isa::fma(b2, Isa::load(u2 + i, tail), d);
+      d = Isa::fma(b3, Isa::load(u3 + i, tail), d);
+      Isa::store(out + i, Isa::subtract(Isa::load(g + i, tail), d), tail);
+      squares[parity] = Isa::fma(d, d, squares[parity]);
+    }
+  }
+  return Isa::sum(Isa::add(squares[0], squares[1]));
 }

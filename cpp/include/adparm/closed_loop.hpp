@@ -175,7 +175,7 @@ class ClosedLoop {
         basis_size_(basis.size()),
         error_system_(model, checked_alpha1(settings, dof_)),
         cost_(settings.Q, settings.R, dof_, settings.input_bound, settings.e2_cost),
-        critic_(settings.critic, basis_size_),
+        critic_(settings.critic, basis_size_, settings.extrapolation.points > 0),
         actor_(settings.actor),
         controller_(settings.controller, dof_),
         trajectory_(settings.task.qd, dof_),
@@ -359,9 +359,24 @@ class ClosedLoop {
 
     Point point;
     prepare_hjb_point<Basis, kDof>(basis_, x, desired, system.drift(x, model_terms), model_terms,
-                                   cost_, point, data.basis);
+                                   cost_, point, data.basis, critic_.kernels());
     Evaluation hjb;
-    evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
+    // With the dispatched kernels (dynamic sizes): B^T [Wa, Wa - Wc] in one pass over B, then
+    // eqs. (20)-(21) from B^T Wa and the actor's share (26) from B^T (Wa - Wc), as for the points.
+    const DenseKernels* kernels = kBasisSize == Dynamic ? critic_.kernels() : nullptr;
+    Joint times_difference;
+    if (kernels != nullptr) {
+      const Weights difference = actor_weights - critic_weights;
+      Joint times_actor_weights(n);
+      times_difference.resize(n);
+      kernels->transposed_products(k, n, point.input_gradient.data(), k, actor_weights.data(),
+                                   difference.data(), times_actor_weights.data(),
+                                   times_difference.data());
+      evaluate_hjb_from_product(point, cost_, critic_weights, times_actor_weights, hjb, kernels,
+                                point.input_gradient.data());
+    } else {
+      evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
+    }
 
     Weights critic_rate = Weights::Zero(k);
     CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
@@ -377,7 +392,8 @@ class ClosedLoop {
       const ConstCovarianceMap gamma = covariance(state);
       const Weights difference = actor_weights - critic_weights;
       Weights actor_gradient = Weights::Zero(k);
-      const auto learn = [&](const Point& p, const Evaluation& e, double weight) {
+      const auto learn = [&](const Point& p, const Evaluation& e, double weight,
+                             const Joint* product = nullptr) {  // B^T (Wa - Wc), kernels
         if constexpr (kBasisSize == Dynamic) {  // (23)-(24), gathered in blocks (critic.hpp)
           if (low_rank)
             low_rank_stage(e.omega, e.error, weight, critic_rate, data);
@@ -388,10 +404,17 @@ class ClosedLoop {
         } else {
           critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         }
-        actor_.add_gradient(p.input_gradient, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega,
-                            e.error, difference, weight, actor_gradient);  // (26)
+        if (product != nullptr) {  // (26): gradient -= B c in the kernels
+          const Joint coefficients = actor_.gradient_coefficients(
+              *product, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
+          kernels->product(k, 1, n, p.input_gradient.data(), k, coefficients.data(), 1, n,
+                           actor_gradient.data(), k, true);
+        } else {
+          actor_.add_gradient(p.input_gradient, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega,
+                              e.error, difference, weight, actor_gradient);  // (26)
+        }
       };
-      learn(point, hjb, 1.0);
+      learn(point, hjb, 1.0, kernels != nullptr ? &times_difference : nullptr);
       bool stacked = false;
       if constexpr (kBasisSize == Dynamic) {
         stacked = gathers_ && extrapolation_.stacked();

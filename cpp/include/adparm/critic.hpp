@@ -67,11 +67,12 @@ class Critic {
   };
 
   Critic() = default;
-  // `size`: the basis size K (== kSize when it is fixed).
+  // `size`: the basis size K (== kSize when it is fixed); `blocks`: whether an evaluation gathers
+  // more than one sample (extrapolation points).
   // The dense kernels are chosen here, once (ADPARM_KERNELS, dense_kernels.hpp; checked for
   // every loop, used by the dynamic sizes' gather/flush).
-  Critic(const CriticSettings& settings, Eigen::Index size)
-      : settings_(settings), size_(size), kernels_(select_dense_kernels()) {
+  Critic(const CriticSettings& settings, Eigen::Index size, bool blocks = true)
+      : settings_(settings), size_(size), kernels_(select_dense_kernels(blocks)) {
     if constexpr (kSize != Dynamic) kernels_ = nullptr;  // add_rates: no kernels
     check_non_negative(settings.eta_c, "critic.eta_c");
     check_non_negative(settings.nu, "critic.nu");
@@ -308,10 +309,18 @@ class Critic {
   // needs_reset(previous, gamma, w)) for the covariance test's next call. (The stored
   // Gamma_next differs from Gamma - D by the subtraction's round-off, about 1e-16 gamma0 per
   // entry and step: far inside the bound's tolerance, 1e-12 K^2 gamma0.)
+  // With the dispatched kernels (dense_kernels.hpp) the same pass runs in them, and the norm is
+  // that of every entry of D (the symmetric D's, up to round-off).
   template <class CovarianceIn, class Vectors, class CovarianceOut>
   void low_rank_update(const CovarianceIn& gamma, const Vectors& u, const Eigen::Vector4d& c,
                        CovarianceOut&& gamma_next, Workspace& w) const {
     const Eigen::Index n = gamma.rows();
+    if (kernels_ != nullptr) {
+      w.step_change = std::sqrt(kernels_->low_rank_update(
+          n, u.data(), u.outerStride(), c.data(), gamma.data(), gamma.outerStride(),
+          gamma_next.data(), gamma_next.outerStride()));
+      return;
+    }
     Vector& d = w.change_column;
     double change = 0.0;
     for (Eigen::Index j = 0; j < n; ++j) {

@@ -6,13 +6,19 @@
 //     up to a column block above it) or the whole matrix                  the rank-s dGamma
 //   - transposed_products: y0 = A^T x0, y1 = A^T x1 (one pass over A)      B^T Wa, B^T (Wa - Wc)
 //   - gains: the gathered samples' gains g_i and g_i Gamma omega_i           eqs. 23-24
+//   - low_rank_update: Gamma - sum of four rank-one terms, and their norm    RK4 without points
 // All column-major on raw pointers: no Eigen or Pinocchio type crosses into the code built for
 // another instruction set (its inline functions would be merged with the portable build's at
 // link time). The portable path is no table at all (nullptr): the callers keep Eigen's products,
 // the same code and the same bits as before the kernels.
 // The choice (select_dense_kernels): the environment variable ADPARM_KERNELS, read when a loop is
-// built: "auto" or unset (AVX-512 if the CPU has AVX-512F, else AVX2 if it has AVX2 and FMA, else
-// portable), "portable", "avx2" or "avx512" (an error if the CPU lacks it).
+// built: "auto" or unset (below), "portable", "avx2" or "avx512" (an error if the CPU lacks it).
+// auto: for a loop whose critic gathers blocks of samples (extrapolation points: K x K x s
+// products) AVX-512 if the CPU has AVX-512F; for one sample per evaluation (rank-one products)
+// AVX2 first: on an AVX-512 CPU (Sapphire Rapids) every such bench case ran faster with the AVX2
+// set (3-link and UR5, quadratic and structured basis: 4-7 %), the 512-bit instructions' cost to
+// the clock and to the surrounding code outweighing their few short products. Then the other
+// set, else portable.
 // The kernels sum each entry's products in a fixed order with fused multiply-adds: the same
 // result on any thread count and run after run on one kernel set, and within round-off (not bit
 // for bit) of the portable path and of the other kernel set.
@@ -41,11 +47,17 @@ struct DenseKernels {
   void (*gains)(long m, long n, const double* omega, long ldo, const double* gamma_omega, long ldg,
                 const double* weight, double eta_c, double nu, double* coefficient, double* scaled,
                 long lds);
+  // The low-rank RK4 step's end (critic.hpp, Critic::low_rank_update): next = gamma - D (n x n,
+  // next may be gamma), D = sum_s c_s u_s u_s^T over the four columns of u (n x 4); returns
+  // ||D||_F^2.
+  double (*low_rank_update)(long n, const double* u, long ldu, const double* c, const double* gamma,
+                            long ldg, double* next, long ldn);
 };
 
-// The kernels of ADPARM_KERNELS on this CPU (above); nullptr: the portable path. Throws
-// std::invalid_argument for an unknown value or a kernel set this CPU cannot run.
-const DenseKernels* select_dense_kernels();
+// The kernels of ADPARM_KERNELS on this CPU for a loop that gathers blocks of samples or not
+// (`blocks`; auto, above); nullptr: the portable path. Throws std::invalid_argument for an unknown
+// value or a kernel set this CPU cannot run.
+const DenseKernels* select_dense_kernels(bool blocks = true);
 
 // The name of a choice: "portable" for nullptr.
 inline const char* dense_kernels_name(const DenseKernels* kernels) {

@@ -39,16 +39,33 @@ struct HjbEvaluation {
 
 // The weight-free part at x, given the desired state, the drift f(x) and the model terms at the
 // matching joint state (their M^-1 gives g(x) = [0; M^-1]; the basis may use them too), with the
-// basis' workspace (basis.hpp; the caller's).
+// basis' workspace (basis.hpp; the caller's). With `kernels` (dense_kernels.hpp; dynamic sizes)
+// the two products with the basis' Jacobian J (K x 2n) run in them:
+//   drift_rate += J f as drift_rate -= J (-f) (the same sum, negated),  B = J_e2 M^-1.
 template <class Basis, int Dof, class Terms>
 void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
                        const DesiredStateT<Dof>& desired, const ErrorVector<Dof>& drift,
                        const Terms& terms, const QuadraticCostT<Dof>& cost,
-                       HjbPoint<Basis, Dof>& point, BasisWorkspace<Basis>& workspace) {
+                       HjbPoint<Basis, Dof>& point, BasisWorkspace<Basis>& workspace,
+                       const DenseKernels* kernels = nullptr) {
   const Eigen::Index n = desired.q.size();
   typename Basis::Vector phi;
   typename Basis::Jacobian jacobian;
   evaluate_basis(basis, x, desired, terms, phi, jacobian, point.drift_rate, workspace);
+  if constexpr (Dof == Dynamic) {
+    if (kernels != nullptr) {
+      const Eigen::Index k = jacobian.rows(), stride = jacobian.outerStride();
+      const ErrorVector<Dof> negative_drift = -drift;
+      kernels->product(k, 1, 2 * n, jacobian.data(), stride, negative_drift.data(), 1, 2 * n,
+                       point.drift_rate.data(), k, true);
+      point.input_gradient.resize(k, n);
+      kernels->product(k, n, n, jacobian.data() + n * stride, stride, terms.mass_inverse.data(), 1,
+                       terms.mass_inverse.outerStride(), point.input_gradient.data(),
+                       point.input_gradient.outerStride(), false);
+      point.state_cost = cost.state_cost(x);
+      return;
+    }
+  }
   point.drift_rate.noalias() += jacobian * drift;
   if constexpr (Dof == Dynamic)  // coefficient-based: no GEMM (its blocking may allocate)
     point.input_gradient.noalias() =
@@ -87,7 +104,7 @@ void evaluate_hjb_from_product(const HjbPoint<Basis, Dof>& point, const Quadrati
                                const DenseKernels* kernels = nullptr,
                                const double* input_gradient = nullptr) {
   out.u_hat = -0.5 * cost.R_inverse().lazyProduct(input_gradient_times_actor_weights);  // eq. (20)
-  const double input_cost =
+  out.input_cost =
       cost.bounded() ? cost.bound().bound_policy(out.u_hat) : cost.input_cost(out.u_hat);
   out.omega = point.drift_rate;
   if (kernels != nullptr) {  // omega += B u_hat as omega -= B (-u_hat): the same sum, negated
@@ -98,7 +115,7 @@ void evaluate_hjb_from_product(const HjbPoint<Basis, Dof>& point, const Quadrati
   } else {
     out.omega.noalias() += point.input_gradient * out.u_hat;
   }
-  out.error = point.state_cost + input_cost + critic_weights.dot(out.omega);
+  out.error = point.state_cost + out.input_cost + critic_weights.dot(out.omega);
 }
 
 // The weight-free part at an error state x with the desired state `desired` (q, dq recovered from
