@@ -529,12 +529,29 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   // M^-1 from the Cholesky factor of M (M = L L^T, n^3 / 3 multiply-adds for the inverse: cheaper
   // than the articulated-body algorithm's pass over the bodies), its lower triangle mirrored. An M
   // that is not positive definite in floating point falls back to pinocchio::computeMinverse.
+  // The inverse as LAPACK's potri forms it, in plain loops (a call of Eigen's triangular solver
+  // per evaluation cost more than the n^3 / 3 multiply-adds of a 3- or 6-joint arm):
+  // L^-1 by forward substitution, then the lower triangle of M^-1 = L^-T L^-1, mirrored.
   w.mass_factor.compute(terms.mass);
   if (w.mass_factor.info() == Eigen::Success) {
-    terms.mass_inverse.setIdentity();
-    w.mass_factor.solveInPlace(terms.mass_inverse);
-    for (Eigen::Index j = 1; j < dof_; ++j)
-      terms.mass_inverse.col(j).head(j) = terms.mass_inverse.row(j).head(j).transpose();
+    const Eigen::MatrixXd& L = w.mass_factor.matrixLLT();  // lower triangle: L
+    Eigen::MatrixXd& X = w.inverse_factor;                 // lower triangle: L^-1
+    const Eigen::Index n = dof_;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      X(j, j) = 1.0 / L(j, j);
+      for (Eigen::Index i = j + 1; i < n; ++i) {
+        double sum = L(i, j) * X(j, j);
+        for (Eigen::Index l = j + 1; l < i; ++l) sum += L(i, l) * X(l, j);
+        X(i, j) = -sum / L(i, i);
+      }
+    }
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index i = j; i < n; ++i) {
+        double sum = X(i, i) * X(i, j);
+        for (Eigen::Index l = i + 1; l < n; ++l) sum += X(l, i) * X(l, j);
+        terms.mass_inverse(i, j) = sum;
+        terms.mass_inverse(j, i) = sum;
+      }
   } else {
     pinocchio::computeMinverse(model, data, w.configuration);
     terms.mass_inverse = data.Minv.selfadjointView<Eigen::Upper>();

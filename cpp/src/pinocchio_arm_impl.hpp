@@ -55,6 +55,7 @@ struct PinocchioArm::WorkspaceData {
   Eigen::VectorXd zero_velocity;
   Eigen::VectorXd unit_acceleration;
   Eigen::LLT<Eigen::MatrixXd> mass_factor;  // of M, for M^-1 (sized once)
+  Eigen::MatrixXd inverse_factor;           // L^-1 of mass_factor's L (lower triangle)
 
   explicit WorkspaceData(const pinocchio::Model& model)
       : data(model),
@@ -62,7 +63,8 @@ struct PinocchioArm::WorkspaceData {
         velocity(Eigen::VectorXd::Zero(model.nv)),
         zero_velocity(Eigen::VectorXd::Zero(model.nv)),
         unit_acceleration(Eigen::VectorXd::Zero(model.nv)),
-        mass_factor(model.nv) {}
+        mass_factor(model.nv),
+        inverse_factor(Eigen::MatrixXd::Zero(model.nv, model.nv)) {}
 };
 
 // SplitMix64: a fixed generator, so that the sampled poses (and the base parameters) are the same
