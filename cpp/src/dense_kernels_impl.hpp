@@ -139,9 +139,9 @@ template <int kPanel, bool kMasked, Mode kMode>
 // C (m x n) = or -= A (m x depth) B (depth x n); lower: the entries on and below the diagonal
 // (and others of the column blocks that reach it). Every entry's products are summed in the same
 // order whatever the blocks, so the block shapes and their order change no bit of C.
-//   - n >= kColumns: panels of rows outermost (row_panel: A's panel stays in the first-level
-//     cache; Gamma Omega at K = 78, s = 51: 11.4 -> 8.5 us, the rank-s update 5.9 -> 5.3 us),
-//   - fewer columns (matrix-vector products): each column block down all rows, 4 vectors a block.
+//   - n >= kColumns and Isa::kRowPanels: panels of rows outermost (row_panel: A's panel stays in
+//     the first-level cache; docs/design.md, "Panels of rows, kernels by the work"),
+//   - else column blocks down all rows (column_block: one column 8 vectors a block, two 4).
 template <Mode kMode>
 void blocked_product(long m, long n, long depth, const double* a, long lda, const double* b,
                      long b_depth_stride, long b_column_stride, double* c, long ldc, bool lower) {
@@ -158,15 +158,11 @@ void blocked_product(long m, long n, long depth, const double* a, long lda, cons
   }
   constexpr long w = Isa::kWidth;
   constexpr int panel = Isa::kRowVectors;
+  static_assert(panel == 2, "the last rows below take one panel of two vectors at most");
   long i = 0;
   for (; i + panel * w <= m; i += panel * w)
     row_panel<panel, false, kMode>(i, panel * w, n, depth, a, lda, b, b_depth_stride,
                                    b_column_stride, c, ldc, lower, Isa::Mask());
-  if constexpr (panel > 2) {
-    for (; i + 2 * w <= m; i += 2 * w)
-      row_panel<2, false, kMode>(i, 2 * w, n, depth, a, lda, b, b_depth_stride, b_column_stride, c,
-                                 ldc, lower, Isa::Mask());
-  }
   if (m - i > w) {  // the last rows in a panel of two vectors, the second one masked
     row_panel<2, true, kMode>(i, m - i, n, depth, a, lda, b, b_depth_stride, b_column_stride, c,
                               ldc, lower, Isa::mask(m - i - w));

@@ -364,9 +364,9 @@ class ClosedLoop {
     // With the dispatched kernels (dynamic sizes): B^T [Wa, Wa - Wc] in one pass over B, then
     // eqs. (20)-(21) from B^T Wa and the actor's share (26) from B^T (Wa - Wc), as for the points.
     const DenseKernels* kernels = kBasisSize == Dynamic ? critic_.kernels() : nullptr;
+    const Weights difference = actor_weights - critic_weights;
     Joint times_difference;
     if (kernels != nullptr) {
-      const Weights difference = actor_weights - critic_weights;
       Joint times_actor_weights(n);
       times_difference.resize(n);
       kernels->transposed_products(k, n, point.input_gradient.data(), k, actor_weights.data(),
@@ -390,7 +390,6 @@ class ClosedLoop {
       gamma_rate.setZero();
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
-      const Weights difference = actor_weights - critic_weights;
       Weights actor_gradient = Weights::Zero(k);
       const auto learn = [&](const Point& p, const Evaluation& e, double weight,
                              const Joint* product = nullptr) {  // B^T (Wa - Wc), kernels

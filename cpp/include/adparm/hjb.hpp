@@ -52,6 +52,7 @@ void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
   typename Basis::Vector phi;
   typename Basis::Jacobian jacobian;
   evaluate_basis(basis, x, desired, terms, phi, jacobian, point.drift_rate, workspace);
+  point.state_cost = cost.state_cost(x);
   if constexpr (Dof == Dynamic) {
     if (kernels != nullptr) {
       const Eigen::Index k = jacobian.rows(), stride = jacobian.outerStride();
@@ -62,7 +63,6 @@ void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
       kernels->product(k, n, n, jacobian.data() + n * stride, stride, terms.mass_inverse.data(), 1,
                        terms.mass_inverse.outerStride(), point.input_gradient.data(),
                        point.input_gradient.outerStride(), false);
-      point.state_cost = cost.state_cost(x);
       return;
     }
   }
@@ -72,7 +72,6 @@ void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
         jacobian.template rightCols<Dof>(n).lazyProduct(terms.mass_inverse);
   else
     point.input_gradient.noalias() = jacobian.template rightCols<Dof>() * terms.mass_inverse;
-  point.state_cost = cost.state_cost(x);
 }
 
 // eqs. (20)-(21) at a prepared point.
