@@ -42,9 +42,9 @@
 //     case records (q, dq) of every arm compute() of its steps (c per RK4 step: one per stage;
 //     a recorded row reuses the next step's first stage), then PinocchioArm::compute (M, C, G,
 //     M^-1, F) is timed over those states alone (a), and for the structured basis its Pinocchio
-//     passes (kinematics derivatives, PinocchioStructuredBasis::pinocchio_passes) at the same
-//     states (b; 0 for the quadratic basis), fastest of 3 each, divided by the loop's best step
-//     time x. Before them
+//     pass (computeJointJacobiansTimeVariation, PinocchioStructuredBasis::pinocchio_passes) at the
+//     same states (b; 0 for the quadratic basis), fastest of 3 each, divided by the loop's best
+//     step time x. Before them
 //   bench=dense_kernels name=avx512|avx2|portable single_sample=avx512|avx2|portable
 //     the critic's dense kernels these loops run with points (name) and without (single_sample)
 //     (dense_kernels.hpp; ADPARM_KERNELS chooses).
@@ -498,17 +498,20 @@ bool run_urdf_loops(double horizon, const std::vector<long>& point_counts, int r
               adparm::dense_kernels_name(adparm::select_dense_kernels(true)),
               adparm::dense_kernels_name(adparm::select_dense_kernels(false)));
   bool ok = true;
-  const char* only = std::getenv("ADPARM_BENCH_ONLY");  // e.g. "ur5:quadratic" (profiling one case)
-  const auto wanted = [&](const char* arm_name, const char* basis) {
-    return only == nullptr || std::string(only) == std::string(arm_name) + ":" + basis;
+  // e.g. "ur5:quadratic" (both point counts) or "ur5:quadratic:0" (one case, for profiling)
+  const char* only = std::getenv("ADPARM_BENCH_ONLY");
+  const auto wanted = [&](const char* arm_name, const char* basis, long points) {
+    if (only == nullptr) return true;
+    const std::string name = std::string(arm_name) + ":" + basis;
+    return only == name || only == name + ":" + std::to_string(points);
   };
   for (const auto& [name, path] : arms) {
     const adparm::PinocchioArm arm(path, Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),
                                    Eigen::VectorXd::Constant(1, 0.1));
     for (const long points : point_counts) {
-      if (wanted(name, "quadratic"))
+      if (wanted(name, "quadratic", points))
         ok = time_and_profile_urdf_loop<QuadraticCase>(name, arm, points, horizon, repeats) && ok;
-      if (wanted(name, "structured"))
+      if (wanted(name, "structured", points))
         ok = time_and_profile_urdf_loop<StructuredCase>(name, arm, points, horizon, repeats) && ok;
     }
   }

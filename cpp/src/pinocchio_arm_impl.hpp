@@ -132,4 +132,22 @@ inline Eigen::Matrix<double, 1, 6> energy_gradient(int k, const Eigen::Vector3d&
   return g;
 }
 
+// A covector g of a body's local spatial velocity ([linear, angular], a force in the body frame)
+// in the world frame, oMi.act(g): g . oMi^-1 m = oMi.act(g) . m for any motion m in the world
+// frame. Its use: the LOCAL velocity derivatives of a body are oMi^-1 J_j (d/dv_j) and
+// oMi^-1 (ov_parent(j) x J_j) = oMi^-1 dJ_j (d/dq_j; a one-coordinate joint's J_j x J_j = 0) for
+// each supporting joint j (Pinocchio's getJointVelocityDerivatives), so g times them is
+// world_covector(oMi, g) . J_j and . dJ_j with J, dJ of computeJointJacobiansTimeVariation: one
+// transform per covector instead of two per supporting joint.
+inline Eigen::Matrix<double, 1, 6> world_covector(const pinocchio::SE3& placement,
+                                                  const Eigen::Matrix<double, 1, 6>& g) {
+  const Eigen::Vector3d linear = placement.rotation() * g.head<3>().transpose();
+  Eigen::Matrix<double, 1, 6> world;
+  world.head<3>() = linear.transpose();
+  world.tail<3>() =
+      (placement.rotation() * g.tail<3>().transpose() + placement.translation().cross(linear))
+          .transpose();
+  return world;
+}
+
 }  // namespace adparm

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
-#include <pinocchio/algorithm/kinematics-derivatives.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -128,18 +128,15 @@ struct PinocchioStructuredBasis::Impl {
 // The work space of one evaluation.
 struct PinocchioStructuredBasis::WorkspaceData {
   PinocchioArm::WorkspaceData arm;  // pinocchio::Data, configuration and velocity
-  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6> gradients;
-  Eigen::VectorXd position;      // q = qd - e1
-  Eigen::VectorXd acceleration;  // zero (computeForwardKinematicsDerivatives needs one)
-  pinocchio::Data::Matrix6x dv_dq, dv_dv;
+  // one body's rows: the gradients of 2 T_b in its local velocity, and the same in the world frame
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6> gradients, world_gradients;
+  Eigen::VectorXd position;  // q = qd - e1
 
   WorkspaceData(const pinocchio::Model& model, Eigen::Index n)
       : arm(model),
         gradients(Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, 10, 6>::Zero(10, 6)),
-        position(Eigen::VectorXd::Zero(n)),
-        acceleration(Eigen::VectorXd::Zero(n)),
-        dv_dq(pinocchio::Data::Matrix6x::Zero(6, n)),
-        dv_dv(pinocchio::Data::Matrix6x::Zero(6, n)) {}
+        world_gradients(gradients),
+        position(Eigen::VectorXd::Zero(n)) {}
 };
 
 void PinocchioStructuredBasis::WorkspaceDeleter::operator()(WorkspaceData* workspace) const {
@@ -285,29 +282,39 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
       jacobian(k, j) += x[i];
     }
 
-  // e2 block: 2 T_b(q, e2) at q = qd - e1, with the kinematics derivatives of each body
+  // e2 block: 2 T_b(q, e2) at q = qd - e1, from one forward pass (oMi, the local velocities v,
+  // the world Jacobian J and its rate dJ = ov x J; Pinocchio's computeJointJacobiansTimeVariation)
   w.position = qd - x.head(n);
   arm.set_configuration(w.position, w.arm.configuration);
   w.arm.velocity = x.tail(n);
-  pinocchio::computeForwardKinematicsDerivatives(arm.model, data, w.arm.configuration,
-                                                 w.arm.velocity, w.acceleration);
-  // per body: its rows' gradients G (rows x 6), then d phi / d(q, v) = G [dv/dq, dv/dv]
+  pinocchio::computeJointJacobiansTimeVariation(arm.model, data, w.arm.configuration,
+                                                w.arm.velocity);
   for (const Group& group : s.groups) {
-    w.dv_dq.setZero();
-    w.dv_dv.setZero();
-    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, w.dv_dq,
-                                           w.dv_dv);
     const auto& velocity = data.v[group.joint];
+    const pinocchio::SE3& placement = data.oMi[group.joint];
     const Eigen::Index rows = group.end - group.begin;
-    for (Eigen::Index b = 0; b < rows; ++b)
+    // per row, the gradient g of 2 T_b in the body's local velocity and the same in the world
+    for (Eigen::Index b = 0; b < rows; ++b) {
       w.gradients.row(b) = energy_gradient(s.local[static_cast<std::size_t>(group.begin + b)],
                                            velocity.linear(), velocity.angular());
+      w.world_gradients.row(b) = world_covector(placement, w.gradients.row(b));
+    }
     const auto G = w.gradients.topRows(rows);
     phi.segment(k, rows).noalias() = 0.5 * G.lazyProduct(velocity.toVector());
-    // q = qd - e1: d phi / d e1 = -G dv/dq, and the desired rate is G dv/dq dqd
-    jacobian.block(k, 0, rows, n).noalias() = -G.lazyProduct(w.dv_dq);
-    jacobian.block(k, n, rows, n).noalias() = G.lazyProduct(w.dv_dv);
-    desired_rate.segment(k, rows).noalias() = -jacobian.block(k, 0, rows, n).lazyProduct(dqd);
+    // G dv/dv and G dv/dq per supporting joint (world_covector); q = qd - e1: d phi / d e1 =
+    // -G dv/dq, and the desired rate is G dv/dq dqd
+    for (const pinocchio::JointIndex joint : arm.model.supports[group.joint]) {
+      if (joint == 0) continue;
+      const Eigen::Index column = arm.model.idx_vs[joint];
+      const auto J = data.J.col(column);
+      const auto dJ = data.dJ.col(column);
+      for (Eigen::Index b = 0; b < rows; ++b) {
+        const double along_q = w.world_gradients.row(b).dot(dJ.transpose());
+        jacobian(k + b, column) = -along_q;
+        jacobian(k + b, n + column) = w.world_gradients.row(b).dot(J.transpose());
+        desired_rate[k + b] += along_q * dqd[column];
+      }
+    }
     k += rows;
   }
 }
@@ -321,18 +328,11 @@ void PinocchioStructuredBasis::pinocchio_passes(const Eigen::Ref<const Eigen::Ve
   const Impl& s = *impl_;
   const PinocchioArm::Impl& arm = *s.arm;
   WorkspaceData& w = *workspace;
-  pinocchio::Data& data = w.arm.data;
   w.position = qd - x.head(n);  // as evaluate_at
   arm.set_configuration(w.position, w.arm.configuration);
   w.arm.velocity = x.tail(n);
-  pinocchio::computeForwardKinematicsDerivatives(arm.model, data, w.arm.configuration,
-                                                 w.arm.velocity, w.acceleration);
-  for (const Group& group : s.groups) {
-    w.dv_dq.setZero();
-    w.dv_dv.setZero();
-    pinocchio::getJointVelocityDerivatives(arm.model, data, group.joint, pinocchio::LOCAL, w.dv_dq,
-                                           w.dv_dv);
-  }
+  pinocchio::computeJointJacobiansTimeVariation(arm.model, w.arm.data, w.arm.configuration,
+                                                w.arm.velocity);
 }
 
 }  // namespace adparm

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
-#include <pinocchio/algorithm/kinematics-derivatives.hpp>
 #include <pinocchio/algorithm/regressor.hpp>
 #include <stdexcept>
 #include <string>
@@ -42,7 +42,6 @@ struct PinocchioRegressor::WorkspaceData {
   PinocchioArm::WorkspaceData arm;  // pinocchio::Data, configuration, velocity, zero velocity
   Eigen::MatrixXd standard;         // Y_pi (n x 10 n)
   Eigen::VectorXd sum, difference, acceleration;
-  pinocchio::Data::Matrix6x dv_dq, dv_dv;
   Eigen::VectorXd pi;           // pi_hat of a candidate
   Eigen::VectorXd accepted_pi;  // pi_hat of the estimate
   Eigen::VectorXd accepted_coulomb, accepted_viscous;
@@ -55,8 +54,6 @@ struct PinocchioRegressor::WorkspaceData {
         sum(Eigen::VectorXd::Zero(n)),
         difference(Eigen::VectorXd::Zero(n)),
         acceleration(Eigen::VectorXd::Zero(n)),
-        dv_dq(pinocchio::Data::Matrix6x::Zero(6, n)),
-        dv_dv(pinocchio::Data::Matrix6x::Zero(6, n)),
         pi(Eigen::VectorXd::Zero(10 * n)),
         accepted_pi(Eigen::VectorXd::Zero(10 * n)),
         accepted_coulomb(Eigen::VectorXd::Zero(n)),
@@ -270,21 +267,21 @@ void PinocchioRegressor::momentum_rate_regressor(const Joint& q, const Joint& dq
   w.acceleration.setZero();
   w.standard = pinocchio::computeJointTorqueRegressor(model, data, w.arm.configuration,
                                                       w.arm.zero_velocity, w.acceleration);  // G
-  // - dT/dq: per body, - 1/2 g_k dv/dq for its 10 parameters
+  // - dT/dq: per body, - 1/2 g_k dv/dq for its 10 parameters (world_covector: g_k dv/dq_j is
+  // oMi.act(g_k) . dJ_j for each supporting joint j)
   w.arm.velocity = dq;
-  pinocchio::computeForwardKinematicsDerivatives(model, data, w.arm.configuration, w.arm.velocity,
-                                                 w.acceleration);
+  pinocchio::computeJointJacobiansTimeVariation(model, data, w.arm.configuration, w.arm.velocity);
   for (int i = 0; i < s.n; ++i) {
     const pinocchio::JointIndex joint = static_cast<pinocchio::JointIndex>(i + 1);
-    w.dv_dq.setZero();
-    w.dv_dv.setZero();
-    pinocchio::getJointVelocityDerivatives(model, data, joint, pinocchio::LOCAL, w.dv_dq, w.dv_dv);
     const auto& velocity = data.v[joint];
     for (int k = 0; k < 10; ++k) {
-      const Eigen::Matrix<double, 1, 6> gradient =
-          energy_gradient(k, velocity.linear(), velocity.angular());
-      for (int j = 0; j < s.n; ++j)
-        w.standard(j, 10 * i + k) -= 0.5 * gradient.dot(w.dv_dq.col(j).transpose());
+      const Eigen::Matrix<double, 1, 6> gradient = world_covector(
+          data.oMi[joint], energy_gradient(k, velocity.linear(), velocity.angular()));
+      for (const pinocchio::JointIndex support : model.supports[joint]) {
+        if (support == 0) continue;
+        const Eigen::Index j = model.idx_vs[support];
+        w.standard(j, 10 * i + k) -= 0.5 * gradient.dot(data.dJ.col(j).transpose());
+      }
     }
   }
   out.resize(s.n, parameters());

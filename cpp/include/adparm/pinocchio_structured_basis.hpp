@@ -20,8 +20,11 @@
 // (m, m c, I) about the joint frame's origin
 //   T = 1/2 m |v|^2 + m c . (v x w) + 1/2 w^T I w   (Pinocchio's computeKineticEnergyRegressor).
 // Each T_k is a quadratic form in (v, w), so 2 T_k = g_k . (v, w) with g_k its gradient (1 x 6),
-// and d(2 T_k)/d(q, e2) = 2 g_k [dv_i/dq, dv_i/dv] from Pinocchio's kinematics derivatives
-// (computeForwardKinematicsDerivatives, getJointVelocityDerivatives, LOCAL frame). Then
+// and d(2 T_k)/d(q, e2) = 2 g_k [dv_i/dq, dv_i/dv], the body's LOCAL velocity derivatives, which
+// for each supporting joint j are oMi^-1 dJ_j and oMi^-1 J_j (J and dJ = ov x J in the world
+// frame from one pass, computeJointJacobiansTimeVariation): g_k times them is oMi.act(g_k) . dJ_j
+// and oMi.act(g_k) . J_j, one transform per row (as getJointVelocityDerivatives, LOCAL, but
+// without its two transforms per supporting joint). Then
 //   d phi_b / d e1 = -2 g_b dv_i/dq,   d phi_b / d e2 = 2 g_b dv_i/dv,
 //   desired rate (d phi_b / d qd) dqd = 2 g_b dv_i/dq dqd,
 // O(n^2) per evaluation, no finite difference.
@@ -129,9 +132,9 @@ class PinocchioStructuredBasis {
                    Eigen::Ref<Eigen::MatrixXd> jacobian, Eigen::Ref<Eigen::VectorXd> desired_rate,
                    Workspace& workspace) const;
 
-  // Only the Pinocchio passes of evaluate_at (forward kinematics derivatives at q = qd - e1,
-  // v = e2, then each body's joint velocity derivatives), without the basis' own products: the
-  // bench times them for the share of a loop step spent in Pinocchio. No heap allocation.
+  // Only the Pinocchio pass of evaluate_at (computeJointJacobiansTimeVariation at q = qd - e1,
+  // v = e2), without the basis' own products: the bench times it for the share of a loop step
+  // spent in Pinocchio. No heap allocation.
   void pinocchio_passes(const Eigen::Ref<const Eigen::VectorXd>& x,
                         const Eigen::Ref<const Eigen::VectorXd>& qd, Workspace& workspace) const;
 
