@@ -653,6 +653,8 @@ class ClosedLoop {
   //   u_hat_i^T R u_hat_i = 0.5 (-u_hat_i)^T B_i^T Wa                      (R R^-1 = I)
   //   eps_i = x_i^T Q x_i + u_hat_i^T R u_hat_i + Wc^T omega_i               (eq. 21)
   //   gradient -= B_i c_i                                                    (eq. 26)
+  // B's rows that are zero at every point (Extrapolation::stacked_first_row: a structured basis'
+  // e1 block, 21 of the UR5's 55 functions) are left out of all three products.
   // Equal to the point-by-point path up to round-off (the sums associate differently).
   template <class Gamma, class GammaRate>
   void learn_from_points_batched(const Weights& critic_weights, const Weights& actor_weights,
@@ -667,20 +669,24 @@ class ClosedLoop {
     const Eigen::MatrixXd& drift_rates = extrapolation_.stacked_drift_rates();
     const Eigen::VectorXd& state_costs = extrapolation_.stacked_state_costs();
     const Eigen::Index n = dof(), k = stacked.rows(), columns = stacked.cols();
+    // B's rows outside [first, first + rows) are zero at every point: skipped
+    const Eigen::Index first = extrapolation_.stacked_first_row();
+    const Eigen::Index rows = extrapolation_.stacked_row_count();
     const double weight = 1.0 / static_cast<double>(points);
     data.point_weights.col(0) = actor_weights;
     data.point_weights.col(1) = difference;
-    kernels->product(columns, 2, k, transposed.data(), columns, data.point_weights.data(), 1, k,
-                     data.point_products.data(), columns, false);
+    kernels->product(columns, 2, rows, transposed.data() + first * columns, columns,
+                     data.point_weights.data() + first, 1, k, data.point_products.data(), columns,
+                     false);
     kernels->product(n, 2 * points, n, cost_.R_inverse().data(), n, data.point_products.data(), 1,
                      n, data.point_projected.data(), n, false);
     data.point_inputs = 0.5 * data.point_projected.leftCols(points);  // -u_hat_i
     for (long i = 0; i < points; ++i) {  // B_i read once: omega_i, then the actor's B_i c_i
-      const double* input_gradient = stacked.data() + i * n * k;  // B_i
+      const double* input_gradient = stacked.data() + i * n * k + first;  // B_i's rows
       double* omega = block.omegas.col(block.gathered).data();
       std::copy_n(drift_rates.col(i).data(), k, omega);
-      kernels->product(k, 1, n, input_gradient, k, data.point_inputs.col(i).data(), 1, n, omega, k,
-                       true);
+      kernels->product(rows, 1, n, input_gradient, k, data.point_inputs.col(i).data(), 1, n,
+                       omega + first, k, true);
       double value = 0.0, norm = 0.0;  // Wc^T omega_i, ||omega_i||^2
       kernels->transposed_products(k, 1, omega, k, critic_weights.data(), omega, &value, &norm);
       const double input_cost =
@@ -690,8 +696,8 @@ class ClosedLoop {
       double* coefficients = data.point_coefficients.data() + i * n;
       for (Eigen::Index j = 0; j < n; ++j)
         coefficients[j] = scale * data.point_projected(j, points + i);
-      kernels->product(k, 1, n, input_gradient, k, coefficients, 1, n, actor_gradient.data(), k,
-                       true);  // (26), point i
+      kernels->product(rows, 1, n, input_gradient, k, coefficients, 1, n,
+                       actor_gradient.data() + first, k, true);  // (26), point i
       block.coefficients[block.gathered] = error;
       block.weights[block.gathered] = weight;
       critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)

@@ -19,6 +19,7 @@
 // point (HjbPoint) is computed when the points are drawn, not at every evaluation.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -154,6 +155,16 @@ class Extrapolation {
             stacked_state_costs_[i] = prepared_[i].state_cost;
           }
           stacked_transposed_input_gradients_ = stacked_input_gradients_.transpose();
+          // the rows of [B_1 ... B_N] in [first, last] with a nonzero entry: the functions before
+          // and after them have J_e2 = 0 at every point (e.g. a structured basis' e1 block)
+          Eigen::Index first = k, last = -1;
+          for (Eigen::Index r = 0; r < k; ++r)
+            if ((stacked_input_gradients_.row(r).array() != 0.0).any()) {
+              first = std::min(first, r);
+              last = r;
+            }
+          stacked_first_row_ = last < 0 ? 0 : first;
+          stacked_row_count_ = last < 0 ? k : last - first + 1;
         }
       }
     }
@@ -170,6 +181,11 @@ class Extrapolation {
     return stacked_transposed_input_gradients_;
   }
   const Eigen::MatrixXd& stacked_drift_rates() const { return stacked_drift_rates_; }
+  // Rows [stacked_first_row(), + stacked_row_count()) of [B_1 ... B_N] hold every nonzero entry
+  // (exact zeros outside, checked when the points are prepared): the batched products skip the
+  // others.
+  Eigen::Index stacked_first_row() const { return stacked_first_row_; }
+  Eigen::Index stacked_row_count() const { return stacked_row_count_; }
   const Eigen::VectorXd& stacked_state_costs() const { return stacked_state_costs_; }
   const Point& prepared(long i) const { return prepared_[i]; }
   static constexpr Eigen::Index kMaxStacked = Eigen::Index(1) << 22;  // 32 MB
@@ -213,10 +229,11 @@ class Extrapolation {
   bool prepared_valid_ = false;
   Points points_;
   std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
-  Eigen::MatrixXd stacked_input_gradients_;             // K x nN, [B_1 ... B_N] (stacked())
-  Eigen::MatrixXd stacked_transposed_input_gradients_;  // nN x K, its transpose
-  Eigen::MatrixXd stacked_drift_rates_;                 // K x N, [F_1 ... F_N]
-  Eigen::VectorXd stacked_state_costs_;                 // N, x_i^T Q x_i
+  Eigen::MatrixXd stacked_input_gradients_;                     // K x nN, [B_1 ... B_N] (stacked())
+  Eigen::MatrixXd stacked_transposed_input_gradients_;          // nN x K, its transpose
+  Eigen::MatrixXd stacked_drift_rates_;                         // K x N, [F_1 ... F_N]
+  Eigen::VectorXd stacked_state_costs_;                         // N, x_i^T Q x_i
+  Eigen::Index stacked_first_row_ = 0, stacked_row_count_ = 0;  // the rows with nonzero entries
 };
 
 }  // namespace adparm
