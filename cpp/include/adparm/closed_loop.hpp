@@ -366,17 +366,11 @@ class ClosedLoop {
     const DenseKernels* kernels = kBasisSize == Dynamic ? critic_.kernels() : nullptr;
     const Weights difference = actor_weights - critic_weights;
     Joint times_difference;
-    if (kernels != nullptr) {
-      Joint times_actor_weights(n);
-      times_difference.resize(n);
-      kernels->transposed_products(k, n, point.input_gradient.data(), k, actor_weights.data(),
-                                   difference.data(), times_actor_weights.data(),
-                                   times_difference.data());
-      evaluate_hjb_from_product(point, cost_, critic_weights, times_actor_weights, hjb, kernels,
-                                point.input_gradient.data());
-    } else {
+    if (kernels != nullptr)
+      evaluate_in_kernels(point, point.input_gradient.data(), critic_weights, actor_weights,
+                          difference, hjb, times_difference);
+    else
       evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
-    }
 
     Weights critic_rate = Weights::Zero(k);
     CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
@@ -404,10 +398,7 @@ class ClosedLoop {
           critic_.add_rates(e.omega, e.error, gamma, weight, critic_rate, gamma_rate);
         }
         if (product != nullptr) {  // (26): gradient -= B c in the kernels
-          const Joint coefficients = actor_.gradient_coefficients(
-              *product, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
-          kernels->product(k, 1, n, p.input_gradient.data(), k, coefficients.data(), 1, n,
-                           actor_gradient.data(), k, true);
+          actor_share_in_kernels(p.input_gradient.data(), *product, e, weight, actor_gradient);
         } else {
           actor_.add_gradient(p.input_gradient, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega,
                               e.error, difference, weight, actor_gradient);  // (26)
@@ -584,6 +575,35 @@ class ClosedLoop {
     w.begin_time = t_end;
   }
 
+  // One sample (the trajectory's or a point's) in the dispatched kernels: B^T [Wa, Wa - Wc] in
+  // one pass over its B (K x n, `input_gradient`: the point's own or its block of the stacked
+  // [B_1 ... B_N]), eqs. (20)-(21) from B^T Wa (evaluate_hjb_from_product), and B^T (Wa - Wc)
+  // into times_difference for the actor's share. No heap allocation (bounded Joint storage).
+  void evaluate_in_kernels(const Point& point, const double* input_gradient,
+                           const Weights& critic_weights, const Weights& actor_weights,
+                           const Weights& difference, Evaluation& out,
+                           Joint& times_difference) const {
+    const Eigen::Index n = dof(), k = basis_size();
+    Joint times_actor_weights(n);
+    times_difference.resize(n);
+    critic_.kernels()->transposed_products(k, n, input_gradient, k, actor_weights.data(),
+                                           difference.data(), times_actor_weights.data(),
+                                           times_difference.data());
+    evaluate_hjb_from_product(point, cost_, critic_weights, times_actor_weights, out,
+                              critic_.kernels(), input_gradient);
+  }
+
+  // That sample's share of the actor's gradient (eq. 26) in the kernels: gradient -= B c with
+  // c = Actor::gradient_coefficients of B^T (Wa - Wc) (evaluate_in_kernels).
+  void actor_share_in_kernels(const double* input_gradient, const Joint& times_difference,
+                              const Evaluation& e, double weight, Weights& actor_gradient) const {
+    const Eigen::Index n = dof(), k = basis_size();
+    const Joint coefficients = actor_.gradient_coefficients(
+        times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
+    critic_.kernels()->product(k, 1, n, input_gradient, k, coefficients.data(), 1, n,
+                               actor_gradient.data(), k, true);
+  }
+
   // Dynamic sizes, prepared extrapolation points (Extrapolation::stacked()): each point's shares
   // of eqs. (20)-(21), (23)-(24) and (26) as the trajectory's (learn in derivative()), with the
   // points' B = [B_1 ... B_N] (K x nN) side by side; the critic gathers the points' omega
@@ -610,22 +630,13 @@ class ClosedLoop {
                                   gamma_rate, actor_gradient, data);
         return;
       }
+      Joint times_difference;
       for (long i = 0; i < extrapolation_.size(); ++i) {
         const double* input_gradient = stacked.data() + i * n * k;  // B_i
-        double* times_actor_weights_data = data.point_products.col(0).data() + i * n;
-        double* times_difference_data = data.point_products.col(1).data() + i * n;
-        kernels->transposed_products(k, n, input_gradient, k, actor_weights.data(),
-                                     difference.data(), times_actor_weights_data,
-                                     times_difference_data);
-        const Joint times_actor_weights = data.point_products.col(0).segment(i * n, n);
-        evaluate_hjb_from_product(extrapolation_.prepared(i), cost_, critic_weights,
-                                  times_actor_weights, e, kernels, input_gradient);
+        evaluate_in_kernels(extrapolation_.prepared(i), input_gradient, critic_weights,
+                            actor_weights, difference, e, times_difference);
         critic_.gather(e.omega, e.error, gamma, weight, critic_rate, gamma_rate, data.critic);
-        const Joint times_difference = data.point_products.col(1).segment(i * n, n);
-        const Joint coefficients = actor_.gradient_coefficients(
-            times_difference, cost_.R_inverse(), cost_.bound(), e.u_hat, e.omega, e.error, weight);
-        kernels->product(k, 1, n, input_gradient, k, coefficients.data(), 1, n,
-                         actor_gradient.data(), k, true);  // (26), point i
+        actor_share_in_kernels(input_gradient, times_difference, e, weight, actor_gradient);
       }
       return;
     }
