@@ -4,6 +4,8 @@ trajectory, and identification with learning from a model 30 % off."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -469,10 +471,11 @@ def urdf_arm_paths() -> dict:
         "spatial_3dof": adparm.example_path("arms/spatial_3dof.urdf"),
     }
     paths["ur5"] = adparm.example_robot_urdf("ur5")
+    paths["branched"] = Path(__file__).parent / "branched.urdf"  # a tree: supporting joints only
     return paths
 
 
-@pytest.mark.parametrize("name", ["planar_3link", "spatial_3dof", "ur5"])
+@pytest.mark.parametrize("name", ["planar_3link", "spatial_3dof", "ur5", "branched"])
 @pytest.mark.parametrize("seed", range(5))
 def test_urdf_regressors_times_beta_are_pinocchio_terms(name: str, seed: int) -> None:
     import pinocchio

@@ -23,13 +23,17 @@ ARMS = Path(__file__).resolve().parents[1] / "examples" / "arms"
 def arm_path(name: str) -> Path:
     if name == "ur5":
         return adparm.example_robot_urdf("ur5")
+    if name == "branched":  # tests/branched.urdf: a tree with a prismatic branch
+        return Path(__file__).parent / "branched.urdf"
     return ARMS / f"{name}.urdf"
 
 
 NAMES = ["planar_3link", "spatial_3dof", "ur5"]
 # and, for the checks against Pinocchio's Python bindings, the two-link URDF (continuous joints:
-# Pinocchio's cos, sin coordinates) and an arm with a prismatic joint (written below)
-CHECKED = NAMES + ["two_link", "prismatic"]
+# Pinocchio's cos, sin coordinates), an arm with a prismatic joint (written below) and a branched
+# tree (tests/branched.urdf: the basis pairs each body's covectors with its supporting joints'
+# columns only)
+CHECKED = NAMES + ["two_link", "prismatic", "branched"]
 
 PRISMATIC_URDF = """<robot name="prismatic">
   <link name="base"/>
