@@ -1,10 +1,16 @@
-"""Two builds of `adparm_bench` compared on its `--urdf` cases (planar 3-link and UR5, quadratic
-and structured basis, N = 0 and 50 extrapolation points), in one of two ways:
+"""Builds of `adparm_bench` compared on its `--urdf` cases (planar 3-link and UR5, quadratic
+and structured basis, N = 0 and 50 extrapolation points), in one of three ways:
 
     python bench/compare_urdf.py pairs OLD_BENCH NEW_BENCH [PAIRS] [SECONDS]
         interleaved runs (old, new, then new, old, ...), each `--urdf SECONDS` (default 1): per
         case the median ns per step of each build and the median of the per-pair ratios
         old / new (above 1: the new build is faster), with the range of the ratios.
+    python bench/compare_urdf.py rounds ROUNDS SECONDS BENCH [BENCH ...]
+        the same for two or more builds (e.g. the issue's, main's and this one), each round running
+        every build once, in a changing order (every order once in six rounds for three builds;
+        interleaved()): a Markdown table of the median us per RK4 step of each build and, for
+        each build before the last, the median of the per-round ratios build / last
+        (docs/design.md's tables for issue 26).
     python bench/compare_urdf.py callgrind OLD_BENCH NEW_BENCH [T1] [T2]
         instruction counts under valgrind's callgrind (deterministic, unaffected by the load of
         other jobs): each build runs `--urdf T` at two horizons (default 0.02 and 0.2 s), with a
@@ -44,18 +50,44 @@ def run(binary: str, *arguments: str) -> str:
     return subprocess.run([binary, *arguments], capture_output=True, text=True, check=True).stdout
 
 
-def pairs(old: str, new: str, count: int, seconds: str) -> None:
-    times: dict[str, dict[str, list[float]]] = {"old": {}, "new": {}}
-    for p in range(count):
-        order = [("old", old), ("new", new)] if p % 2 == 0 else [("new", new), ("old", old)]
-        for name, binary in order:
-            for case, _, ns, heap, status in cases(run(binary, "--urdf", seconds)):
+def interleaved(binaries: list[str], count: int, seconds: str) -> list[dict[str, list[float]]]:
+    """ns per step of each case, per build (in the order given), over `count` rounds. Two builds:
+    a, b, then b, a, and so on; more: rounds 2j and 2j + 1 run the builds rotated by j, forwards
+    then backwards (three builds: every order once in six rounds)."""
+    times: list[dict[str, list[float]]] = [{} for _ in binaries]
+    n = len(binaries)
+    for r in range(count):
+        shift = (r // 2) % n if n > 2 else 0
+        order = list(range(shift, n)) + list(range(shift))
+        for b in order[::-1] if r % 2 else order:
+            for case, _, ns, heap, status in cases(run(binaries[b], "--urdf", seconds)):
                 if heap or status != "finished":
-                    raise SystemExit(f"{name}: {case}: {heap} heap allocations, {status}")
-                times[name].setdefault(case, []).append(ns)
+                    raise SystemExit(f"{binaries[b]}: {case}: {heap} heap allocations, {status}")
+                times[b].setdefault(case, []).append(ns)
+    return times
+
+
+def rounds(binaries: list[str], count: int, seconds: str) -> None:
+    times = interleaved(binaries, count, seconds)
+    names = list(binaries)  # as given: two builds' binaries often share their file name
+    last = names[-1]
+    ratios = [f"{name} / {last}" for name in names[:-1]]
+    print("| case | " + " | ".join(names + ratios) + " |")
+    print("|---" * (len(names) + len(ratios) + 1) + "|")
+    for case, final in times[-1].items():
+        medians = [f"{statistics.median(t[case]) / 1000:.1f}" for t in times]
+        per_round = [
+            f"{statistics.median(a / b for a, b in zip(t[case], final, strict=True)):.2f}"
+            for t in times[:-1]
+        ]
+        print(f"| {case} | " + " | ".join(medians + per_round) + " |")
+
+
+def pairs(old: str, new: str, count: int, seconds: str) -> None:
+    old_times, new_times = interleaved([old, new], count, seconds)
     print(f"{'case':28s} {'old ns':>9s} {'new ns':>9s} ratio (range)")
-    for case, old_ns in times["old"].items():
-        new_ns = times["new"][case]
+    for case, old_ns in old_times.items():
+        new_ns = new_times[case]
         ratios = [a / b for a, b in zip(old_ns, new_ns, strict=True)]
         print(
             f"{case:28s} {statistics.median(old_ns):9.0f} {statistics.median(new_ns):9.0f} "
@@ -98,6 +130,13 @@ def callgrind(old: str, new: str, t1: str, t2: str) -> None:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) < 4:
+        raise SystemExit(__doc__)
+    if sys.argv[1] == "rounds":
+        if len(sys.argv) < 6:
+            raise SystemExit(__doc__)
+        rounds(sys.argv[4:], int(sys.argv[2]), sys.argv[3])
+        raise SystemExit(0)
     mode, old, new, *rest = sys.argv[1:]
     if mode == "pairs":
         pairs(old, new, int(rest[0]) if rest else 7, rest[1] if len(rest) > 1 else "1")
