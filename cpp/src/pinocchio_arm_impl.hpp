@@ -150,4 +150,13 @@ inline Eigen::Matrix<double, 1, 6> world_covector(const pinocchio::SE3& placemen
   return world;
 }
 
+// f(column) for the velocity column of each joint that carries body `joint` (Pinocchio's
+// model.supports, the universe left out), in the order from the root: the columns a body's
+// velocity derivatives can be nonzero in (world_covector), also in a branched tree.
+template <class F>
+void for_each_supporting_column(const pinocchio::Model& model, pinocchio::JointIndex joint, F&& f) {
+  for (const pinocchio::JointIndex support : model.supports[joint])
+    if (support != 0) f(static_cast<Eigen::Index>(model.idx_vs[support]));
+}
+
 }  // namespace adparm

@@ -303,9 +303,7 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
     phi.segment(k, rows).noalias() = 0.5 * G.lazyProduct(velocity.toVector());
     // G dv/dv and G dv/dq per supporting joint (world_covector); q = qd - e1: d phi / d e1 =
     // -G dv/dq, and the desired rate is G dv/dq dqd
-    for (const pinocchio::JointIndex joint : arm.model.supports[group.joint]) {
-      if (joint == 0) continue;
-      const Eigen::Index column = arm.model.idx_vs[joint];
+    for_each_supporting_column(arm.model, group.joint, [&](Eigen::Index column) {
       const auto J = data.J.col(column);
       const auto dJ = data.dJ.col(column);
       for (Eigen::Index b = 0; b < rows; ++b) {
@@ -314,7 +312,7 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
         jacobian(k + b, n + column) = w.world_gradients.row(b).dot(J.transpose());
         desired_rate[k + b] += along_q * dqd[column];
       }
-    }
+    });
     k += rows;
   }
 }

@@ -277,11 +277,9 @@ void PinocchioRegressor::momentum_rate_regressor(const Joint& q, const Joint& dq
     for (int k = 0; k < 10; ++k) {
       const Eigen::Matrix<double, 1, 6> gradient = world_covector(
           data.oMi[joint], energy_gradient(k, velocity.linear(), velocity.angular()));
-      for (const pinocchio::JointIndex support : model.supports[joint]) {
-        if (support == 0) continue;
-        const Eigen::Index j = model.idx_vs[support];
+      for_each_supporting_column(model, joint, [&](Eigen::Index j) {
         w.standard(j, 10 * i + k) -= 0.5 * gradient.dot(data.dJ.col(j).transpose());
-      }
+      });
     }
   }
   out.resize(s.n, parameters());

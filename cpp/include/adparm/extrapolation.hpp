@@ -158,8 +158,8 @@ class Extrapolation {
           // the rows of [B_1 ... B_N] in [first, last] with a nonzero entry: the functions before
           // and after them have J_e2 = 0 at every point (e.g. a structured basis' e1 block)
           Eigen::Index first = k, last = -1;
-          for (Eigen::Index r = 0; r < k; ++r)
-            if ((stacked_input_gradients_.row(r).array() != 0.0).any()) {
+          for (Eigen::Index r = 0; r < k; ++r)  // row r of B: the transpose's column r
+            if ((stacked_transposed_input_gradients_.col(r).array() != 0.0).any()) {
               first = std::min(first, r);
               last = r;
             }
