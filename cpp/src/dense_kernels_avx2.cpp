@@ -33,12 +33,21 @@ struct Isa {
     const __m128d pairs = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
     return _mm_cvtsd_f64(_mm_add_sd(pairs, _mm_unpackhi_pd(pairs, pairs)));
   }
+  // rows[t] becomes column t of the 4 x 4 matrix whose rows are rows[0 ... 3].
+  static void transpose(V (&rows)[4]) {
+    const V a0 = _mm256_unpacklo_pd(rows[0], rows[1]), a1 = _mm256_unpackhi_pd(rows[0], rows[1]);
+    const V a2 = _mm256_unpacklo_pd(rows[2], rows[3]), a3 = _mm256_unpackhi_pd(rows[2], rows[3]);
+    rows[0] = _mm256_permute2f128_pd(a0, a2, 0x20);
+    rows[1] = _mm256_permute2f128_pd(a1, a3, 0x20);
+    rows[2] = _mm256_permute2f128_pd(a0, a2, 0x31);
+    rows[3] = _mm256_permute2f128_pd(a1, a3, 0x31);
+  }
 };
 
 #include "dense_kernels_impl.hpp"
 
-const adparm::DenseKernels kKernels{"avx2", product,        rank_update, transposed_products,
-                                    gains,  low_rank_update};
+const adparm::DenseKernels kKernels{"avx2", product,         rank_update,  transposed_products,
+                                    gains,  low_rank_update, mirror_lower, point_regressor};
 
 }  // namespace
 

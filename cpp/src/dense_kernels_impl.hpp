@@ -5,13 +5,14 @@
 //   vectors, columns), kRowPanels (the order of the blocks: blocked_product),
 //   zero(), load(p), load(p, mask) (zero-filled), store(p, v), store(p, v, mask),
 //   broadcast(p), fma(a, b, c) = a b + c, subtract(a, b) = a - b, add(a, b), multiply(a, b),
-//   mask(count), sum(v).
+//   mask(count), sum(v), transpose(rows) (kWidth vectors, in place).
 // Nothing here has external linkage and no standard header is included: every function compiled
 // with the wider instruction set stays in its unit, so the linker can never hand it to a caller
 // built for the portable one.
 //
-// Register blocks: C's rows in kRowVectors vectors (then 2, the second one masked if the rows end
-// in it, then 1, then a masked one) x kColumns columns (one or two columns: 4 vectors), each
+// Register blocks: C's rows in kRowVectors vectors (panels of rows: the last vector masked if the
+// rows end in it; column blocks down all rows: then 2, then 1, then a masked one) x kColumns
+// columns (one or two columns: 8 or 4 vectors), each
 // entry's products summed in the order of the depth index from zero, then stored (C = sum),
 // subtracted (C -= sum) or stored negated (C = 0 - sum: the bits of C -= sum on a zeroed C, without
 // reading C): a fixed order, the same result on every call.
@@ -99,7 +100,7 @@ inline void last_columns(long n, long m, long row_begin, long depth, const doubl
   }
 }
 
-// The last n < kColumns columns of a row panel: one block of n columns.
+// n <= kColumns columns of a row panel: one block of n columns.
 template <int kPanel, bool kMasked, Mode kMode, int kColumnCount>
 inline void last_panel_columns(long n, long depth, const double* a, long lda, const double* b,
                                long b_depth_stride, long b_column_stride, double* c, long ldc,
@@ -114,33 +115,64 @@ inline void last_panel_columns(long n, long depth, const double* a, long lda, co
   }
 }
 
+// The size of the block that starts at j of n (columns, or vectors of rows): `full`, except that
+// a last remainder under half a block is evened out with the block before it (8 + 3 columns become
+// 6 + 5, 3 + 1 vectors 2 + 2): a short block runs well below the multiply-add rate.
+inline long block_width(long j, long n, long full) {
+  const long left = n - j;
+  if (left <= full || left >= 2 * full) return left < full ? left : full;
+  const long remainder = left - full;
+  return 2 * remainder >= full ? full : (left + 1) / 2;
+}
+
 // One panel of C's rows, i ... i + kPanel w - 1 (the last vector masked if kMasked), across C's
-// columns in blocks of kColumns, then the last n % kColumns columns in one block; lower: only the
-// column blocks that start above the panel's last row. The panel's rows of A (kPanel w x depth)
-// stay in the first-level cache while B's columns stream past them.
+// columns in blocks of kColumns (block_width); lower: only the column blocks that start above the
+// panel's last row. The panel's rows of A (kPanel w x depth) stay in the first-level cache while
+// B's columns stream past them.
 template <int kPanel, bool kMasked, Mode kMode>
 [[gnu::flatten]] inline void row_panel(long i, long rows, long n, long depth, const double* a,
                                        long lda, const double* b, long b_depth_stride,
                                        long b_column_stride, double* c, long ldc, bool lower,
                                        Isa::Mask mask) {
-  long j = 0;
-  for (; j + Isa::kColumns <= n; j += Isa::kColumns) {
+  for (long j = 0; j < n;) {
     if (lower && j >= i + rows) return;
-    block<kPanel, Isa::kColumns, kMode, kMasked>(depth, a + i, lda, b + j * b_column_stride,
-                                                 b_depth_stride, b_column_stride, c + j * ldc + i,
-                                                 ldc, mask);
-  }
-  if (j < n && !(lower && j >= i + rows))
-    last_panel_columns<kPanel, kMasked, kMode, Isa::kColumns - 1>(
-        n - j, depth, a + i, lda, b + j * b_column_stride, b_depth_stride, b_column_stride,
+    const long width = block_width(j, n, Isa::kColumns);
+    last_panel_columns<kPanel, kMasked, kMode, Isa::kColumns>(
+        width, depth, a + i, lda, b + j * b_column_stride, b_depth_stride, b_column_stride,
         c + j * ldc + i, ldc, mask);
+    j += width;
+  }
+}
+
+// A panel of `vectors` (1 ... kVectors) vectors of rows from row i, the last one masked if the
+// rows end in it.
+template <int kVectors, Mode kMode>
+inline void panel_of(long vectors, long i, long m, long n, long depth, const double* a, long lda,
+                     const double* b, long b_depth_stride, long b_column_stride, double* c,
+                     long ldc, bool lower) {
+  constexpr long w = Isa::kWidth;
+  if constexpr (kVectors > 1) {
+    if (vectors < kVectors) {
+      panel_of<kVectors - 1, kMode>(vectors, i, m, n, depth, a, lda, b, b_depth_stride,
+                                    b_column_stride, c, ldc, lower);
+      return;
+    }
+  }
+  const long rows = m - i < kVectors * w ? m - i : kVectors * w;
+  if (rows == kVectors * w)
+    row_panel<kVectors, false, kMode>(i, rows, n, depth, a, lda, b, b_depth_stride, b_column_stride,
+                                      c, ldc, lower, Isa::Mask());
+  else
+    row_panel<kVectors, true, kMode>(i, rows, n, depth, a, lda, b, b_depth_stride, b_column_stride,
+                                     c, ldc, lower, Isa::mask(rows - (kVectors - 1) * w));
 }
 
 // C (m x n) = or -= A (m x depth) B (depth x n); lower: the entries on and below the diagonal
 // (and others of the column blocks that reach it). Every entry's products are summed in the same
 // order whatever the blocks, so the block shapes and their order change no bit of C.
 //   - n >= kColumns and Isa::kRowPanels: panels of rows outermost (row_panel: A's panel stays in
-//     the first-level cache; docs/design.md, "Panels of rows, kernels by the work"),
+//     the first-level cache; docs/design.md, "Panels of rows, kernels by the work"), the last
+//     panels and column blocks evened out (block_width),
 //   - else column blocks down all rows (column_block: one column 8 vectors a block, two 4).
 template <Mode kMode>
 void blocked_product(long m, long n, long depth, const double* a, long lda, const double* b,
@@ -157,25 +189,13 @@ void blocked_product(long m, long n, long depth, const double* a, long lda, cons
     return;
   }
   constexpr long w = Isa::kWidth;
-  constexpr int panel = Isa::kRowVectors;
-  static_assert(panel == 2, "the last rows below take one panel of two vectors at most");
-  long i = 0;
-  for (; i + panel * w <= m; i += panel * w)
-    row_panel<panel, false, kMode>(i, panel * w, n, depth, a, lda, b, b_depth_stride,
-                                   b_column_stride, c, ldc, lower, Isa::Mask());
-  if (m - i > w) {  // the last rows in a panel of two vectors, the second one masked
-    row_panel<2, true, kMode>(i, m - i, n, depth, a, lda, b, b_depth_stride, b_column_stride, c,
-                              ldc, lower, Isa::mask(m - i - w));
-    return;
+  const long vectors = (m + w - 1) / w;
+  for (long v = 0; v < vectors;) {  // panels of kRowVectors vectors, the last ones evened out
+    const long count = block_width(v, vectors, Isa::kRowVectors);
+    panel_of<Isa::kRowVectors, kMode>(count, v * w, m, n, depth, a, lda, b, b_depth_stride,
+                                      b_column_stride, c, ldc, lower);
+    v += count;
   }
-  if (i + w <= m) {
-    row_panel<1, false, kMode>(i, w, n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc,
-                               lower, Isa::Mask());
-    i += w;
-  }
-  if (i < m)
-    row_panel<1, true, kMode>(i, m - i, n, depth, a, lda, b, b_depth_stride, b_column_stride, c,
-                              ldc, lower, Isa::mask(m - i));
 }
 
 void product(long m, long n, long depth, const double* a, long lda, const double* b,
@@ -305,4 +325,67 @@ double low_rank_update(long n, const double* u, long ldu, const double* c, const
     }
   }
   return Isa::sum(Isa::add(squares[0], squares[1]));
+}
+
+// C(i, j) = C(j, i) for i < j (C n x n): the strictly lower triangle copied onto the upper one in
+// w x w tiles, each loaded by columns (rows past n masked), transposed in registers and stored as
+// the columns of its mirror tile; a diagonal tile stores only its entries above the diagonal.
+// Copies alone: the same bits as the entry-by-entry copy.
+void mirror_lower(long n, double* c, long ldc) {
+  constexpr long w = Isa::kWidth;
+  for (long jb = 0; jb < n; jb += w) {
+    const long columns = n - jb < w ? n - jb : w;
+    for (long ib = jb; ib < n; ib += w) {
+      const long rows = n - ib < w ? n - ib : w;
+      Isa::V tile[w];
+      for (long t = 0; t < w; ++t) {
+        const double* column = c + (jb + t) * ldc + ib;
+        tile[t] = t >= columns ? Isa::zero()
+                  : rows == w  ? Isa::load(column)
+                               : Isa::load(column, Isa::mask(rows));
+      }
+      Isa::transpose(tile);  // tile[t]: row ib + t, columns jb ... jb + w - 1
+      if (ib == jb) {        // the diagonal tile: column jb + t above the diagonal, t entries
+        for (long t = 1; t < columns; ++t)
+          Isa::store(c + (jb + t) * ldc + jb, tile[t], Isa::mask(t));
+      } else {  // below the diagonal: whole columns (columns == w here)
+        for (long t = 0; t < rows; ++t) Isa::store(c + (ib + t) * ldc + jb, tile[t]);
+      }
+    }
+  }
+}
+
+// One extrapolation point's regressor (hjb.hpp) and its two dot products in one pass over its
+// rows: omega = f - B x, where B (m x n, column stride ldb) has nonzero rows only in [first, first
+// + rows) (omega = f in the vectors outside them), then value = c . omega and norm = omega . omega.
+// Each entry and each sum in the order of product (subtract, on a copy of f) and of
+// transposed_products (omega; c and omega): the same bits as those two calls.
+void point_regressor(long m, long first, long rows, long n, const double* b, long ldb,
+                     const double* x, const double* f, const double* c, double* omega,
+                     double* value, double* norm) {
+  constexpr long w = Isa::kWidth;
+  const long end = first + rows;
+  Isa::V value_sum = Isa::zero(), norm_sum = Isa::zero();
+  for (long i = 0; i < m; i += w) {
+    const bool whole = i + w <= m;
+    const Isa::Mask mask = whole ? Isa::Mask() : Isa::mask(m - i);
+    Isa::V entry = whole ? Isa::load(f + i) : Isa::load(f + i, mask);
+    if (i + w > first && i < end) {  // B's rows here are not all zero
+      Isa::V product = Isa::zero();
+      for (long j = 0; j < n; ++j) {
+        const double* column = b + j * ldb + i;
+        product = Isa::fma(whole ? Isa::load(column) : Isa::load(column, mask),
+                           Isa::broadcast(x + j), product);
+      }
+      entry = Isa::subtract(entry, product);
+    }
+    if (whole)
+      Isa::store(omega + i, entry);
+    else
+      Isa::store(omega + i, entry, mask);
+    value_sum = Isa::fma(entry, whole ? Isa::load(c + i) : Isa::load(c + i, mask), value_sum);
+    norm_sum = Isa::fma(entry, entry, norm_sum);
+  }
+  *value = Isa::sum(value_sum);
+  *norm = Isa::sum(norm_sum);
 }

@@ -659,13 +659,14 @@ class ClosedLoop {
   //   [B_i^T Wa, B_i^T (Wa - Wc)] = [B_1 ... B_N]^T [Wa, Wa - Wc]         (one product, nN x 2)
   //   R^-1 of both (n x 2N), -u_hat_i = 0.5 R^-1 B_i^T Wa                    (eq. 20)
   // then point by point, B_i (K x n) in the first-level cache for both of its products:
-  //   omega_i = F_i - B_i (-u_hat_i), written straight into the critic's gathered block
-  //   Wc^T omega_i and ||omega_i||^2 (one pass over omega_i)
+  //   omega_i = F_i - B_i (-u_hat_i), written straight into the critic's gathered block, with
+  //   Wc^T omega_i and ||omega_i||^2 in the same pass (DenseKernels::point_regressor)
   //   u_hat_i^T R u_hat_i = 0.5 (-u_hat_i)^T B_i^T Wa                      (R R^-1 = I)
   //   eps_i = x_i^T Q x_i + u_hat_i^T R u_hat_i + Wc^T omega_i               (eq. 21)
   //   gradient -= B_i c_i                                                    (eq. 26)
   // B's rows that are zero at every point (Extrapolation::stacked_first_row: a structured basis'
-  // e1 block, 21 of the UR5's 55 functions) are left out of all three products.
+  // e1 block, 21 of the UR5's 55 functions) are left out of all three products (omega_i = F_i
+  // there).
   // Equal to the point-by-point path up to round-off (the sums associate differently).
   template <class Gamma, class GammaRate>
   void learn_from_points_batched(const Weights& critic_weights, const Weights& actor_weights,
@@ -693,13 +694,13 @@ class ClosedLoop {
                      n, data.point_projected.data(), n, false);
     data.point_inputs = 0.5 * data.point_projected.leftCols(points);  // -u_hat_i
     for (long i = 0; i < points; ++i) {  // B_i read once: omega_i, then the actor's B_i c_i
-      const double* input_gradient = stacked.data() + i * n * k + first;  // B_i's rows
+      const double* input_gradient = stacked.data() + i * n * k;  // B_i
       double* omega = block.omegas.col(block.gathered).data();
-      std::copy_n(drift_rates.col(i).data(), k, omega);
-      kernels->product(rows, 1, n, input_gradient, k, data.point_inputs.col(i).data(), 1, n,
-                       omega + first, k, true);
-      double value = 0.0, norm = 0.0;  // Wc^T omega_i, ||omega_i||^2
-      kernels->transposed_products(k, 1, omega, k, critic_weights.data(), omega, &value, &norm);
+      double value = 0.0,
+             norm = 0.0;  // omega_i = F_i - B_i (-u_hat_i), Wc^T omega_i, ||omega_i||^2
+      kernels->point_regressor(k, first, rows, n, input_gradient, k,
+                               data.point_inputs.col(i).data(), drift_rates.col(i).data(),
+                               critic_weights.data(), omega, &value, &norm);
       const double input_cost =
           0.5 * data.point_inputs.col(i).dot(data.point_products.col(0).segment(i * n, n));
       const double error = state_costs[i] + input_cost + value;         // (21)
@@ -707,7 +708,7 @@ class ClosedLoop {
       double* coefficients = data.point_coefficients.data() + i * n;
       for (Eigen::Index j = 0; j < n; ++j)
         coefficients[j] = scale * data.point_projected(j, points + i);
-      kernels->product(rows, 1, n, input_gradient, k, coefficients, 1, n,
+      kernels->product(rows, 1, n, input_gradient + first, k, coefficients, 1, n,
                        actor_gradient.data() + first, k, true);  // (26), point i
       block.coefficients[block.gathered] = error;
       block.weights[block.gathered] = weight;

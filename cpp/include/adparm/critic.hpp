@@ -156,8 +156,12 @@ class Critic {
     if (w.lower_only) {  // mirror the lower triangle (the blocks of this evaluation)
       w.lower_only = false;
       const Eigen::Index n = gamma_rate.rows();
-      for (Eigen::Index j = 1; j < n; ++j)
-        gamma_rate.col(j).head(j) = gamma_rate.row(j).head(j).transpose();
+      if (kernels_ != nullptr) {  // in tiles transposed in registers (the same copies)
+        kernels_->mirror_lower(n, gamma_rate.data(), gamma_rate.outerStride());
+      } else {
+        for (Eigen::Index j = 1; j < n; ++j)
+          gamma_rate.col(j).head(j) = gamma_rate.row(j).head(j).transpose();
+      }
     }
   }
 

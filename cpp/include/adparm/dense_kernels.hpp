@@ -7,6 +7,8 @@
 //   - transposed_products: y0 = A^T x0, y1 = A^T x1 (one pass over A)      B^T Wa, B^T (Wa - Wc)
 //   - gains: the gathered samples' gains g_i and g_i Gamma omega_i           eqs. 23-24
 //   - low_rank_update: Gamma - sum of four rank-one terms, and their norm    RK4 without points
+//   - mirror_lower: the lower triangle copied onto the upper one               the rank-s dGamma
+//   - point_regressor: omega = f - B x, c . omega and ||omega||^2               eqs. 21-22, a point
 // All column-major on raw pointers: no Eigen or Pinocchio type crosses into the code built for
 // another instruction set (its inline functions would be merged with the portable build's at
 // link time). The portable path is no table at all (nullptr): the callers keep Eigen's products,
@@ -52,6 +54,16 @@ struct DenseKernels {
   // ||D||_F^2.
   double (*low_rank_update)(long n, const double* u, long ldu, const double* c, const double* gamma,
                             long ldg, double* next, long ldn);
+  // C(i, j) = C(j, i) for i < j (C n x n): the rank-s update's lower triangle mirrored
+  // (Critic::flush), in tiles transposed in registers; copies only (the same bits as any copy).
+  void (*mirror_lower)(long n, double* c, long ldc);
+  // An extrapolation point's regressor omega = f - B x (m entries; B m x n, column stride ldb,
+  // nonzero only in rows [first, first + rows): omega = f outside them) and value = c . omega,
+  // norm = omega . omega, in one pass (ClosedLoop::learn_from_points_batched). The same bits as
+  // product (subtract, rows [first, first + rows), on a copy of f) then transposed_products.
+  void (*point_regressor)(long m, long first, long rows, long n, const double* b, long ldb,
+                          const double* x, const double* f, const double* c, double* omega,
+                          double* value, double* norm);
 };
 
 // The kernels of ADPARM_KERNELS on this CPU for a loop that gathers blocks of samples or not
