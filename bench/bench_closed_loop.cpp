@@ -67,7 +67,10 @@
 //     the part-way and unstarted runs, advanced to the end, equal one-by-one runs;
 //   bench=checks invalid_settings=k refused=k failed=f
 //     k invalid Settings (and a Batch with one, and threads = 0), each expected to throw
-//     std::invalid_argument; f counts the failures of the whole section.
+//     std::invalid_argument; f counts the failures of the whole section;
+//   bench=check run=dense_kernels set=avx2|avx512 shapes=n failed=f ok=1
+//     the dense kernels of each set this CPU runs on random shapes, against plain loops and their
+//     bit-for-bit claims (bench/dense_kernel_checks.hpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -87,6 +90,7 @@
 #include "adparm/pinocchio_arm.hpp"
 #include "adparm/pinocchio_structured_basis.hpp"
 #include "adparm/urdf_loop_arm.hpp"
+#include "dense_kernel_checks.hpp"
 #include "heap_counter.hpp"
 #include "plain_port.hpp"
 
@@ -1259,6 +1263,7 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
     check_runs(horizon);
     check_paper_port(horizon);
     check_invalid_settings();
+    failures += static_cast<int>(dense_kernel_checks::check_dense_kernels());
     std::fflush(stdout);
   }
   return all_finished && identical && arms_ok && failures == 0 ? 0 : 1;

@@ -5,7 +5,8 @@
 # 16-run batch on 1 and 2 threads, the URDF arms in the closed loop (50 steps of the planar 3-link
 # arm and the UR5, quadratic and structured bases, N = 0 and 10), then local/grid points,
 # tracking, the other controllers, a diverging run, chunked and threaded runs, a streamed batch
-# (window 2) stopped part-way and resumed, and invalid settings that must throw; then the expression basis bench (adparm_bench_basis
+# (window 2) stopped part-way and resumed, invalid settings that must throw, and the dense kernels
+# of each set the CPU runs on random shapes (bench/dense_kernel_checks.hpp); then the expression basis bench (adparm_bench_basis
 # --checks: exactness, no heap allocation per evaluation, invalid programs and sizes) and the
 # structured basis bench (adparm_bench_structured_basis, 2000 evaluations per arm: the HJB error at
 # W* at round-off, copies evaluate alike, no heap allocation).
