@@ -696,8 +696,8 @@ class ClosedLoop {
     for (long i = 0; i < points; ++i) {  // B_i read once: omega_i, then the actor's B_i c_i
       const double* input_gradient = stacked.data() + i * n * k;  // B_i
       double* omega = block.omegas.col(block.gathered).data();
-      double value = 0.0,
-             norm = 0.0;  // omega_i = F_i - B_i (-u_hat_i), Wc^T omega_i, ||omega_i||^2
+      // omega_i = F_i - B_i (-u_hat_i), value = Wc^T omega_i, norm = ||omega_i||^2
+      double value = 0.0, norm = 0.0;
       kernels->point_regressor(k, first, rows, n, input_gradient, k,
                                data.point_inputs.col(i).data(), drift_rates.col(i).data(),
                                critic_weights.data(), omega, &value, &norm);
