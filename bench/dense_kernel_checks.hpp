@@ -79,7 +79,7 @@ inline long check_set(const adparm::DenseKernels& k, std::mt19937& generator, lo
         Buffer reference = whole;
         k.rank_update(m, depth, left.data(), lda, right.data(), lda, whole.data(), ldc, false,
                       false);
-        bool rank_close = true, rank_bits = true, negated_bits = true;
+        bool rank_close = true, rank_bits = true, negated_close = true;
         for (long j = 0; j < m; ++j)
           for (long i = j; i < m; ++i) {
             double sum = 0.0;
@@ -87,11 +87,11 @@ inline long check_set(const adparm::DenseKernels& k, std::mt19937& generator, lo
             rank_close = rank_close && near(whole[i + j * ldc], reference[i + j * ldc] - sum);
             rank_bits = rank_bits && lower[i + j * ldc] == whole[i + j * ldc];
             // -(A B^T) written: the bits of 0 - sum, whatever was there
-            negated_bits = negated_bits && near(negated[i + j * ldc], -sum);
+            negated_close = negated_close && near(negated[i + j * ldc], -sum);
           }
         expect(rank_close, "rank_update", m, depth, 0);
         expect(rank_bits, "rank_update lower = whole (bits)", m, depth, 0);
-        expect(negated_bits, "rank_update overwrite", m, depth, 0);
+        expect(negated_close, "rank_update overwrite", m, depth, 0);
         expect(lower[ldc * m] == reference[ldc * m], "rank_update past C", m, depth, 0);
         // mirror_lower
         Buffer mirrored = random_buffer(generator, ldc * m + 8);

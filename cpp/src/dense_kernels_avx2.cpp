@@ -9,6 +9,7 @@ namespace {
 struct Isa {
   using V = __m256d;
   using Mask = __m256i;
+  static constexpr const char* kName = "avx2";
   static constexpr long kWidth = 4;
   static constexpr int kRowVectors = 2;
   static constexpr int kColumns = 3;  // 2 x 3 sums (measured faster than 2 x 4 and 3 x 3)
@@ -45,9 +46,6 @@ struct Isa {
 };
 
 #include "dense_kernels_impl.hpp"
-
-const adparm::DenseKernels kKernels{"avx2", product,         rank_update,  transposed_products,
-                                    gains,  low_rank_update, mirror_lower, point_regressor};
 
 }  // namespace
 

@@ -9,6 +9,7 @@ namespace {
 struct Isa {
   using V = __m512d;
   using Mask = __mmask8;
+  static constexpr const char* kName = "avx512";
   static constexpr long kWidth = 8;
   static constexpr int kRowVectors = 3;
   static constexpr int kColumns = 8;  // 3 x 8 sums in 24 of the 32 registers
@@ -51,9 +52,6 @@ struct Isa {
 };
 
 #include "dense_kernels_impl.hpp"
-
-const adparm::DenseKernels kKernels{"avx512", product,         rank_update,  transposed_products,
-                                    gains,    low_rank_update, mirror_lower, point_regressor};
 
 }  // namespace
 

@@ -1,11 +1,11 @@
 // The dense kernels of dense_kernels.hpp, written once over an instruction set's vector type:
 // included by each ISA's translation unit (dense_kernels_avx2.cpp, dense_kernels_avx512.cpp)
 // inside an anonymous namespace, after it defines `Isa`:
-//   V, Mask, kWidth (doubles per V), kRowVectors and kColumns (a register block of C: rows in
-//   vectors, columns), kRowPanels (the order of the blocks: blocked_product),
-//   zero(), load(p), load(p, mask) (zero-filled), store(p, v), store(p, v, mask),
-//   broadcast(p), fma(a, b, c) = a b + c, subtract(a, b) = a - b, add(a, b), multiply(a, b),
-//   mask(count), sum(v), transpose(rows) (kWidth vectors, in place).
+//   kName, V, Mask, kWidth (doubles per V), kRowVectors and kColumns (a register block of C: rows
+//   in vectors, columns), kRowPanels (the order of the blocks: blocked_product), zero(), load(p),
+//   load(p, mask) (zero-filled), store(p, v), store(p, v, mask), broadcast(p), fma(a, b, c) = a b +
+//   c, subtract(a, b) = a - b, add(a, b), multiply(a, b), mask(count), sum(v), transpose(rows)
+//   (kWidth vectors, in place).
 // Nothing here has external linkage and no standard header is included: every function compiled
 // with the wider instruction set stays in its unit, so the linker can never hand it to a caller
 // built for the portable one.
@@ -389,3 +389,7 @@ void point_regressor(long m, long first, long rows, long n, const double* b, lon
   *value = Isa::sum(value_sum);
   *norm = Isa::sum(norm_sum);
 }
+
+// The set's table (dense_kernels.hpp), in the order of DenseKernels' members.
+const adparm::DenseKernels kKernels{Isa::kName, product,         rank_update,  transposed_products,
+                                    gains,      low_rank_update, mirror_lower, point_regressor};
