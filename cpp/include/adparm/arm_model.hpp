@@ -154,7 +154,9 @@ inline JointVector<Dynamic> dynamic_acceleration(const DynamicTerms& terms,
                                                  const JointVector<Dynamic>& dq,
                                                  const JointVector<Dynamic>& tau,
                                                  const JointVector<Dynamic>& tau_d) {
-  return terms.mass_inverse * (tau - terms.coriolis * dq - terms.gravity - terms.friction - tau_d);
+  const JointVector<Dynamic> residual =
+      tau - small_product(terms.coriolis, dq) - terms.gravity - terms.friction - tau_d;
+  return small_product(terms.mass_inverse, residual);
 }
 
 // tau_d(t) = [a1 sin t, a2 cos t] (Section 4, with a = (0.1, 0.1)); for n joints, joint j

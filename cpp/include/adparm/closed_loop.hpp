@@ -677,7 +677,8 @@ class ClosedLoop {
     const long points = extrapolation_.size();
     const DenseKernels* kernels = critic_.kernels();
     const Eigen::MatrixXd& stacked = extrapolation_.stacked_input_gradients();
-    const Eigen::MatrixXd& transposed = extrapolation_.stacked_transposed_input_gradients();
+    const double* transposed = extrapolation_.stacked_transposed_data();  // nN x K, aligned
+    const Eigen::Index stride = extrapolation_.stacked_transposed_stride();
     const Eigen::MatrixXd& drift_rates = extrapolation_.stacked_drift_rates();
     const Eigen::VectorXd& state_costs = extrapolation_.stacked_state_costs();
     const Eigen::Index n = dof(), k = stacked.rows(), columns = stacked.cols();
@@ -687,7 +688,7 @@ class ClosedLoop {
     const double weight = 1.0 / static_cast<double>(points);
     data.point_weights.col(0) = actor_weights;
     data.point_weights.col(1) = difference;
-    kernels->product(columns, 2, rows, transposed.data() + first * columns, columns,
+    kernels->product(columns, 2, rows, transposed + first * stride, stride,
                      data.point_weights.data() + first, 1, k, data.point_products.data(), columns,
                      false);
     kernels->product(n, 2 * points, n, cost_.R_inverse().data(), n, data.point_products.data(), 1,

@@ -55,7 +55,7 @@ class QuadraticCostT {
   bool bounded() const { return bound_.bounded(); }
 
   double state_cost(const ErrorVector<N>& x) const {
-    if (!bound_.logcosh()) return x.dot(Q_ * x);
+    if (!bound_.logcosh()) return x.dot(small_product(Q_, x));
     // e1^T Q11 e1 + 2 e1^T Q12 e2 + the ln cosh e2 term (input_bound.hpp)
     const Eigen::Index n = x.size() / 2;
     const auto e1 = x.template segment<N>(0, n);

@@ -30,7 +30,7 @@ TrackingErrorsT<N> tracking_errors(const JointVector<N>& q, const JointVector<N>
                                    const JointMatrix<N>& alpha1) {
   TrackingErrorsT<N> errors;
   errors.e1 = qd - q;
-  errors.e2 = (dqd - dq) + alpha1 * errors.e1;
+  errors.e2 = (dqd - dq) + small_product(alpha1, errors.e1);
   return errors;
 }
 
@@ -61,16 +61,18 @@ class ErrorSystem {
   void joint_state(const Error& x, const Desired& desired, Joint& q, Joint& dq) const {
     const Eigen::Index n = dof();
     q = desired.q - x.template head<kDof>(n);
-    dq = desired.dq + alpha1_ * x.template head<kDof>(n) - x.template segment<kDof>(n, n);
+    dq = desired.dq + small_product(alpha1_, x.template head<kDof>(n)) -
+         x.template segment<kDof>(n, n);
   }
 
   // f(x) = [-alpha1 e1 + e2; -M^-1 C e2] (eq. 9) from model terms at the matching joint state.
   Error drift(const Error& x, const Terms& terms) const {
     const Eigen::Index n = dof();
     Error f(2 * n);
-    f.template head<kDof>(n) = -alpha1_ * x.template head<kDof>(n) + x.template segment<kDof>(n, n);
-    f.template segment<kDof>(n, n) =
-        -terms.mass_inverse * (terms.coriolis * x.template segment<kDof>(n, n));
+    f.template head<kDof>(n) =
+        -small_product(alpha1_, x.template head<kDof>(n)) + x.template segment<kDof>(n, n);
+    const Joint coriolis_e2 = small_product(terms.coriolis, x.template segment<kDof>(n, n));
+    f.template segment<kDof>(n, n) = -small_product(terms.mass_inverse, coriolis_e2);
     return f;
   }
 
@@ -79,8 +81,10 @@ class ErrorSystem {
   Joint feedforward(const Terms& terms, const Joint& dq, const TrackingErrorsT<kDof>& errors,
                     const Desired& desired) const {
     const Joint de1 = desired.dq - dq;
-    return terms.mass * (desired.ddq + alpha1_ * de1) +
-           terms.coriolis * (desired.dq + alpha1_ * errors.e1) + terms.gravity + terms.friction;
+    const Joint acceleration = desired.ddq + small_product(alpha1_, de1);
+    const Joint velocity = desired.dq + small_product(alpha1_, errors.e1);
+    return small_product(terms.mass, acceleration) + small_product(terms.coriolis, velocity) +
+           terms.gravity + terms.friction;
   }
 
  private:

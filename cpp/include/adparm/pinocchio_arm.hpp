@@ -171,8 +171,8 @@ class PinocchioArm {
                     const Eigen::Ref<const Eigen::VectorXd>& tau_d,
                     Eigen::Ref<Eigen::VectorXd> ddq) const {
     terms.residual = tau - terms.gravity - terms.friction - tau_d;
-    terms.residual.noalias() -= terms.coriolis * dq;
-    ddq.noalias() = terms.mass_inverse * terms.residual;
+    terms.residual -= terms.coriolis.lazyProduct(dq);  // no matrix-vector kernel call
+    ddq = terms.mass_inverse.lazyProduct(terms.residual);
   }
 
   // The inertial parameters pi of the URDF (10 per joint, Pinocchio's order for the body that

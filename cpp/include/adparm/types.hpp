@@ -57,6 +57,19 @@ constexpr Eigen::Index size_of(int compile_time, Eigen::Index runtime) {
   return compile_time == Dynamic ? runtime : compile_time;
 }
 
+// A joint-sized (or error-sized) matrix times a vector, a x: dynamic sizes coefficient by
+// coefficient (lazyProduct: each entry's sum in the order of the columns, the bits of Eigen's
+// matrix-vector kernel, without its call, which costs more than a 3 x 3 product); fixed sizes as
+// Eigen's product (unrolled already).
+template <class Matrix, class Vector>
+auto small_product(const Matrix& a, const Vector& x) {
+  if constexpr (Matrix::RowsAtCompileTime == Eigen::Dynamic ||
+                Matrix::ColsAtCompileTime == Eigen::Dynamic)
+    return a.lazyProduct(x);
+  else
+    return a * x;
+}
+
 // Throws std::invalid_argument unless 1 <= n <= kMaxDof (a dynamic joint count) and 1 <= k <=
 // kMaxBasisSize.
 inline void check_dimensions(Eigen::Index n, Eigen::Index k) {
