@@ -125,10 +125,26 @@ inline long block_width(long j, long n, long full) {
   return 2 * remainder >= full ? full : (left + 1) / 2;
 }
 
+// The last `vectors` (fewer than the panel's) vectors of a panel: one block of n columns.
+template <int kVectors, bool kMasked, Mode kMode>
+inline void lower_part(long vectors, long n, long depth, const double* a, long lda, const double* b,
+                       long b_depth_stride, long b_column_stride, double* c, long ldc,
+                       Isa::Mask mask) {
+  if constexpr (kVectors > 0) {
+    if (vectors == kVectors)
+      last_panel_columns<kVectors, kMasked, kMode, Isa::kColumns>(
+          n, depth, a, lda, b, b_depth_stride, b_column_stride, c, ldc, mask);
+    else
+      lower_part<kVectors - 1, kMasked, kMode>(vectors, n, depth, a, lda, b, b_depth_stride,
+                                               b_column_stride, c, ldc, mask);
+  }
+}
+
 // One panel of C's rows, i ... i + kPanel w - 1 (the last vector masked if kMasked), across C's
 // columns in blocks of kColumns (block_width); lower: only the column blocks that start above the
-// panel's last row. The panel's rows of A (kPanel w x depth) stay in the first-level cache while
-// B's columns stream past them.
+// panel's last row, each without the panel's vectors whose rows all lie above its first column
+// (strictly upper entries: a fifth of the products at K = 78 in blocks of 3 x 8). The panel's rows
+// of A (kPanel w x depth) stay in the first-level cache while B's columns stream past them.
 template <int kPanel, bool kMasked, Mode kMode>
 [[gnu::flatten]] inline void row_panel(long i, long rows, long n, long depth, const double* a,
                                        long lda, const double* b, long b_depth_stride,
@@ -137,9 +153,17 @@ template <int kPanel, bool kMasked, Mode kMode>
   for (long j = 0; j < n;) {
     if (lower && j >= i + rows) return;
     const long width = block_width(j, n, Isa::kColumns);
-    last_panel_columns<kPanel, kMasked, kMode, Isa::kColumns>(
-        width, depth, a + i, lda, b + j * b_column_stride, b_depth_stride, b_column_stride,
-        c + j * ldc + i, ldc, mask);
+    // lower: the panel's vectors whose rows all lie above the block's first column are skipped
+    const long skip = lower && j > i ? (j - i) / Isa::kWidth : 0;
+    if (skip == 0) {
+      last_panel_columns<kPanel, kMasked, kMode, Isa::kColumns>(
+          width, depth, a + i, lda, b + j * b_column_stride, b_depth_stride, b_column_stride,
+          c + j * ldc + i, ldc, mask);
+    } else {
+      lower_part<kPanel - 1, kMasked, kMode>(
+          kPanel - skip, width, depth, a + i + skip * Isa::kWidth, lda, b + j * b_column_stride,
+          b_depth_stride, b_column_stride, c + j * ldc + i + skip * Isa::kWidth, ldc, mask);
+    }
     j += width;
   }
 }
@@ -168,7 +192,7 @@ inline void panel_of(long vectors, long i, long m, long n, long depth, const dou
 }
 
 // C (m x n) = or -= A (m x depth) B (depth x n); lower: the entries on and below the diagonal
-// (and others of the column blocks that reach it). Every entry's products are summed in the same
+// (and some above it, in the blocks that reach it). Every entry's products are summed in the same
 // order whatever the blocks, so the block shapes and their order change no bit of C.
 //   - n >= kColumns and Isa::kRowPanels: panels of rows outermost (row_panel: A's panel stays in
 //     the first-level cache; docs/design.md, "Panels of rows, kernels by the work"), the last

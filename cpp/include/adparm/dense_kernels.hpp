@@ -34,10 +34,10 @@ struct DenseKernels {
   // b[p * b_depth_stride + j * b_column_stride] (B itself: 1, ldb; a transpose: ldb, 1).
   void (*product)(long m, long n, long depth, const double* a, long lda, const double* b,
                   long b_depth_stride, long b_column_stride, double* c, long ldc, bool subtract);
-  // C -= A B^T (C n x n, A and B n x depth): lower (its lower triangle; entries above it within
-  // a column block are updated too, as in the whole product) or whole. overwrite: C = -(A B^T)
-  // on those entries, C not read (the same bits as C -= A B^T on a zeroed C); the others are
-  // left as they were.
+  // C -= A B^T (C n x n, A and B n x depth): lower (its lower triangle; some entries above it,
+  // in the register blocks that reach it, are updated too, as in the whole product) or whole.
+  // overwrite: C = -(A B^T) on those entries, C not read (the same bits as C -= A B^T on a zeroed
+  // C); the others are left as they were.
   void (*rank_update)(long n, long depth, const double* a, long lda, const double* b, long ldb,
                       double* c, long ldc, bool lower, bool overwrite);
   // y0 = A^T x0, y1 = A^T x1 (A m x n).
