@@ -180,7 +180,8 @@ class Extrapolation {
   // drift_rate) and [x_i^T Q x_i] (N), for ClosedLoop's batched products with the dense kernels.
   // The transpose's columns start on 64-byte boundaries (the stride a multiple of 8 doubles, the
   // first column aligned): its product's loads never straddle two cache lines (measured: the
-  // product over 300 x 72 entries 2.8 -> 2.0 us).
+  // product over 300 x 72 entries 2.8 -> 2.0 us). A copy of this object reads the same entries
+  // (the offset is into its own copy of the buffer), aligned again from its next preparation.
   const double* stacked_transposed_data() const {
     return stacked_transposed_buffer_.data() + stacked_transposed_offset_;
   }

@@ -58,9 +58,10 @@ constexpr Eigen::Index size_of(int compile_time, Eigen::Index runtime) {
 }
 
 // A joint-sized (or error-sized) matrix times a vector, a x: dynamic sizes coefficient by
-// coefficient (lazyProduct: each entry's sum in the order of the columns, the bits of Eigen's
-// matrix-vector kernel, without its call, which costs more than a 3 x 3 product); fixed sizes as
-// Eigen's product (unrolled already).
+// coefficient (lazyProduct: each entry's sum over the columns in order, as Eigen's matrix-vector
+// kernel sums it - the same runs bit for bit, checked on the portable and dispatched paths -
+// without the kernel's call, which costs more than a 3 x 3 product); fixed sizes as Eigen's
+// product (unrolled already).
 template <class Matrix, class Vector>
 auto small_product(const Matrix& a, const Vector& x) {
   if constexpr (Matrix::RowsAtCompileTime == Eigen::Dynamic ||
