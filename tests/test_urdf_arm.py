@@ -5,6 +5,7 @@ M = sum_k pi_k M_k(q), and the URDFs that must be refused."""
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -137,6 +138,47 @@ def test_terms_match_pinocchio_python(name: str, rng) -> None:
         np.testing.assert_allclose(ours["M_inv"], theirs["M_inv"], rtol=1e-9, atol=1e-9)
     assert arm.joint_names == theirs["names"]
     np.testing.assert_array_equal(arm.inertial_parameters, theirs["pi"])
+
+
+def tree_and_chain_paths(tmp_path_factory) -> dict[str, Path]:
+    """Every example robot that reads without locked joints, the test tree (a prismatic branch)
+    and three random chains of bench/every_arm.py."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    import every_arm
+
+    paths = {"branched": Path(__file__).parent / "branched.urdf"}
+    for name in adparm.EXAMPLE_ROBOTS:
+        try:
+            adparm.UrdfArm(adparm.example_robot_urdf(name))
+        except (ValueError, ModuleNotFoundError):  # locked joints needed (Panda, Baxter)
+            continue
+        paths[name] = adparm.example_robot_urdf(name)
+    folder = tmp_path_factory.mktemp("chains")
+    for seed, joints in ((3, 4), (11, 7), (29, 9)):
+        path = folder / f"chain{joints}_{seed}.urdf"
+        path.write_text(every_arm.random_chain_urdf(np.random.default_rng(seed), joints))
+        paths[path.stem] = path
+    return paths
+
+
+def test_mass_and_gravity_from_the_coriolis_pass_are_pinocchios(tmp_path_factory, rng) -> None:
+    """M and G come from the Coriolis pass's composite inertias (PinocchioArm::compute) in place
+    of pinocchio::crba and computeGeneralizedGravity: the same to round-off on every example
+    robot, a tree and random chains, with gravity off the vertical."""
+    gravity = [0.7, -0.4, -9.81]
+    paths = tree_and_chain_paths(tmp_path_factory)
+    assert {"branched", "ur5", "kinova", "chain9_29"} <= set(paths)
+    for name, path in paths.items():
+        arm = adparm.UrdfArm(path, gravity=gravity)
+        for q, dq in random_states(rng, arm.dof, 4):
+            ours = arm.terms(q, dq)
+            theirs = pinocchio_terms(path, gravity, q, dq)
+            for key in ("M", "G", "C"):
+                scale = max(1.0, np.abs(theirs[key]).max())
+                np.testing.assert_allclose(
+                    ours[key], theirs[key], rtol=0, atol=1e-13 * scale, err_msg=f"{name} {key}"
+                )
+            np.testing.assert_array_equal(ours["M"], ours["M"].T)
 
 
 def test_ur5_has_six_revolute_joints_with_limits() -> None:

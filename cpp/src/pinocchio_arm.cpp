@@ -13,7 +13,6 @@
 #include <limits>
 #include <map>
 #include <pinocchio/algorithm/aba.hpp>
-#include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/model.hpp>
 #include <pinocchio/algorithm/regressor.hpp>
@@ -506,6 +505,37 @@ bool PinocchioArm::set_estimate(const Eigen::Ref<const Eigen::VectorXd>& pi,
   return true;
 }
 
+namespace {
+
+// M (its upper triangle, in data.M, where pinocchio::crba writes it) and G from what
+// pinocchio::computeCoriolisMatrix leaves in data (Pinocchio 4.1, pinned in pyproject.toml): the
+// joints' motion subspaces in the world frame J, the composite inertia oYcrb_i of the bodies joint
+// i carries (its backward pass adds each body's into its parent's) and Ag = oYcrb_i J_i, the
+// same quantities CRBA's passes form. Then, as CRBA's backward step and RNEA at dq = ddq = 0,
+//   M(i, j) = J_i^T Ag_j for j in i's subtree (the columns after i's, Pinocchio's depth-first
+//   order) G_i     = J_i^T (oYcrb_i a_g),  a_g = -gravity (the lift of the bodies i carries)
+// In place of pinocchio::crba and computeGeneralizedGravity, each a forward pass of its own over
+// the same kinematics (3-link arm: 170 + 240 ns against 35 here). Checked against both, and
+// against Pinocchio's Python bindings, on arms, trees and random chains (tests/test_urdf_arm.py).
+void mass_and_gravity_from_coriolis_pass(const pinocchio::Model& model, pinocchio::Data& data,
+                                         Eigen::VectorXd& gravity) {
+  const pinocchio::Motion lift(-model.gravity.linear(), Eigen::Vector3d::Zero());
+  for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(model.njoints); ++i) {
+    const pinocchio::Force weight = data.oYcrb[i] * lift;
+    const Eigen::Index first = model.idx_vs[i];
+    const Eigen::Index end = first + data.nvSubtree[i];
+    for (int c = 0; c < model.nvs[i]; ++c) {
+      const Eigen::Index row = first + c;
+      const Eigen::Matrix<double, 6, 1> column = data.J.col(row);
+      for (Eigen::Index j = first; j < end; ++j)
+        data.M(row, j) = column.dot(data.Ag.col(j).head<6>());
+      gravity[row] = column.head<3>().dot(weight.linear()) + column.tail<3>().dot(weight.angular());
+    }
+  }
+}
+
+}  // namespace
+
 void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
                            const Eigen::Ref<const Eigen::VectorXd>& dq, Terms& terms,
                            const EstimateData* estimate) const {
@@ -519,13 +549,12 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   pinocchio::Data& data = w.data;
   s.set_configuration(q, w.configuration);
   w.velocity = dq;
-  // CRBA fills the upper triangle only: mirror it.
-  pinocchio::crba(model, data, w.configuration);
-  terms.mass = data.M.selfadjointView<Eigen::Upper>();
+  // One pass over the bodies: the Coriolis matrix, then M (upper triangle, mirrored) and G from
+  // what that pass leaves (mass_and_gravity_from_coriolis_pass).
   pinocchio::computeCoriolisMatrix(model, data, w.configuration, w.velocity);
   terms.coriolis = data.C;
-  pinocchio::computeGeneralizedGravity(model, data, w.configuration);
-  terms.gravity = data.g;
+  mass_and_gravity_from_coriolis_pass(model, data, terms.gravity);
+  terms.mass = data.M.selfadjointView<Eigen::Upper>();
   // M^-1 from the Cholesky factor of M (M = L L^T, n^3 / 3 multiply-adds for the inverse: cheaper
   // than the articulated-body algorithm's pass over the bodies), its lower triangle mirrored. An M
   // that is not positive definite in floating point falls back to pinocchio::computeMinverse.

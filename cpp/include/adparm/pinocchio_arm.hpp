@@ -1,8 +1,8 @@
 // Any fixed-base serial arm from a URDF, with Pinocchio as the rigid-body engine (eq. 1):
 //   M(q) ddq + C(q, dq) dq + G(q) + F(dq) + tau_d(t) = tau
-//   M      CRBA (pinocchio::crba), symmetrised
 //   C      Pinocchio's Coriolis matrix (pinocchio::computeCoriolisMatrix), so dM/dt - 2C is skew
-//   G      pinocchio::computeGeneralizedGravity for the given gravity vector
+//   M      CRBA's last step on that pass's composite inertias (= pinocchio::crba), symmetrised
+//   G      J^T (composite inertias x -gravity) from the same pass (= computeGeneralizedGravity)
 //   M^-1   from the Cholesky factor of M (Eigen::LLT), symmetrised
 //   F      coulomb_i sign(dq_i) + viscous_i dq_i, per joint
 // The joints q are the URDF's revolute, continuous and prismatic joints in Pinocchio's model order
