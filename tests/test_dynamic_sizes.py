@@ -7,9 +7,10 @@ dynamic-size reduction differently (an unrolled tree against two running accumul
 evaluations differ at round-off (1e-16 relative). Without learning the runs then agree to 1e-12;
 the learning laws (gain eta_c gamma0 = 8e4 on the critic) amplify round-off to about 1e-10
 relative in the weights, where it stays (measured over 20 s of the paper run, with the same 44
-covariance resets at the same steps). (Bases of more than 24 functions without points take
-low-rank RK4 steps on the dynamic path, ClosedLoop::step; the two-link bases here do not:
-tests/test_bench.py checks those steps on the UR5 against the NumPy + Pinocchio loop.)"""
+covariance resets at the same steps). (Without points the dynamic path takes low-rank RK4 steps,
+ClosedLoop::step, when it has dispatched kernels, and with more than 24 functions on the portable
+path: the paper's run here does on a CPU with AVX2; tests/test_bench.py checks those steps on the
+3-link arm and the UR5 against the NumPy + Pinocchio loop.)"""
 
 from __future__ import annotations
 

@@ -558,14 +558,29 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   // M^-1 from the Cholesky factor of M (M = L L^T, n^3 / 3 multiply-adds for the inverse: cheaper
   // than the articulated-body algorithm's pass over the bodies), its lower triangle mirrored. An M
   // that is not positive definite in floating point falls back to pinocchio::computeMinverse.
-  // The inverse as LAPACK's potri forms it, in plain loops (a call of Eigen's triangular solver
-  // per evaluation cost more than the n^3 / 3 multiply-adds of a 3- or 6-joint arm):
-  // L^-1 by forward substitution, then the lower triangle of M^-1 = L^-T L^-1, mirrored.
-  w.mass_factor.compute(terms.mass);
-  if (w.mass_factor.info() == Eigen::Success) {
-    const Eigen::MatrixXd& L = w.mass_factor.matrixLLT();  // lower triangle: L
-    Eigen::MatrixXd& X = w.inverse_factor;                 // lower triangle: L^-1
-    const Eigen::Index n = dof_;
+  // The factor and the inverse as LAPACK's potf2 and potri form them, in plain loops (a call of
+  // Eigen's LLT or triangular solver per evaluation cost more than the n^3 / 3 multiply-adds of
+  // a 3- or 6-joint arm): L column by column, L^-1 by forward substitution, then the lower
+  // triangle of M^-1 = L^-T L^-1, mirrored.
+  const Eigen::Index n = dof_;
+  Eigen::MatrixXd& L = w.mass_factor;  // lower triangle: L
+  bool positive = true;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double pivot = terms.mass(j, j);
+    for (Eigen::Index l = 0; l < j; ++l) pivot -= L(j, l) * L(j, l);
+    if (!(pivot > 0.0)) {  // also NaN
+      positive = false;
+      break;
+    }
+    L(j, j) = std::sqrt(pivot);
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      double sum = terms.mass(i, j);
+      for (Eigen::Index l = 0; l < j; ++l) sum -= L(i, l) * L(j, l);
+      L(i, j) = sum / L(j, j);
+    }
+  }
+  if (positive) {
+    Eigen::MatrixXd& X = w.inverse_factor;  // lower triangle: L^-1
     for (Eigen::Index j = 0; j < n; ++j) {
       X(j, j) = 1.0 / L(j, j);
       for (Eigen::Index i = j + 1; i < n; ++i) {

@@ -54,8 +54,8 @@ struct PinocchioArm::WorkspaceData {
   Eigen::VectorXd velocity;
   Eigen::VectorXd zero_velocity;
   Eigen::VectorXd unit_acceleration;
-  Eigen::LLT<Eigen::MatrixXd> mass_factor;  // of M, for M^-1 (sized once)
-  Eigen::MatrixXd inverse_factor;           // L^-1 of mass_factor's L (lower triangle)
+  Eigen::MatrixXd mass_factor;     // the Cholesky factor L of M, for M^-1 (lower triangle)
+  Eigen::MatrixXd inverse_factor;  // L^-1 (lower triangle)
 
   explicit WorkspaceData(const pinocchio::Model& model)
       : data(model),
@@ -63,7 +63,7 @@ struct PinocchioArm::WorkspaceData {
         velocity(Eigen::VectorXd::Zero(model.nv)),
         zero_velocity(Eigen::VectorXd::Zero(model.nv)),
         unit_acceleration(Eigen::VectorXd::Zero(model.nv)),
-        mass_factor(model.nv),
+        mass_factor(Eigen::MatrixXd::Zero(model.nv, model.nv)),
         inverse_factor(Eigen::MatrixXd::Zero(model.nv, model.nv)) {}
 };
 

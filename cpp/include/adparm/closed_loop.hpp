@@ -185,11 +185,12 @@ class ClosedLoop {
         limited_(settings.torque_limits.size() > 0 &&
                  (settings.torque_limits.array() < kInfinity).any()),
         anti_windup_(settings.control.anti_windup),
-        gathers_(kBasisSize == Dynamic && (extrapolation_.enabled() || basis_size_ > 24)),
+        gathers_(kBasisSize == Dynamic &&
+                 (extrapolation_.enabled() || basis_size_ > 24 || critic_.kernels() != nullptr)),
         identifier_(make_identifier(settings, model)),
         identifies_(identifier_.enabled()),
         low_rank_(kBasisSize == Dynamic && !extrapolation_.enabled() && controller_.learns() &&
-                  basis_size_ > 24) {
+                  (basis_size_ > 24 || critic_.kernels() != nullptr)) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -313,8 +314,9 @@ class ClosedLoop {
 
   // Whether step() takes low-rank steps: dynamic sizes, a learning controller, no extrapolation
   // points (one sample per evaluation, so each stage's dGamma is rank one) and more than 24
-  // functions (measured: faster on the UR5's 55 and 78; at 8-21 within the noise or slower in
-  // wall time, where add_rates' unrolled products are cheap; those keep rk4_step, bit for bit).
+  // functions or dispatched kernels (measured: faster on the UR5's 55 and 78; at 8-21 functions
+  // 1.05-1.10x per step with the kernels, within the noise or slower on the portable path, where
+  // add_rates' unrolled products are cheap: there they keep rk4_step, bit for bit).
   bool low_rank_steps() const { return low_rank_; }
 
   // One RK4 step from (t_begin, x) to (t_end, x_next) (x_next not x): rk4_step (rk4.hpp), or with
@@ -794,8 +796,10 @@ class ClosedLoop {
   bool limited_;
   bool anti_windup_;
   // Dynamic sizes: the critic gathers the samples of an evaluation (critic.hpp) when there are
-  // extrapolation points or more than 24 functions; one small sample goes through add_rates,
-  // whose coefficient-wise products beat a call of Eigen's matrix-vector kernel.
+  // extrapolation points, more than 24 functions or dispatched kernels (measured: a lone sample
+  // of 8-21 functions 1.02-1.10x faster per step in the kernels than in add_rates); on the
+  // portable path a small lone sample goes through add_rates, whose coefficient-wise products
+  // beat a call of Eigen's matrix-vector kernel.
   bool gathers_;
   IdentifierType identifier_;  // the online identifier (identifier.hpp; disabled by default)
   bool identifies_;
