@@ -125,7 +125,7 @@ inline long block_width(long j, long n, long full) {
   return 2 * remainder >= full ? full : (left + 1) / 2;
 }
 
-// The last `vectors` (fewer than the panel's) vectors of a panel: one block of n columns.
+// The last `vectors` (1 ... kVectors) vectors of a panel: one block of n columns.
 template <int kVectors, bool kMasked, Mode kMode>
 inline void lower_part(long vectors, long n, long depth, const double* a, long lda, const double* b,
                        long b_depth_stride, long b_column_stride, double* c, long ldc,
@@ -155,15 +155,9 @@ template <int kPanel, bool kMasked, Mode kMode>
     const long width = block_width(j, n, Isa::kColumns);
     // lower: the panel's vectors whose rows all lie above the block's first column are skipped
     const long skip = lower && j > i ? (j - i) / Isa::kWidth : 0;
-    if (skip == 0) {
-      last_panel_columns<kPanel, kMasked, kMode, Isa::kColumns>(
-          width, depth, a + i, lda, b + j * b_column_stride, b_depth_stride, b_column_stride,
-          c + j * ldc + i, ldc, mask);
-    } else {
-      lower_part<kPanel - 1, kMasked, kMode>(
-          kPanel - skip, width, depth, a + i + skip * Isa::kWidth, lda, b + j * b_column_stride,
-          b_depth_stride, b_column_stride, c + j * ldc + i + skip * Isa::kWidth, ldc, mask);
-    }
+    lower_part<kPanel, kMasked, kMode>(kPanel - skip, width, depth, a + i + skip * Isa::kWidth, lda,
+                                       b + j * b_column_stride, b_depth_stride, b_column_stride,
+                                       c + j * ldc + i + skip * Isa::kWidth, ldc, mask);
     j += width;
   }
 }

@@ -511,9 +511,9 @@ namespace {
 // pinocchio::computeCoriolisMatrix leaves in data (Pinocchio 4.1, pinned in pyproject.toml): the
 // joints' motion subspaces in the world frame J, the composite inertia oYcrb_i of the bodies joint
 // i carries (its backward pass adds each body's into its parent's) and Ag = oYcrb_i J_i, the
-// same quantities CRBA's passes form. Then, as CRBA's backward step and RNEA at dq = ddq = 0,
-//   M(i, j) = J_i^T Ag_j for j in i's subtree (the columns after i's, Pinocchio's depth-first
-//   order) G_i     = J_i^T (oYcrb_i a_g),  a_g = -gravity (the lift of the bodies i carries)
+// same quantities CRBA's passes form. Then, as CRBA's backward step and RNEA at dq = ddq = 0:
+//   M(i, j) = J_i^T Ag_j for j in i's subtree (from i's column on: Pinocchio's depth-first order)
+//   G_i = J_i^T (oYcrb_i a_g), a_g = -gravity (the lift of the bodies joint i carries)
 // In place of pinocchio::crba and computeGeneralizedGravity, each a forward pass of its own over
 // the same kinematics (3-link arm: 170 + 240 ns against 35 here). Checked against both, and
 // against Pinocchio's Python bindings, on arms, trees and random chains (tests/test_urdf_arm.py).

@@ -3,7 +3,7 @@
 //   C      Pinocchio's Coriolis matrix (pinocchio::computeCoriolisMatrix), so dM/dt - 2C is skew
 //   M      CRBA's last step on that pass's composite inertias (= pinocchio::crba), symmetrised
 //   G      J^T (composite inertias x -gravity) from the same pass (= computeGeneralizedGravity)
-//   M^-1   from the Cholesky factor of M (Eigen::LLT), symmetrised
+//   M^-1   from the Cholesky factor of M (plain loops, as LAPACK's potf2 and potri), symmetrised
 //   F      coulomb_i sign(dq_i) + viscous_i dq_i, per joint
 // The joints q are the URDF's revolute, continuous and prismatic joints in Pinocchio's model order
 // (depth first from the root); fixed joints merge their links into the parent body. A continuous
@@ -35,6 +35,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "adparm/types.hpp"
 
 namespace adparm {
 
@@ -171,8 +173,8 @@ class PinocchioArm {
                     const Eigen::Ref<const Eigen::VectorXd>& tau_d,
                     Eigen::Ref<Eigen::VectorXd> ddq) const {
     terms.residual = tau - terms.gravity - terms.friction - tau_d;
-    terms.residual -= terms.coriolis.lazyProduct(dq);  // no matrix-vector kernel call
-    ddq = terms.mass_inverse.lazyProduct(terms.residual);
+    terms.residual -= small_product(terms.coriolis, dq);
+    ddq = small_product(terms.mass_inverse, terms.residual);
   }
 
   // The inertial parameters pi of the URDF (10 per joint, Pinocchio's order for the body that
