@@ -374,9 +374,7 @@ class RecordingArm : public LoopArm {
 // states' x = [e1; e2] (the loop evaluates the basis once per compute(); fixed points are
 // prepared before the run), each the fastest of `repeats`. Seconds per run.
 struct PinocchioReplay {
-  long calls = 0;
-  long steps = 0;  // the recording run's (all of them: a shorter run is reported, not replayed)
-  adparm::RunStatus status = adparm::RunStatus::running;
+  long calls = 0;  // -1: the recording run stopped early (reported, not replayed)
   double arm_seconds = 0.0;
   double basis_seconds = 0.0;
 };
@@ -393,12 +391,12 @@ PinocchioReplay replay_pinocchio(const adparm::Settings& settings, const adparm:
   calls.reserve(static_cast<std::size_t>(2 * n) * 5 * static_cast<std::size_t>(simulation.steps()));
   simulation.advance(simulation.steps());
   PinocchioReplay replay;
-  replay.steps = simulation.step();
-  replay.status = simulation.status();
+  const long steps = simulation.step();
+  const adparm::RunStatus status = simulation.status();
   replay.calls = static_cast<long>(calls.size()) / (2 * n);
-  if (replay.steps != simulation.steps() || replay.status != adparm::RunStatus::finished) {
+  if (steps != simulation.steps() || status != adparm::RunStatus::finished) {
     std::printf("bench=urdf_profile recording_run steps=%ld of=%ld status=%s calls=%ld failed=1\n",
-                replay.steps, simulation.steps(), status_name(replay.status), replay.calls);
+                steps, simulation.steps(), status_name(status), replay.calls);
     replay.calls = -1;
     return replay;
   }

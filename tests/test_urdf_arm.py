@@ -13,8 +13,13 @@ import pytest
 
 import adparm
 from adparm import _core
+from adparm.urdf import EXAMPLE_LOCKED_JOINTS
 
 from numpy_reference import pinocchio_terms
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+
+import every_arm  # noqa: E402
 
 ARMS = Path(__file__).resolve().parents[1] / "examples" / "arms"
 PAPER = {"p1": 5.0, "p2": 1.0, "p3": 1.0, "g1": 9.8 * 1.2, "g2": 9.8}
@@ -143,16 +148,10 @@ def test_terms_match_pinocchio_python(name: str, rng) -> None:
 def tree_and_chain_paths(tmp_path_factory) -> dict[str, Path]:
     """Every example robot that reads without locked joints, the test tree (a prismatic branch)
     and three random chains of bench/every_arm.py."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-    import every_arm
-
     paths = {"branched": Path(__file__).parent / "branched.urdf"}
     for name in adparm.EXAMPLE_ROBOTS:
-        try:
-            adparm.UrdfArm(adparm.example_robot_urdf(name))
-        except (ValueError, ModuleNotFoundError):  # locked joints needed (Panda, Baxter)
-            continue
-        paths[name] = adparm.example_robot_urdf(name)
+        if name not in EXAMPLE_LOCKED_JOINTS:  # Panda and Baxter read only with locked joints
+            paths[name] = adparm.example_robot_urdf(name)
     folder = tmp_path_factory.mktemp("chains")
     for seed, joints in ((3, 4), (11, 7), (29, 9)):
         path = folder / f"chain{joints}_{seed}.urdf"

@@ -189,8 +189,7 @@ class ClosedLoop {
                  (extrapolation_.enabled() || basis_size_ > 24 || critic_.kernels() != nullptr)),
         identifier_(make_identifier(settings, model)),
         identifies_(identifier_.enabled()),
-        low_rank_(kBasisSize == Dynamic && !extrapolation_.enabled() && controller_.learns() &&
-                  (basis_size_ > 24 || critic_.kernels() != nullptr)) {
+        low_rank_(gathers_ && !extrapolation_.enabled() && controller_.learns()) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
