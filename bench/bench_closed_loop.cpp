@@ -70,7 +70,10 @@
 //     std::invalid_argument; f counts the failures of the whole section;
 //   bench=check run=dense_kernels set=avx2|avx512 shapes=n failed=f ok=1
 //     the dense kernels of each set this CPU runs on random shapes, against plain loops and their
-//     bit-for-bit claims (bench/dense_kernel_checks.hpp).
+//     bit-for-bit claims (bench/dense_kernel_checks.hpp);
+//   bench=check run=lower_step arm=A basis=B steps=n ok=1
+//     ClosedLoop::step with gathered blocks in the kernels (lower_step: Gamma summed on its lower
+//     triangle) equal bit for bit to rk4_step, step after step.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -603,6 +606,46 @@ void check_paper_port(double horizon) {
       ok ? 1 : 0);
   std::fflush(stdout);
   if (!ok) fail("paper_port");
+}
+
+// ClosedLoop::step's lower_step (extrapolation points, the dispatched kernels: Gamma summed on
+// its lower triangle, then mirrored) against rk4_step on a twin loop: the same state, bit for bit,
+// after each of 40 steps of the planar 3-link arm with 10 points (the state is compared whole:
+// Gamma's upper triangle too).
+template <class Case>
+void check_lower_step(const adparm::PinocchioArm& arm) {
+  using Loop = adparm::ClosedLoop<LoopArm, typename Case::Basis>;
+  const adparm::Settings settings = case_settings<Case>(arm, 10, 0.05);
+  const LoopArm loop_arm(arm);
+  Loop lower(settings, loop_arm, loop_arm, true, Case::basis(arm));
+  Loop plain(settings, loop_arm, loop_arm, true, Case::basis(arm));
+  if (!lower.lower_steps()) {
+    std::printf("bench=check run=lower_step basis=%s skipped=portable_kernels\n", Case::name());
+    return;
+  }
+  auto lower_data = lower.make_data();
+  auto plain_data = plain.make_data();
+  adparm::Rk4Workspace<Loop> lower_workspace, plain_workspace;
+  typename Loop::State x = lower.initial_state(), y = x, x_next = x, y_next = x;
+  lower_workspace.resize(x.size());
+  plain_workspace.resize(x.size());
+  const double dt = settings.sim.dt;
+  long steps = 0;
+  bool ok = true;
+  for (; steps < 40 && ok; ++steps) {
+    const double t = steps * dt;
+    lower.begin_step(t, x, lower_data);
+    plain.begin_step(t, y, plain_data);
+    lower.step(t, t + dt, x, x_next, lower_workspace, nullptr, lower_data);
+    adparm::rk4_step(plain, t, t + dt, y, y_next, plain_workspace, nullptr, plain_data);
+    x.swap(x_next);
+    y.swap(y_next);
+    ok = x == y && x.allFinite();
+  }
+  std::printf("bench=check run=lower_step arm=planar_3link basis=%s steps=%ld ok=%d\n",
+              Case::name(), steps, ok ? 1 : 0);
+  std::fflush(stdout);
+  if (!ok) fail("lower_step");
 }
 
 // qd1 a cubic on [0, end/2] continued by a line with the same position and velocity on
@@ -1270,6 +1313,11 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
   if (checks) {
     check_runs(horizon);
     check_paper_port(horizon);
+    const adparm::PinocchioArm planar(std::string(ADPARM_ARMS_DIR) + "/planar_3link.urdf",
+                                      Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),
+                                      Eigen::VectorXd::Constant(1, 0.1));
+    check_lower_step<QuadraticCase>(planar);
+    check_lower_step<StructuredCase>(planar);
     check_invalid_settings();
     failures += static_cast<int>(dense_kernel_checks::check_dense_kernels());
     std::fflush(stdout);

@@ -408,6 +408,60 @@ void point_regressor(long m, long first, long rows, long n, const double* b, lon
   *norm = Isa::sum(norm_sum);
 }
 
+// A product kept apart from the sum that uses it (an empty asm statement the compiler cannot see
+// through): no fused multiply-add, which would round once instead of twice (these units are built
+// with FMA, and GCC contracts a * b + c by default).
+inline Isa::V rounded(Isa::V v) {
+  asm("" : "+v"(v));
+  return v;
+}
+
+// out = x + c r, entry by entry: fl(x + fl(c r)), as Eigen's x + c * r.
+void stage_sum(long n, const double* x, const double* r, double c, double* out) {
+  constexpr long w = Isa::kWidth;
+  const Isa::V scale = Isa::broadcast(&c);
+  long i = 0;
+  for (; i + w <= n; i += w)
+    Isa::store(out + i,
+               Isa::add(Isa::load(x + i), rounded(Isa::multiply(scale, Isa::load(r + i)))));
+  if (i < n) {
+    const Isa::Mask tail = Isa::mask(n - i);
+    Isa::store(
+        out + i,
+        Isa::add(Isa::load(x + i, tail), rounded(Isa::multiply(scale, Isa::load(r + i, tail)))),
+        tail);
+  }
+}
+
+// out = x + h6 (((r1 + 2 r2) + 2 r3) + r4), entry by entry in that order, as Eigen's
+// x + (h / 6) * (k1 + 2 * k2 + 2 * k3 + k4).
+template <bool kMasked>
+inline Isa::V rk4_entries(const double* x, const double* r1, const double* r2, const double* r3,
+                          const double* r4, Isa::V two, Isa::V h6, Isa::Mask mask) {
+  const auto load = [mask](const double* p) { return kMasked ? Isa::load(p, mask) : Isa::load(p); };
+  Isa::V sum = Isa::add(load(r1), rounded(Isa::multiply(two, load(r2))));
+  sum = Isa::add(sum, rounded(Isa::multiply(two, load(r3))));
+  sum = Isa::add(sum, load(r4));
+  return Isa::add(load(x), rounded(Isa::multiply(h6, sum)));
+}
+
+void rk4_sum(long n, const double* x, const double* r1, const double* r2, const double* r3,
+             const double* r4, double h6, double* out) {
+  constexpr long w = Isa::kWidth;
+  const double two_value = 2.0;
+  const Isa::V two = Isa::broadcast(&two_value), scale = Isa::broadcast(&h6);
+  long i = 0;
+  for (; i + w <= n; i += w)
+    Isa::store(out + i,
+               rk4_entries<false>(x + i, r1 + i, r2 + i, r3 + i, r4 + i, two, scale, Isa::Mask()));
+  if (i < n) {
+    const Isa::Mask tail = Isa::mask(n - i);
+    Isa::store(out + i, rk4_entries<true>(x + i, r1 + i, r2 + i, r3 + i, r4 + i, two, scale, tail),
+               tail);
+  }
+}
+
 // The set's table (dense_kernels.hpp), in the order of DenseKernels' members.
 const adparm::DenseKernels kKernels{Isa::kName, product,         rank_update,  transposed_products,
-                                    gains,      low_rank_update, mirror_lower, point_regressor};
+                                    gains,      low_rank_update, mirror_lower, point_regressor,
+                                    stage_sum,  rk4_sum};

@@ -189,7 +189,9 @@ class ClosedLoop {
                  (extrapolation_.enabled() || basis_size_ > 24 || critic_.kernels() != nullptr)),
         identifier_(make_identifier(settings, model)),
         identifies_(identifier_.enabled()),
-        low_rank_(gathers_ && !extrapolation_.enabled() && controller_.learns()) {
+        low_rank_(gathers_ && !extrapolation_.enabled() && controller_.learns()),
+        lower_steps_(gathers_ && !low_rank_ && controller_.learns() &&
+                     critic_.kernels() != nullptr) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -317,17 +319,25 @@ class ClosedLoop {
   // 1.05-1.10x per step with the kernels, within the noise or slower on the portable path, where
   // add_rates' unrolled products are cheap: there they keep rk4_step, bit for bit).
   bool low_rank_steps() const { return low_rank_; }
+  // Whether step() takes lower_step: gathered blocks (extrapolation points) in the dispatched
+  // kernels, a learning controller.
+  bool lower_steps() const { return lower_steps_; }
 
   // One RK4 step from (t_begin, x) to (t_end, x_next) (x_next not x): rk4_step (rk4.hpp), or with
   // low_rank_steps() the same step with each stage's dGamma kept as (u_s, g_s) (Critic::
   // stage_rates): the stages' K x K rates and covariances are never formed, and Gamma_next is one
   // pass (Critic::low_rank_update). Equal to rk4_step up to round-off (the products associate
-  // differently: the last bits of a run differ).
+  // differently: the last bits of a run differ). With gathered blocks in the dispatched kernels,
+  // lower_step: rk4_step's numbers bit for bit, Gamma summed on its lower triangle.
   void step(double t_begin, double t_end, const State& x, State& x_next,
             Rk4Workspace<ClosedLoop>& w, Outputs* outputs, Data& data) const {
     if constexpr (kBasisSize == Dynamic) {
       if (low_rank_) {
         low_rank_step(t_begin, t_end, x, x_next, w, outputs, data);
+        return;
+      }
+      if (lower_steps_) {
+        lower_step(t_begin, t_end, x, x_next, w, outputs, data);
         return;
       }
     }
@@ -533,14 +543,24 @@ class ClosedLoop {
                                               critic_rate, data.stage_vectors.col(s));
   }
 
+  // rk4_step's time signals (rk4.hpp) in low_rank_step and lower_step: the step's begin (unless
+  // the previous step's end), middle and end; after the step its end becomes the next begin.
+  void step_signals(double t_begin, double t_end, Rk4Workspace<ClosedLoop>& w) const {
+    if (!(w.begin_time == t_begin)) time_signals(t_begin, w.begin);
+    time_signals(t_begin + 0.5 * (t_end - t_begin), w.middle);
+    time_signals(t_end, w.end);
+  }
+  static void next_step_signals(double t_end, Rk4Workspace<ClosedLoop>& w) {
+    std::swap(w.begin, w.end);
+    w.begin_time = t_end;
+  }
+
   // step() with low-rank stages: rk4_step's stages and sum on the state apart from Gamma
   // ([q, dq, Wc, Wa] before it, [nu, J] after it), Gamma's through (u_s, g_s).
   void low_rank_step(double t_begin, double t_end, const State& x, State& x_next,
                      Rk4Workspace<ClosedLoop>& w, Outputs* outputs, Data& data) const {
     const double h = t_end - t_begin;
-    if (!(w.begin_time == t_begin)) time_signals(t_begin, w.begin);
-    time_signals(t_begin + 0.5 * h, w.middle);
-    time_signals(t_end, w.end);
+    step_signals(t_begin, t_end, w);
     const Eigen::Index head = gamma_offset(), tail = nu_offset(), rest = state_size() - tail;
     const auto stage = [&](const State& k, double c) {
       w.stage.head(head) = x.head(head) + c * k.head(head);
@@ -572,8 +592,49 @@ class ClosedLoop {
     const Eigen::Vector4d& g = data.stage_gains;
     const Eigen::Vector4d c = (h / 6.0) * Eigen::Vector4d(g[0], 2.0 * g[1], 2.0 * g[2], g[3]);
     critic_.low_rank_update(covariance(x), data.stage_vectors, c, covariance(x_next), data.critic);
-    std::swap(w.begin, w.end);
-    w.begin_time = t_end;
+    next_step_signals(t_end, w);
+  }
+
+  // step() with gathered blocks in the dispatched kernels (lower_steps_): rk4_step's stages and
+  // sum, Gamma's on its lower triangle alone. Each stage's dGamma is symmetric and flush() leaves
+  // it in the lower triangle (Critic::Workspace::mirror_rate false); a stage's Gamma_s and
+  // Gamma_next are summed there, coefficient by coefficient as rk4_step, then mirrored
+  // (DenseKernels::mirror_lower): the same bits as rk4_step on the mirrored rates (Gamma is
+  // symmetric bit for bit), a mirror per stage as before, half the sums over Gamma.
+  void lower_step(double t_begin, double t_end, const State& x, State& x_next,
+                  Rk4Workspace<ClosedLoop>& w, Outputs* outputs, Data& data) const {
+    const double h = t_end - t_begin;
+    step_signals(t_begin, t_end, w);
+    const Eigen::Index k = basis_size(), head = gamma_offset(), tail = nu_offset();
+    const Eigen::Index rest = state_size() - tail;
+    // The state's parts apart from Gamma's upper triangle: [q, dq, Wc, Wa], Gamma's columns
+    // from the diagonal down, [nu, J]; `sum` on each (offset, size), then Gamma mirrored.
+    const DenseKernels& kernels = *critic_.kernels();
+    const auto parts = [&](State& out, const auto& sum) {
+      sum(0, head);
+      for (Eigen::Index j = 0; j < k; ++j) sum(head + j * (k + 1), k - j);
+      sum(tail, rest);
+      kernels.mirror_lower(k, out.data() + head, k);
+    };
+    const auto stage = [&](const State& rate, double c) {
+      parts(w.stage, [&](Eigen::Index begin, Eigen::Index size) {
+        kernels.stage_sum(size, x.data() + begin, rate.data() + begin, c, w.stage.data() + begin);
+      });
+    };
+    data.critic.mirror_rate = false;
+    derivative(w.begin, x, w.k1, outputs, data);
+    stage(w.k1, 0.5 * h);
+    derivative(w.middle, w.stage, w.k2, nullptr, data);
+    stage(w.k2, 0.5 * h);
+    derivative(w.middle, w.stage, w.k3, nullptr, data);
+    stage(w.k3, h);
+    derivative(w.end, w.stage, w.k4, nullptr, data);
+    data.critic.mirror_rate = true;
+    parts(x_next, [&](Eigen::Index begin, Eigen::Index size) {
+      kernels.rk4_sum(size, x.data() + begin, w.k1.data() + begin, w.k2.data() + begin,
+                      w.k3.data() + begin, w.k4.data() + begin, h / 6.0, x_next.data() + begin);
+    });
+    next_step_signals(t_end, w);
   }
 
   // One sample (the trajectory's or a point's) in the dispatched kernels: B^T [Wa, Wa - Wc] in
@@ -802,7 +863,8 @@ class ClosedLoop {
   bool gathers_;
   IdentifierType identifier_;  // the online identifier (identifier.hpp; disabled by default)
   bool identifies_;
-  bool low_rank_;  // step() takes low-rank steps (low_rank_steps())
+  bool low_rank_;     // step() takes low-rank steps (low_rank_steps())
+  bool lower_steps_;  // step() sums Gamma's lower triangle alone (lower_step)
   State initial_state_;
 };
 

@@ -57,6 +57,9 @@ class Critic {
     Eigen::Index gathered = 0;
     bool lower_only = false;      // gamma_rate holds blocks in its lower triangle only (flush)
     bool rate_unwritten = false;  // gamma_rate not zeroed yet (leave_rate_to_flush)
+    // flush() mirrors a rank-s rate's lower triangle; false: the caller reads the lower triangle
+    // alone and the entries above it are left as they are (ClosedLoop::lower_step).
+    bool mirror_rate = true;
     // low_rank_update's column of Gamma_next - Gamma, and its ||.||_F for the next
     // needs_reset(previous, gamma, w) (negative: none; that call sums it from the matrices).
     Vector change_column;
@@ -155,6 +158,7 @@ class Critic {
     }
     if (w.lower_only) {  // mirror the lower triangle (the blocks of this evaluation)
       w.lower_only = false;
+      if (!w.mirror_rate) return;
       const Eigen::Index n = gamma_rate.rows();
       if (kernels_ != nullptr) {  // in tiles transposed in registers (the same copies)
         kernels_->mirror_lower(n, gamma_rate.data(), gamma_rate.outerStride());

@@ -9,6 +9,7 @@
 //   - low_rank_update: Gamma - sum of four rank-one terms, and their norm    RK4 without points
 //   - mirror_lower: the lower triangle copied onto the upper one               the rank-s dGamma
 //   - point_regressor: omega = f - B x, c . omega and ||omega||^2               eqs. 21-22, a point
+//   - stage_sum, rk4_sum: RK4's sums on the state, as Eigen's, bit for bit        lower_step
 // All column-major on raw pointers: no Eigen or Pinocchio type crosses into the code built for
 // another instruction set (its inline functions would be merged with the portable build's at
 // link time). The portable path is no table at all (nullptr): the callers keep Eigen's products,
@@ -64,6 +65,12 @@ struct DenseKernels {
   void (*point_regressor)(long m, long first, long rows, long n, const double* b, long ldb,
                           const double* x, const double* f, const double* c, double* omega,
                           double* value, double* norm);
+  // RK4's sums on n entries (ClosedLoop::lower_step): a stage's out = x + c r, and the step's end
+  // out = x + h6 (((r1 + 2 r2) + 2 r3) + r4), each a product then a sum, no fused multiply-add:
+  // the same bits as Eigen's expressions of rk4_step (rk4.hpp) on the portable path.
+  void (*stage_sum)(long n, const double* x, const double* r, double c, double* out);
+  void (*rk4_sum)(long n, const double* x, const double* r1, const double* r2, const double* r3,
+                  const double* r4, double h6, double* out);
 };
 
 // The kernels of ADPARM_KERNELS on this CPU for a loop that gathers blocks of samples or not
