@@ -620,7 +620,8 @@ void check_lower_step(const adparm::PinocchioArm& arm) {
   Loop lower(settings, loop_arm, loop_arm, true, Case::basis(arm));
   Loop plain(settings, loop_arm, loop_arm, true, Case::basis(arm));
   if (!lower.lower_steps()) {
-    std::printf("bench=check run=lower_step basis=%s skipped=portable_kernels\n", Case::name());
+    std::printf("bench=check run=lower_step arm=planar_3link basis=%s skipped=portable_kernels\n",
+                Case::name());
     return;
   }
   auto lower_data = lower.make_data();

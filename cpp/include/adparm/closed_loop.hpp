@@ -190,7 +190,7 @@ class ClosedLoop {
         identifier_(make_identifier(settings, model)),
         identifies_(identifier_.enabled()),
         low_rank_(gathers_ && !extrapolation_.enabled() && controller_.learns()),
-        lower_steps_(gathers_ && !low_rank_ && controller_.learns() &&
+        lower_steps_(gathers_ && extrapolation_.enabled() && controller_.learns() &&
                      critic_.kernels() != nullptr) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
