@@ -74,6 +74,7 @@
 //   bench=check run=lower_step arm=A basis=B steps=n ok=1
 //     ClosedLoop::step with gathered blocks in the kernels (lower_step: Gamma summed on its lower
 //     triangle) equal bit for bit to rk4_step, step after step.
+#include <Eigen/QR>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -82,6 +83,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -673,6 +675,57 @@ adparm::TrajectorySettings sinusoid() {
   qd.frequency << 1.0, 2.0, 0.5, 3.0;
   qd.phase.setZero(2, 2);
   return qd;
+}
+
+// The covariance test (Critic::needs_reset: lambda_min(Gamma) < epsilon_T, by the pivots of a
+// factorisation of Gamma - epsilon_T I) against the eigenvalues it was built from: Gamma = Q
+// diag(l) Q^T with Q random orthogonal, l log-uniform in [1e-7, 100] and its least set to epsilon_T
+// (1 +- 1e-3) or left above it, at the paper's 8 functions (fixed size), 13, 21 and 24 (the loop of
+// the small sizes) and 30 and 78 (left-looking Cholesky). Forming Gamma and factoring it move
+// lambda_min by about 1e-13, a hundredth of the 1e-9 between it and epsilon_T: every answer must
+// be the eigenvalues'. A NaN off the diagonal must ask for a reset.
+template <class Basis>
+void check_covariance_test_size(Eigen::Index n, std::mt19937& random) {
+  adparm::CriticSettings settings;
+  settings.epsilon_T = 1e-6;
+  const adparm::Critic<Basis> critic(settings, n, false);
+  auto workspace = critic.workspace();
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform(std::log(1e-7), std::log(100.0));
+  int wrong = 0, below = 0;
+  constexpr int kTrials = 120;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    Eigen::MatrixXd a(n, n);
+    for (Eigen::Index i = 0; i < a.size(); ++i) a.data()[i] = normal(random);
+    const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(a).householderQ();
+    Eigen::VectorXd l(n);
+    for (Eigen::Index i = 0; i < n; ++i) l[i] = std::exp(uniform(random));
+    // trial % 3: 0, the least 1e-3 under epsilon_T; 1, 1e-3 above it; 2, all at 2 epsilon_T or more
+    const int kind = trial % 3;
+    const bool expected = kind == 0;
+    for (Eigen::Index i = 0; i < n; ++i) l[i] = std::max(l[i], 2.0 * settings.epsilon_T);
+    if (kind < 2) l[trial % n] = settings.epsilon_T * (expected ? 1.0 - 1e-3 : 1.0 + 1e-3);
+    Eigen::MatrixXd gamma = q * l.asDiagonal() * q.transpose();
+    gamma = (0.5 * (gamma + gamma.transpose())).eval();
+    below += expected;
+    if (critic.needs_reset(gamma, workspace) != expected) ++wrong;
+  }
+  Eigen::MatrixXd gamma = 10.0 * Eigen::MatrixXd::Identity(n, n);
+  gamma(n - 1, 0) = gamma(0, n - 1) = std::numeric_limits<double>::quiet_NaN();
+  const bool nan_resets = critic.needs_reset(gamma, workspace);
+  const bool ok = wrong == 0 && nan_resets && below > 0 && below < kTrials;
+  std::printf(
+      "bench=check run=covariance_test functions=%ld trials=%d below=%d wrong=%d "
+      "nan_resets=%d ok=%d\n",
+      static_cast<long>(n), kTrials, below, wrong, nan_resets ? 1 : 0, ok ? 1 : 0);
+  if (!ok) fail("covariance_test functions=" + std::to_string(n));
+}
+
+void check_covariance_test() {
+  std::mt19937 random(26);
+  check_covariance_test_size<adparm::PaperBasis>(8, random);
+  for (const Eigen::Index n : {8, 13, 21, 24, 30, 78})
+    check_covariance_test_size<adparm::ExpressionLoopBasis>(n, random);
 }
 
 void check_runs(double horizon) {
@@ -1313,6 +1366,7 @@ int run(double horizon, std::vector<long> point_counts, bool checks) {
     arms_ok = run_urdf_loops(std::min(horizon, kUrdfHorizon), {0, 50}, 3) && arms_ok;
   if (checks) {
     check_runs(horizon);
+    check_covariance_test();
     check_paper_port(horizon);
     const adparm::PinocchioArm planar(std::string(ADPARM_ARMS_DIR) + "/planar_3link.urdf",
                                       Eigen::Vector3d(0.0, 0.0, -9.81), Eigen::VectorXd(),

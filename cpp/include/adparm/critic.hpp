@@ -5,8 +5,8 @@
 // With Bellman-error extrapolation each law gains the average of the same term over the N
 // extrapolation points (extrapolation.hpp).
 // Gamma is reset to gamma0 I when its smallest eigenvalue falls below epsilon_T. The test needs no
-// eigen-decomposition: lambda_min(Gamma) >= epsilon_T exactly when Gamma - epsilon_T I has a
-// Cholesky factor.
+// eigen-decomposition: lambda_min(Gamma) >= epsilon_T exactly when the pivots of a factorisation
+// of Gamma - epsilon_T I (Cholesky's, L D L^T's) are all positive.
 // Dynamic sizes (K = Eigen::Dynamic, the URDF arms) gather the samples (trajectory and points) in
 // blocks (gather/flush): Gamma [omega_1 ... omega_s] is then one matrix product and the s rank-one
 // terms of dGamma one rank-s product, instead of s matrix-vector and s outer products (the same
@@ -177,7 +177,7 @@ class Critic {
   void leave_rate_to_flush(Workspace& w) const { w.rate_unwritten = kernels_ != nullptr; }
 
   // True when lambda_min(Gamma) < epsilon_T (also for a non-finite Gamma): below(gamma,
-  // epsilon_T, w), a Cholesky factorisation.
+  // epsilon_T, w), a factorisation's pivots.
   template <class CovarianceIn>
   bool needs_reset(const CovarianceIn& gamma, Workspace& w) const {
     return below(gamma, settings_.epsilon_T, w);
@@ -234,17 +234,18 @@ class Critic {
     w.margin = 0.5 * (settings_.gamma0 - settings_.epsilon_T);
   }
 
-  // True when lambda_min(Gamma) < threshold (also for a non-finite Gamma): an in-place Cholesky
-  // factorisation of Gamma - threshold I (lower triangle; Gamma is symmetric), fixed size, that
-  // stops at the first pivot that is not positive: about N^3 / 6 multiply-adds, no
-  // eigen-decomposition. A NaN or infinity reaches a pivot and fails the test.
-  // Dynamic sizes above 24 functions factor column by column (left-looking: column j is updated
-  // by one matrix-vector product with the columns before it, contiguous in the column-major
-  // buffer); smaller ones use the loop below, whose short rows stay in cache.
+  // True when lambda_min(Gamma) < threshold (also for a non-finite Gamma): an in-place
+  // factorisation of Gamma - threshold I (lower triangle; Gamma is symmetric) that stops at the
+  // first pivot that is not positive (Sylvester: all pivots are positive exactly when the matrix is
+  // positive definite): about N^3 / 6 multiply-adds, no eigen-decomposition. A NaN or infinity
+  // reaches a pivot and fails the test. Dynamic sizes above 24 functions take Cholesky's factor
+  // column by column (left-looking: column j is updated by one matrix-vector product with the
+  // columns before it, contiguous in the column-major buffer); up to 24 functions (the paper's 8
+  // among them) the loop below, L D L^T's pivots, whose short columns stay in cache.
   template <class CovarianceIn>
   bool below(const CovarianceIn& gamma, double threshold, Workspace& w) const {
     const Eigen::Index n = w.factor.rows();
-    Covariance& factor = w.factor;  // its lower triangle becomes L, Gamma - threshold I = L L^T
+    Covariance& factor = w.factor;  // its lower triangle: the factorisation's work
     factor = gamma;                 // (a buffer sized once: no allocation)
     if constexpr (kSize == Dynamic) {
       if (n > 24) {
@@ -259,17 +260,22 @@ class Critic {
         return false;
       }
     }
+    // Right-looking, without square roots (the pivots of L D L^T, Gaussian elimination of the
+    // symmetric matrix): column j's pivot d, then the trailing lower triangle less the outer
+    // product of its column scaled by 1/d. The pivots are those of the Cholesky factorisation
+    // (d_j = L_jj^2) up to round-off; the chain from one pivot to the next is a division and a
+    // multiply-add instead of a square root, a division and a dot product.
+    for (Eigen::Index j = 0; j < n; ++j) factor(j, j) -= threshold;
     for (Eigen::Index j = 0; j < n; ++j) {
-      double pivot = factor(j, j) - threshold;
-      for (Eigen::Index k = 0; k < j; ++k) pivot -= factor(j, k) * factor(j, k);
+      const double pivot = factor(j, j);
       if (!(pivot > 0.0)) return true;  // also catches NaN
-      const double diagonal = std::sqrt(pivot);
-      const double inverse = 1.0 / diagonal;  // one division per column
-      factor(j, j) = diagonal;
+      const double inverse = 1.0 / pivot;
       for (Eigen::Index i = j + 1; i < n; ++i) {
-        double value = factor(i, j);
-        for (Eigen::Index k = 0; k < j; ++k) value -= factor(i, k) * factor(j, k);
-        factor(i, j) = value * inverse;
+        const double scaled = factor(i, j) * inverse;
+        if constexpr (kSize != Dynamic)  // whole fixed-size columns (above the diagonal: unread)
+          factor.col(i) -= scaled * factor.col(j);
+        else
+          factor.col(i).tail(n - i) -= scaled * factor.col(j).tail(n - i);
       }
     }
     return false;
@@ -348,8 +354,9 @@ class Critic {
   }
 
  private:
-  // Above the round-off of a Cholesky factorisation of an n x n matrix of norm <= gamma0 (Gamma
-  // only decreases between resets: each RK4 stage's dGamma is negative semi-definite).
+  // Above the round-off of a Cholesky (or L D L^T) factorisation of an n x n matrix of norm <=
+  // gamma0 (Gamma only decreases between resets: each RK4 stage's dGamma is negative
+  // semi-definite).
   double round_off_tolerance(Eigen::Index n) const {
     return 1e-12 * static_cast<double>(n * n) * settings_.gamma0;
   }
