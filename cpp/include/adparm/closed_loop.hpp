@@ -621,15 +621,22 @@ class ClosedLoop {
         kernels.stage_sum(size, x.data() + begin, rate.data() + begin, c, w.stage.data() + begin);
       });
     };
-    data.critic.mirror_rate = false;
-    derivative(w.begin, x, w.k1, outputs, data);
-    stage(w.k1, 0.5 * h);
-    derivative(w.middle, w.stage, w.k2, nullptr, data);
-    stage(w.k2, 0.5 * h);
-    derivative(w.middle, w.stage, w.k3, nullptr, data);
-    stage(w.k3, h);
-    derivative(w.end, w.stage, w.k4, nullptr, data);
-    data.critic.mirror_rate = true;
+    {
+      // the stages' rates stay in the lower triangle; mirror_rate is true again when the block
+      // ends, also should a derivative throw (any later evaluation of this Data then mirrors)
+      struct LowerRates {
+        bool& mirror_rate;
+        ~LowerRates() { mirror_rate = true; }
+      } lower_rates{data.critic.mirror_rate};
+      lower_rates.mirror_rate = false;
+      derivative(w.begin, x, w.k1, outputs, data);
+      stage(w.k1, 0.5 * h);
+      derivative(w.middle, w.stage, w.k2, nullptr, data);
+      stage(w.k2, 0.5 * h);
+      derivative(w.middle, w.stage, w.k3, nullptr, data);
+      stage(w.k3, h);
+      derivative(w.end, w.stage, w.k4, nullptr, data);
+    }
     parts(x_next, [&](Eigen::Index begin, Eigen::Index size) {
       kernels.rk4_sum(size, x.data() + begin, w.k1.data() + begin, w.k2.data() + begin,
                       w.k3.data() + begin, w.k4.data() + begin, h / 6.0, x_next.data() + begin);
