@@ -57,18 +57,15 @@ constexpr Eigen::Index size_of(int compile_time, Eigen::Index runtime) {
   return compile_time == Dynamic ? runtime : compile_time;
 }
 
-// A joint-sized (or error-sized) matrix times a vector, a x: dynamic sizes coefficient by
-// coefficient (lazyProduct: each entry's sum over the columns in order, as Eigen's matrix-vector
-// kernel sums it - the same runs bit for bit, checked on the portable and dispatched paths -
-// without the kernel's call, which costs more than a 3 x 3 product); fixed sizes as Eigen's
-// product (unrolled already).
+// A joint-sized (or error-sized) matrix times a vector, a x, coefficient by coefficient
+// (lazyProduct: each entry's sum over the columns in order, as Eigen's matrix-vector kernel sums
+// it - the same runs bit for bit, checked on the portable and dispatched paths - without the
+// kernel's call, which costs more than a 3 x 3 product). Fixed sizes too: in an expression such
+// as (dqd - dq) + alpha1 e1, Eigen's product would be assigned apart (a = b; a += alpha1 e1, a
+// function call of its own); the lazy product is one coefficient-wise pass with the same sums.
 template <class Matrix, class Vector>
 auto small_product(const Matrix& a, const Vector& x) {
-  if constexpr (Matrix::RowsAtCompileTime == Eigen::Dynamic ||
-                Matrix::ColsAtCompileTime == Eigen::Dynamic)
-    return a.lazyProduct(x);
-  else
-    return a * x;
+  return a.lazyProduct(x);
 }
 
 // Throws std::invalid_argument unless 1 <= n <= kMaxDof (a dynamic joint count) and 1 <= k <=
