@@ -9,7 +9,10 @@ how many end within 1 %, and whether every run outside 1 % says so in its verdic
 silent).
 
     python bench/every_arm.py [--arms ur3,chain4,...] [--seed 0] [--T 10] [--runs 20]
-                              [--skip-table] [--skip-runs]
+                              [--skip-table] [--skip-runs] [--from-defaults]
+
+With --from-defaults the table's runs start from the default weights instead (a user's first
+run with their own cost: docs, URDF arms, "Your own cost").
 
 The random cost is of the exact family in the arm's own units: with D = the derived default
 R^-1 (10 M_ii(qd) per joint: an optimal policy acting at about 10/s),
@@ -163,11 +166,12 @@ def target_config(
     *,
     T: float = 10.0,
     q0_spread: float = 0.0,
-    off: float = 0.2,
+    off: float | None = 0.2,
 ) -> adparm.Config:
     """The target's run: the plant only, a random exact cost, critic and actor weights each
-    ``off`` from W* (drawn apart) and sim.T; with q0_spread > 0, q0 = the default q0 + uniform
-    (-spread, spread) per joint, clipped into the joint limits."""
+    ``off`` from W* (drawn apart; None: the default weights, a user's first run with their own
+    cost) and sim.T; with q0_spread > 0, q0 = the default q0 + uniform (-spread, spread) per
+    joint, clipped into the joint limits."""
     base = adparm.Config.from_dict({"plant": plant})
     cost = random_exact_cost(rng, np.array(base.cost.R))
     data: dict[str, Any] = {
@@ -182,6 +186,8 @@ def target_config(
         low = np.nan_to_num(np.asarray(limits["lower"], dtype=float), nan=-np.inf)
         high = np.nan_to_num(np.asarray(limits["upper"], dtype=float), nan=np.inf)
         data["task"] = {"q0": np.clip(q0, low, high).tolist()}
+    if off is None:
+        return adparm.Config.from_dict(data)
     W = adparm.optimal_weights(adparm.Config.from_dict(data))
     data["init"] = {
         "critic_weights": off_by(rng, W, off).tolist(),
@@ -244,7 +250,9 @@ def _number(value: float | None, form: str = ".2g") -> str:
     return "-" if value is None else format(value, form)
 
 
-def table(names: list[str], folder: Path, seed: int, T: float) -> list[dict[str, Any]]:
+def table(
+    names: list[str], folder: Path, seed: int, T: float, off: float | None = 0.2
+) -> list[dict[str, Any]]:
     print(
         "| arm | joints | ks | dt (s) | verdict | critic error | policy error | "
         "within 1 % from (s) | compute per simulated s (s) |",
@@ -254,7 +262,7 @@ def table(names: list[str], folder: Path, seed: int, T: float) -> list[dict[str,
     rows = []
     for name in names:
         rng = np.random.default_rng([seed, ARMS.index(name)])  # the row's cost: not the order
-        row = measure(target_config(arm_plant(name, folder, seed), rng, T=T))
+        row = measure(target_config(arm_plant(name, folder, seed), rng, T=T, off=off))
         rows.append(row)
         verdict = row["verdict"] if len(row["verdict"]) < 300 else row["verdict"][:300] + " ..."
         print(
@@ -293,12 +301,17 @@ def main() -> None:
     parser.add_argument("--repeat-arms", default="chain3,ur5")
     parser.add_argument("--skip-table", action="store_true")
     parser.add_argument("--skip-runs", action="store_true")
+    parser.add_argument(
+        "--from-defaults",
+        action="store_true",
+        help="the table's runs start from the default weights (a first run with one's own cost)",
+    )
     parser.add_argument("--folder", default="/tmp/adparm-every-arm")
     args = parser.parse_args()
     folder = Path(args.folder)
     folder.mkdir(parents=True, exist_ok=True)
     if not args.skip_table:
-        table(args.arms.split(","), folder, args.seed, args.T)
+        table(args.arms.split(","), folder, args.seed, args.T, None if args.from_defaults else 0.2)
     if not args.skip_runs:
         for name in args.repeat_arms.split(","):
             repeated(name, folder, args.runs, args.seed, args.T)

@@ -147,3 +147,56 @@ def test_the_learning_defaults_of_a_urdf_arm_and_the_paper_s() -> None:
     paper = adparm.paper_config()
     assert (paper.critic.epsilon_T, paper.actor.eta_a1, paper.actor.eta_a2) == (None, 0.01, 1.0)
     assert "actor.eta_a1" not in paper.derived and "actor.eta_a2" not in paper.derived
+
+
+def _own_cost(name: str, seed: int, folder: Path) -> adparm.Config:
+    """A user's first run with their own cost: the bench's random cost of the exact family for
+    the seed (bench/every_arm.py --from-defaults), the default weights, sim.dt = "auto"."""
+    rng = np.random.default_rng([seed, every_arm.ARMS.index(name)])
+    return every_arm.target_config(every_arm.arm_plant(name, folder, seed), rng, off=None)
+
+
+def _suggested(text: str) -> dict:
+    """The change a message names: actor.eta_a2 = a and sim.T = b s, as an update."""
+    found = re.search(
+        r"actor\.eta_a2 = ([0-9.e+-]+) \(not [0-9.e+-]+\) and sim\.T = ([0-9.e+-]+) s", text
+    )
+    assert found, text
+    return {"actor": {"eta_a2": float(found[1])}, "sim": {"T": float(found[2])}}
+
+
+def test_a_divergence_from_an_actor_that_follows_an_unsettled_critic_names_a_change_that_works(
+    folder: Path,
+) -> None:
+    """A random 6-joint chain with its own cost diverges at about 0.2 s from the default weights
+    (its actor's policy, stable at every frozen instant, follows the critic's first, unsettled
+    fits at 5/s); the message says so and names actor.eta_a2 = 0.5 with sim.T = 20 s, with which
+    the same run ends "ok"."""
+    config = _own_cost("chain6", 40, folder)
+    assert config.actor.eta_a2 == 5.0 and config.sim.T == 10.0
+    with pytest.raises(adparm.SimulationDiverged) as caught:
+        adparm.simulate(config, diagnose=False)
+    message = str(caught.value)
+    assert "the actor followed the critic at actor.eta_a2 = 5/s before the critic's" in message
+    change = _suggested(message)
+    assert change == {"actor": {"eta_a2": 0.5}, "sim": {"T": 20.0}}
+    result = adparm.simulate(config.updated(change))
+    assert result.diagnostics["verdict"] == "ok", result.diagnostics["verdict"]
+    # a slow actor is not told to be slower
+    assert divergence_causes(config.updated(change), caught.value.result)[0].startswith(
+        "the closed loop's rates"
+    )
+
+
+def test_a_non_stabilising_e2_block_names_a_change_that_works(folder: Path) -> None:
+    """A random 7-joint chain with its own cost ends at a non-stabilising e2 block from the
+    default weights; the advice (no longer "start from the default weights", which it did) names
+    actor.eta_a2 = 0.5 with sim.T = 20 s and no longer run at the same rate, and that run ends
+    "ok"."""
+    config = _own_cost("chain7", 43, folder)
+    diagnostics = adparm.simulate(config).diagnostics
+    assert diagnostics["verdict"].startswith("ended at a non-stabilising solution")
+    assert len(diagnostics["advice"]) == 1, diagnostics["advice"]
+    assert diagnostics["advice"][0].endswith("the actor followed the critic before it settled")
+    result = adparm.simulate(config.updated(_suggested(diagnostics["advice"][0])))
+    assert result.diagnostics["verdict"] == "ok", result.diagnostics["verdict"]

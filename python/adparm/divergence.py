@@ -11,16 +11,26 @@ import numpy as np
 from .basis_family import UrdfStructuredBasis, basis_for
 from .config import Config
 from .desired import desired_state
-from .rates import AUTO_MARGIN, RK4_STABILITY_LIMIT, auto_step, closed_loop_rates, rates_text
+from .rates import (
+    AUTO_MARGIN,
+    ETA_A2_SLOW,
+    RK4_STABILITY_LIMIT,
+    SLOW_ACTOR_T,
+    auto_step,
+    closed_loop_rates,
+    rates_text,
+)
 from .result import SimulationResult
 from .translate import extrapolation_points
 from .urdf import config_arm
 
 __all__ = [
+    "actor_followed_critic",
     "divergence_causes",
     "estimate_jump",
     "extrapolation_shortfall",
     "initial_actor_e2_block",
+    "slow_actor_change",
 ]
 
 
@@ -145,10 +155,52 @@ def estimate_jump(result: SimulationResult, window: float = 0.1) -> str | None:
     )
 
 
+def slow_actor_change(config: Config) -> str | None:
+    """The change that keeps the actor of a URDF arm's structured basis from following its critic
+    before the critic's least squares has settled: actor.eta_a2 = rates.ETA_A2_SLOW with sim.T at
+    least rates.SLOW_ACTOR_T (the actor's lag e^(-eta_a2 T) then ends below 5e-5 of its start).
+    Random 6- and 7-joint chains with their own cost that diverged or ended at a non-stabilising
+    e2 block at the derived 5/s end within 1 % of W* with it (docs: URDF arms, "Your own cost").
+    None for other bases, without learning, or when the actor is that slow already."""
+    if not isinstance(basis_for(config), UrdfStructuredBasis):
+        return None
+    if not (config.actor.eta_a2 > ETA_A2_SLOW and config.critic.eta_c > 0.0):
+        return None
+    T = max(config.sim.T, SLOW_ACTOR_T)
+    return f"actor.eta_a2 = {ETA_A2_SLOW:g} (not {config.actor.eta_a2:g}) and sim.T = {T:g} s"
+
+
+def actor_followed_critic(config: Config, result: SimulationResult) -> str | None:
+    """For a diverged run of a URDF arm's structured basis whose actor's weights moved by more
+    than 5 % (relative, by norm) before the divergence: the actor followed the critic at
+    actor.eta_a2 while the critic's least squares was still far from settled (on a random 6-joint
+    chain with its own cost the critic's e2 weights swung to 10 times their start within 0.2 s,
+    and the actor's policy, stable at every frozen instant, diverged with them), with the change
+    that avoids it (slow_actor_change). None otherwise."""
+    change = slow_actor_change(config)
+    weights = result.actor_weights
+    if change is None or weights.shape[0] < 2:
+        return None
+    finite = np.nonzero(np.all(np.isfinite(weights), axis=1))[0]
+    start = np.linalg.norm(weights[0])
+    if finite.size < 2 or not start > 0.0:
+        return None
+    last = finite[-1]
+    moved = float(np.linalg.norm(weights[last] - weights[0]) / start)
+    if not moved > 0.05:
+        return None
+    return (
+        f"the actor's weights moved by {moved:.3g} (relative, by norm) by t = "
+        f"{result.t[last]:.6g} s: the actor followed the critic at actor.eta_a2 = "
+        f"{config.actor.eta_a2:g}/s before the critic's least squares settled (use {change})"
+    )
+
+
 def divergence_causes(config: Config, result: SimulationResult | None = None) -> list[str]:
     """Likely causes of a divergence that the config shows before any run, each with a change
     that is not already in effect: the measured fast rates of the closed loop against RK4's limit
-    at sim.dt (rates.closed_loop_rates; a smaller sim.dt that keeps them inside it), initial
+    at sim.dt (rates.closed_loop_rates; a smaller sim.dt that keeps them inside it), given the
+    partial result an actor that followed an unsettled critic (actor_followed_critic), initial
     actor weights of the structured basis of a URDF arm whose e2 block is not positive definite
     (only when init.actor_weights is set), fewer extrapolation points than basis functions, and
     first an expression basis term that is not finite at a fixed extrapolation point or (given
@@ -173,6 +225,9 @@ def divergence_causes(config: Config, result: SimulationResult | None = None) ->
             f"limit {RK4_STABILITY_LIMIT}/sim.dt = {RK4_STABILITY_LIMIT / dt:.4g}/s (use "
             f'sim.dt = {auto_step(rates, config.sim.T):g}, which sim.dt = "auto" picks)'
         )
+    chase = None if result is None or jump is not None else actor_followed_critic(config, result)
+    if chase is not None:
+        causes.append(chase)
     block = initial_actor_e2_block(config)
     if block is not None and block["min_eigenvalue"] <= 0.0:
         causes.append(

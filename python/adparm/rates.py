@@ -84,6 +84,10 @@ ETA_A1_PAPER = 0.01
 #: actor.eta_a2 of a URDF arm with extrapolation (paper: 1), the rate at which the actor follows
 #: the critic (a 7-joint chain: with 1, actor 1.7 % off after 10 s; with 5, 1e-9; docs).
 ETA_A2_URDF = 5.0
+#: actor.eta_a2 and sim.T (at least) that messages suggest when the actor followed an unsettled
+#: critic (divergence.slow_actor_change).
+ETA_A2_SLOW = 0.5
+SLOW_ACTOR_T = 20.0
 
 _SAMPLES = 64
 _SEED = 20241202

@@ -29,15 +29,11 @@ from .divergence import (
     e2_block_min_eigenvalues,
     extrapolation_shortfall,
     initial_actor_e2_block,
+    slow_actor_change,
     structured_e2_block_min_eigenvalue,
 )
 from .identification import identifier_diagnosis, judged_config, model_gap_text
-from .optimal import (
-    basis,
-    lqr_value,
-    optimal_weights,
-    policy,
-)
+from .optimal import basis, lqr_value, optimal_weights, policy
 from .rates import nice_ceil
 from .residual import hjb_residual, residual_settings
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
@@ -421,18 +417,17 @@ def _diagnose_learning(
         if paper_basis or urdf_structured
         else math.inf
     )
+    chased = None  # set: the actor followed an unsettled critic (divergence.slow_actor_change)
     if lowest <= 0.0:
         problems.append(
             "ended at a non-stabilising solution: the e2 block of the learned V is not positive "
             f"definite (lambda_min = {lowest:.3g}"
             + (" over the explored joint positions)" if urdf_structured else ")")
         )
-        advice.append(
-            "start from the default weights (the believed model's inertia) with more "
-            "extrapolation points"
-            if urdf_structured
-            else "keep actor.positive_e2 = true (the default)"
-        )
+        if not urdf_structured:
+            advice.append("keep actor.positive_e2 = true (the default)")
+        elif chased := slow_actor_change(config):  # pulled by the critic's first, unsettled fits
+            advice.append(f"{chased}: the actor followed the critic before it settled")
     short = []  # the parts that end outside the tolerance of the known optimum
     if target is not None:
         for key, text in (
@@ -512,6 +507,10 @@ def _diagnose_learning(
                 else ""
             )
         )
+    if chased:  # a longer run at the same rate does not leave the non-stabilising solution
+        advice[:] = [
+            a for a in advice if not a.startswith(("run longer", "a longer", "learning is"))
+        ]
     shortfall = extrapolation_shortfall(config)
     out["extrapolation_shortfall"] = shortfall
     if shortfall is not None and problems:  # a likely reason why learning fell short
