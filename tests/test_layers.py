@@ -51,6 +51,7 @@ LAYERS = {
     "residual": 4,
     "yardstick": 4,
     "identification": 4,
+    "progress": 4,
     "against_plant": 4,
     "truth": 4,
     "comparison": 4,

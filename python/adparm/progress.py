@@ -1,0 +1,71 @@
+"""How much longer a run needs, from its own progress towards a known W*: longer_run_estimate,
+and the advice adparm.truth gives with it (longer_run_advice)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .rates import nice_ceil
+from .result import SimulationResult
+
+__all__ = ["LONGER_RUN_LIMIT", "longer_run_advice", "longer_run_estimate"]
+
+
+def longer_run_estimate(
+    result: SimulationResult, target: np.ndarray | None, tolerance: float
+) -> dict[str, float] | None:
+    """How much longer learning needs, from the run's own progress (W* known): the larger of the
+    critic's and the actor's relative weight errors, e(t), falls from e(t_mid) to e(t_end) over
+    the second half of the run; at that exponential rate it reaches ``tolerance`` after
+    ``needed`` = ln(e(t_end) / tolerance) / rate more seconds, and ``T`` = a round horizon of at
+    least t_end + 1.5 needed (a margin: learning slows near the end). ``needed`` is inf when the
+    error did not fall. None without W* or rows."""
+    if target is None or result.t.size < 4:
+        return None
+    norm = float(np.linalg.norm(target))
+    error = np.maximum(
+        np.linalg.norm(result.critic_weights - target, axis=1),
+        np.linalg.norm(result.actor_weights - target, axis=1),
+    ) / max(norm, 1e-300)
+    t = result.t
+    t_end = float(t[-1])
+    middle = int(np.searchsorted(t, t[0] + 0.5 * (t_end - t[0])))
+    e_mid, e_end = float(error[middle]), float(error[-1])
+    out = {"error_mid": e_mid, "error_end": e_end, "t_mid": float(t[middle]), "t_end": t_end}
+    if not (e_end < e_mid) or not math.isfinite(e_end) or t_end <= t[middle]:
+        return {**out, "needed": math.inf, "T": math.inf}
+    rate = math.log(e_mid / e_end) / (t_end - float(t[middle]))
+    needed = max(0.0, math.log(e_end / tolerance) / rate)
+    return {**out, "needed": needed, "T": nice_ceil(t_end + 1.5 * needed)}
+
+
+#: A longer run is suggested only up to this many times the run's horizon (beyond, learning is
+#: too slow for a longer run to be the remedy).
+LONGER_RUN_LIMIT = 20.0
+
+
+def longer_run_advice(result: SimulationResult, target: np.ndarray | None, tolerance: float) -> str:
+    estimate = longer_run_estimate(result, target, tolerance)
+    if estimate is None:
+        return "run longer (sim.T)"
+    progress = (
+        f"the weights' error went from {estimate['error_mid']:.3g} at t = "
+        f"{estimate['t_mid']:.3g} s to {estimate['error_end']:.3g} at {estimate['t_end']:.3g} s"
+    )
+    if math.isfinite(estimate["T"]) and estimate["T"] <= LONGER_RUN_LIMIT * result.config.sim.T:
+        return (
+            f"run longer: {progress}; at that rate sim.T = {estimate['T']:g} s reaches the "
+            "tolerance (an estimate with a margin of 1.5)"
+        )
+    if not math.isfinite(estimate["T"]):
+        return (
+            f"a longer run will not help: {progress} (no progress over the second half of the run)"
+        )
+    return (
+        f"learning is slow: {progress}; at that rate the tolerance needs about "
+        f"{estimate['needed']:.3g} s more (sim.T = {estimate['T']:g} s, over "
+        f"{LONGER_RUN_LIMIT:g} times this run's); likely some direction of the weights is "
+        "barely informed by the samples (the cost R, the extrapolation box or the basis)"
+    )
