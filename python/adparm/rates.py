@@ -259,7 +259,8 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     put(
         "actor.weight_bound",
         max(100.0, 10.0 * size),
-        f"10 times ||W*|| = {size:.3g} (K and the base parameters), at least 100",
+        f"10 times ||[K; beta]|| = {size:.3g} (K = -Q12, beta the base parameters: W* for a "
+        "cost of the exact family), at least 100",
     )
     put("extrapolation.points", 2 * config.basis_size, "twice the basis functions")
     points = values.get(("extrapolation", "points"), config.extrapolation.points)

@@ -90,9 +90,10 @@ _REASONS: dict[str, str] = {
     "model": "Not in the paper; the controller's model defaults to the plant (exact model).",
     "actor.positive_e2": (
         "Not in the paper (its proj{} bounds only ||Wa||): the projection also keeps the e2 block "
-        "of the critic's and the actor's V positive definite at cos q2 = +-1. Without it about one "
-        "run in four with other probe phases or q(0) ends at the anti-stabilising HJB solution "
-        "(e2 block negated), reported as finished."
+        "of the critic's and the actor's V positive definite at cos q2 = +-1 (a URDF arm's "
+        "structured basis: at qd(0), q(0) and joint positions of the extrapolation box). Without "
+        "it about one run in four with other probe phases or q(0) ends at the anti-stabilising "
+        "HJB solution (e2 block negated), reported as finished."
     ),
     "actor.e2_margin": "Not in the paper; see actor.positive_e2 (lambda_min >= 0.01 kg m^2).",
     "controller.basis": (
@@ -537,7 +538,8 @@ def summary_markdown(summary: dict[str, Any]) -> str:
     if target is None:
         lines += [
             "",
-            f"W* is not known for this configuration: {summary['optimal_weights_unavailable']}",
+            "W* is not known for this configuration (it is for a cost of the exact family, "
+            f"adparm.solvable_cost): {summary['optimal_weights_unavailable']}",
         ]
     else:
         tol = 100 * summary["tolerance"]
