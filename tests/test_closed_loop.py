@@ -447,6 +447,51 @@ def test_short_simulation_matches_numpy_rk4_local_sinusoid_adp() -> None:
     assert np.abs(reseeded.state[4:20] - expected[-1, 4:20]).max() > 1e-4
 
 
+def test_points_of_a_moving_desired_state_are_those_prepared_at_every_evaluation() -> None:
+    """A URDF arm tracking a sinusoid with fixed extrapolation points: the core prepares the points
+    once per desired state (RK4's second and third stages share it, the fourth the next step's
+    first); its run equals RK4 over the core's derivative, a fresh loop at every evaluation that
+    prepares them there."""
+    config = adparm.Config.from_dict(
+        {
+            "plant": {"urdf": "examples/arms/planar_3link.urdf"},
+            "task": {
+                "qd": {
+                    "kind": "sinusoid",
+                    "amplitude": [0.4, 0.3, 0.2],
+                    "frequency": [1.0, 1.5, 2.0],
+                    "offset": [0.0, 0.2, -0.1],
+                }
+            },
+            "extrapolation": {"points": 6},
+            "critic": {"epsilon_T": 0.0},  # no resets: a plain RK4 run
+            "sim": {"dt": 1e-3, "T": 0.03},
+        }
+    )
+    settings = core_settings(config)
+    simulation = _core.Simulation(settings)
+    state = np.array(simulation.state, dtype=float)
+    steps, dt = 30, config.sim.dt
+
+    def rate(t: float, y: np.ndarray) -> np.ndarray:
+        return np.asarray(_core.closed_loop_derivative(settings, t, y)[0])
+
+    t = 0.0
+    for _ in range(steps):
+        k1 = rate(t, state)
+        k2 = rate(t + 0.5 * dt, state + 0.5 * dt * k1)
+        k3 = rate(t + 0.5 * dt, state + 0.5 * dt * k2)
+        k4 = rate(t + dt, state + dt * k3)
+        state = state + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        t += dt
+    simulation.advance(steps)
+    np.testing.assert_allclose(simulation.state, state, rtol=1e-11, atol=1e-13)
+    # the points matter here
+    alone = _core.Simulation(core_settings(config.updated({"extrapolation": {"points": 0}})))
+    alone.advance(steps)
+    assert np.abs(np.asarray(alone.state) - state).max() > 1e-9
+
+
 def test_short_simulation_matches_numpy_rk4_samples_pd() -> None:
     t = [-0.1, 0.05, 0.1, 0.15, 0.25]
     config = adparm.paper_config().updated(

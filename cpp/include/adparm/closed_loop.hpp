@@ -149,6 +149,8 @@ class ClosedLoop {
     int stage = -1;
     double stage_scale = 0.0;
     const double* step_covariance = nullptr;
+    // Dynamic sizes: the points of a moving desired state (extrapolation.hpp)
+    std::conditional_t<kDof == Dynamic, MovingPoints<Basis, kDof>, NoTerms> moving_points;
   };
 
   struct Outputs {
@@ -226,6 +228,13 @@ class ClosedLoop {
   Eigen::Index state_size() const { return cost_offset() + 1; }
 
   const State& initial_state() const { return initial_state_; }
+
+  static MovingPoints<Basis, kDof>* moving_points(Data& data) {
+    if constexpr (kDof == Dynamic)
+      return &data.moving_points;
+    else
+      return nullptr;
+  }
 
   Data make_data() const {
     Data data;
@@ -425,7 +434,7 @@ class ClosedLoop {
       }
       if (!stacked)
         extrapolation_.for_each(basis_, system, cost_, desired, critic_weights, actor_weights,
-                                data.point_terms, data.basis, learn);
+                                data.point_terms, data.basis, moving_points(data), learn);
       if constexpr (kBasisSize == Dynamic)
         if (!low_rank) critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
       if (actor_.settings().positive_e2) {  // not in the paper: positive_block.hpp

@@ -54,6 +54,25 @@ class UniformDraws {
   std::mt19937 generator_;
 };
 
+// The points of a moving desired state (or of local points), prepared at one desired state:
+// ClosedLoop's Data owns them. RK4's second and third stages share their time, and the fourth
+// the next step's first: prepared again only when the desired state (bit for bit) or the points
+// (Extrapolation::generation) change, so the numbers are those of preparing at every evaluation.
+// Sized on the first preparation (allocates once).
+template <class Basis, int Dof>
+struct MovingPoints {
+  std::vector<HjbPoint<Basis, Dof>, Eigen::aligned_allocator<HjbPoint<Basis, Dof>>> points;
+  DesiredStateT<Dof> desired;
+  std::int64_t generation = -1;  // none prepared yet
+
+  bool holds(const DesiredStateT<Dof>& other, std::uint32_t current) const {
+    return generation == static_cast<std::int64_t>(current) && desired.q.size() == other.q.size() &&
+           (desired.q.array() == other.q.array()).all() &&
+           (desired.dq.array() == other.dq.array()).all() &&
+           (desired.ddq.array() == other.ddq.array()).all();
+  }
+};
+
 template <class Arm, class Basis>
 class Extrapolation {
  public:
@@ -125,7 +144,12 @@ class Extrapolation {
   const Points& points() const { return points_; }
   // The believed model changed (online identification): prepared points are prepared again at
   // the next begin_step.
-  void model_changed() { prepared_valid_ = false; }
+  void model_changed() {
+    prepared_valid_ = false;
+    ++generation_;
+  }
+  // Changes whenever the points or the believed model do (MovingPoints).
+  std::uint32_t generation() const { return generation_; }
 
   // Start of a step at error state x: draws new local points; prepares points that are fixed for
   // the step when the desired state is constant. `terms`: a buffer of the model's terms at a point
@@ -138,6 +162,7 @@ class Extrapolation {
       shifted_ = x + centre_;  // no allocation: sized at construction
       draw(shifted_);
       prepared_valid_ = false;
+      ++generation_;
     }
     if (constant_desired_ && !prepared_valid_) {
       for (long i = 0; i < size(); ++i)
@@ -197,29 +222,60 @@ class Extrapolation {
   static constexpr Eigen::Index kMaxStacked = Eigen::Index(1) << 22;  // 32 MB
 
   // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state
-  // (`terms`, `workspace` as for begin_step).
+  // (`terms`, `workspace` as for begin_step); points not prepared for the step (a moving desired
+  // state, local points) come from `moving`, prepared there when it does not hold them.
   template <class F>
   void for_each(const Basis& basis, const ErrorSystem<Arm>& system,
                 const QuadraticCostT<kDof>& cost, const Desired& desired,
                 const typename Basis::Vector& critic_weights,
                 const typename Basis::Vector& actor_weights, typename Arm::Terms& terms,
-                BasisWorkspace<Basis>& workspace, F&& f) const {
+                BasisWorkspace<Basis>& workspace,
+                [[maybe_unused]] MovingPoints<Basis, kDof>* moving, F&& f) const {
     if (!enabled()) return;
     const double weight = 1.0 / static_cast<double>(size());
-    Point fresh;
-    Evaluation evaluation;
-    for (long i = 0; i < size(); ++i) {
-      const Point* point = &prepared_[i];
-      if (!prepared_valid_) {
-        prepare_hjb_point(basis, system, cost, points_[i], desired, terms, fresh, workspace);
-        point = &fresh;
+    if constexpr (kDof == Dynamic) {  // the fixed-size loops keep preparing at each evaluation
+      const Point* prepared =
+          prepared_valid_ ? prepared_.data()
+                          : moving_points(basis, system, cost, desired, terms, workspace, *moving);
+      Evaluation evaluation;
+      for (long i = 0; i < size(); ++i) {
+        evaluate_hjb(prepared[i], cost, critic_weights, actor_weights, evaluation);
+        f(prepared[i], evaluation, weight);
       }
-      evaluate_hjb(*point, cost, critic_weights, actor_weights, evaluation);
-      f(*point, evaluation, weight);
+    } else {
+      Point fresh;
+      Evaluation evaluation;
+      for (long i = 0; i < size(); ++i) {
+        const Point* point = &prepared_[i];
+        if (!prepared_valid_) {
+          prepare_hjb_point(basis, system, cost, points_[i], desired, terms, fresh, workspace);
+          point = &fresh;
+        }
+        evaluate_hjb(*point, cost, critic_weights, actor_weights, evaluation);
+        f(*point, evaluation, weight);
+      }
     }
   }
 
  private:
+  // The points of `moving`, prepared at `desired` unless it holds them (out of line: for_each,
+  // inlined into the loop's derivative, stays as small as it was for the paper's loop).
+  ADPARM_NOINLINE const Point* moving_points(const Basis& basis, const ErrorSystem<Arm>& system,
+                                             const QuadraticCostT<kDof>& cost,
+                                             const Desired& desired, typename Arm::Terms& terms,
+                                             BasisWorkspace<Basis>& workspace,
+                                             MovingPoints<Basis, kDof>& moving) const {
+    if (!moving.holds(desired, generation_)) {
+      moving.points.resize(static_cast<std::size_t>(size()));
+      for (long i = 0; i < size(); ++i)
+        prepare_hjb_point(basis, system, cost, points_[i], desired, terms, moving.points[i],
+                          workspace);
+      moving.desired = desired;
+      moving.generation = static_cast<std::int64_t>(generation_);
+    }
+    return moving.points.data();
+  }
+
   void draw(const Error& centre) {
     for (Error& point : points_)
       for (Eigen::Index axis = 0; axis < point.size(); ++axis)
@@ -233,6 +289,7 @@ class Extrapolation {
   UniformDraws draws_;
   bool constant_desired_ = true;
   bool prepared_valid_ = false;
+  std::uint32_t generation_ = 0;  // model_changed() and local draws (in the bools' padding)
   Points points_;
   std::vector<Point, Eigen::aligned_allocator<Point>> prepared_;
   Eigen::MatrixXd stacked_input_gradients_;    // K x nN, [B_1 ... B_N] (stacked())
