@@ -179,11 +179,11 @@ def actor_followed_critic(config: Config, result: SimulationResult) -> str | Non
     that avoids it (slow_actor_change). None otherwise."""
     change = slow_actor_change(config)
     weights = result.actor_weights
-    if change is None or weights.shape[0] < 2:
-        return None
     finite = np.nonzero(np.all(np.isfinite(weights), axis=1))[0]
+    if change is None or finite.size < 2:
+        return None
     start = np.linalg.norm(weights[0])
-    if finite.size < 2 or not start > 0.0:
+    if not start > 0.0:
         return None
     last = finite[-1]
     moved = float(np.linalg.norm(weights[last] - weights[0]) / start)

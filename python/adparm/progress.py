@@ -10,7 +10,12 @@ import numpy as np
 from .rates import nice_ceil
 from .result import SimulationResult
 
-__all__ = ["LONGER_RUN_LIMIT", "longer_run_advice", "longer_run_estimate"]
+__all__ = ["LONGER_RUN_LIMIT", "half_time_index", "longer_run_advice", "longer_run_estimate"]
+
+
+def half_time_index(t: np.ndarray) -> int:
+    """The row of a run's record at half its time span (where its progress is measured from)."""
+    return int(np.searchsorted(t, t[0] + 0.5 * (t[-1] - t[0])))
 
 
 def longer_run_estimate(
@@ -31,7 +36,7 @@ def longer_run_estimate(
     ) / max(norm, 1e-300)
     t = result.t
     t_end = float(t[-1])
-    middle = int(np.searchsorted(t, t[0] + 0.5 * (t_end - t[0])))
+    middle = half_time_index(t)
     e_mid, e_end = float(error[middle]), float(error[-1])
     out = {"error_mid": e_mid, "error_end": e_end, "t_mid": float(t[middle]), "t_end": t_end}
     if not (e_end < e_mid) or not math.isfinite(e_end) or t_end <= t[middle]:

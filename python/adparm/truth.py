@@ -34,7 +34,7 @@ from .divergence import (
 )
 from .identification import identifier_diagnosis, judged_config, model_gap_text
 from .optimal import basis, lqr_value, optimal_weights, policy
-from .progress import longer_run_advice, longer_run_estimate
+from .progress import half_time_index, longer_run_advice, longer_run_estimate
 from .residual import hjb_residual, residual_settings
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
 from .simulation import SimulationDiverged, simulate
@@ -218,8 +218,7 @@ def _half_time_residual(
     (the best weights: 0.046), the Kinova falls from 0.36 at 10 s to 0.22 at 40 s."""
     if target is not None or result.t.size < 4:
         return None
-    t = result.t
-    middle = int(np.searchsorted(t, t[0] + 0.5 * (t[-1] - t[0])))
+    middle = half_time_index(result.t)
     Wc, Wa = result.critic_weights[middle], result.actor_weights[middle]
     return _relative_residual(config, X, Wc, Wa, t_end)
 
@@ -460,7 +459,8 @@ def _diagnose_learning(
                     f"half time), where other weights reach {best:.3g}, not round-off: V* is not "
                     "in this basis for this cost, and learning settles elsewhere"
                 )
-                advice.append("a longer run will not help; " + _exact_cost_advice(config))
+                if not chased:  # a longer run at the same rate keeps the non-stabilising solution
+                    advice.append("a longer run will not help; " + _exact_cost_advice(config))
             else:
                 out["approximation"] = "not converged"
                 problems.append(
@@ -469,34 +469,33 @@ def _diagnose_learning(
                     + ("" if earlier is None else f" ({earlier:.3g} at half time)")
                     + f", where the basis can reach {best:.3g}"
                 )
-                advice.append(
-                    (
-                        "a longer run will not help: the residual did not fall over the second "
-                        "half of the run"
-                        if settled
-                        else longer_run_advice(result, target, tolerance)
-                    )
-                    + (
-                        ", excite more (probe.amplitude) or add Bellman-error extrapolation "
-                        "(extrapolation.points)"
-                        if config.extrapolation.points == 0
-                        else ""
-                    )
+                longer = (
+                    "a longer run will not help: the residual did not fall over the second half "
+                    "of the run"
+                    if settled
+                    else longer_run_advice(result, target, tolerance)
                 )
+                if not chased:
+                    advice.append(
+                        longer
+                        + (
+                            ", excite more (probe.amplitude) or add Bellman-error extrapolation "
+                            "(extrapolation.points)"
+                            if config.extrapolation.points == 0
+                            else ""
+                        )
+                    )
     elif short:
         out["approximation"] = "not converged"
-        advice.append(
-            longer_run_advice(result, target, tolerance)
-            + (
-                ", or add Bellman-error extrapolation (extrapolation.points)"
-                if config.extrapolation.points == 0
-                else ""
+        if not chased:  # a longer run at the same rate keeps the non-stabilising solution
+            advice.append(
+                longer_run_advice(result, target, tolerance)
+                + (
+                    ", or add Bellman-error extrapolation (extrapolation.points)"
+                    if config.extrapolation.points == 0
+                    else ""
+                )
             )
-        )
-    if chased:  # a longer run at the same rate does not leave the non-stabilising solution
-        advice[:] = [
-            a for a in advice if not a.startswith(("run longer", "a longer", "learning is"))
-        ]
     shortfall = extrapolation_shortfall(config)
     out["extrapolation_shortfall"] = shortfall
     if shortfall is not None and problems:  # a likely reason why learning fell short

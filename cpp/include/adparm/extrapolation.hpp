@@ -258,13 +258,11 @@ class Extrapolation {
   }
 
  private:
-  // The points of `moving`, prepared at `desired` unless it holds them (out of line: for_each,
-  // inlined into the loop's derivative, stays as small as it was for the paper's loop).
-  ADPARM_NOINLINE const Point* moving_points(const Basis& basis, const ErrorSystem<Arm>& system,
-                                             const QuadraticCostT<kDof>& cost,
-                                             const Desired& desired, typename Arm::Terms& terms,
-                                             BasisWorkspace<Basis>& workspace,
-                                             MovingPoints<Basis, kDof>& moving) const {
+  // The points of `moving`, prepared at `desired` unless it holds them.
+  const Point* moving_points(const Basis& basis, const ErrorSystem<Arm>& system,
+                             const QuadraticCostT<kDof>& cost, const Desired& desired,
+                             typename Arm::Terms& terms, BasisWorkspace<Basis>& workspace,
+                             MovingPoints<Basis, kDof>& moving) const {
     if (!moving.holds(desired, generation_)) {
       moving.points.resize(static_cast<std::size_t>(size()));
       for (long i = 0; i < size(); ++i)

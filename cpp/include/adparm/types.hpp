@@ -17,13 +17,6 @@
 
 namespace adparm {
 
-// A function kept out of line (a rarely taken branch that would otherwise grow its hot caller).
-#if defined(_MSC_VER)
-#define ADPARM_NOINLINE __declspec(noinline)
-#else
-#define ADPARM_NOINLINE __attribute__((noinline))
-#endif
-
 using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
 using Vec4 = Eigen::Vector4d;
