@@ -469,12 +469,14 @@ def _diagnose_learning(
                     + ("" if earlier is None else f" ({earlier:.3g} at half time)")
                     + f", where the basis can reach {best:.3g}"
                 )
-                longer = (
-                    "a longer run will not help: the residual did not fall over the second half "
-                    "of the run"
-                    if settled
-                    else longer_run_advice(result, target, tolerance)
-                )
+                if settled:
+                    longer = "a longer run will not help: the residual did not fall over the "
+                    longer += "second half of the run"
+                elif target is None:  # the UR5, Q = I, R = I, 2 s: still falling, settles at 3 s
+                    longer = "a longer run may lower the residual, but without a known W* "
+                    longer += "nothing tells how far or how soon"
+                else:
+                    longer = longer_run_advice(result, target, tolerance)
                 if not chased:
                     advice.append(
                         longer
@@ -485,6 +487,8 @@ def _diagnose_learning(
                             else ""
                         )
                     )
+                    if target is None and not settled:
+                        advice.append(_exact_cost_advice(config))
     elif short:
         out["approximation"] = "not converged"
         if not chased:  # a longer run at the same rate keeps the non-stabilising solution
