@@ -108,3 +108,24 @@ def test_tracking_samples_from_a_file(tmp_path) -> None:
 def test_samples_must_cover_the_horizon() -> None:
     with pytest.raises(ValueError, match="task.qd: the samples end at t = 5 s, before sim.T"):
         tracking({"kind": "samples", "t": [0.0, 5.0], "q": [[0, 0], [1, 1]]})
+
+
+def test_a_sinusoid_on_a_urdf_arm_needs_no_offset_or_phase() -> None:
+    # amplitude and frequency alone on a 3-joint arm: offset and phase are 0 on every joint (the
+    # offset's default was the two-link arm's pair: "task.qd.offset: expected shape (3,)")
+    qd = {"kind": "sinusoid", "amplitude": [0.3, 0.2, 0.1], "frequency": [1.0, 2.0, 3.0]}
+    config = adparm.Config.from_dict(
+        {
+            "plant": {"urdf": "examples/arms/planar_3link.urdf"},
+            "task": {"qd": qd},
+            "sim": {"T": 0.05},
+        }
+    )
+    assert config.task.qd.offset == (0.0, 0.0, 0.0)
+    assert config.task.qd.phase == ((0.0,), (0.0,), (0.0,))
+    np.testing.assert_allclose(
+        adparm.desired_state(config, 0.5)[0], np.sin([0.5, 1.0, 1.5]) * [0.3, 0.2, 0.1]
+    )
+    assert adparm.simulate(config, diagnose=False).status == "finished"
+    paper = adparm.paper_config().updated({"task": {"qd": {"kind": "sinusoid"}}})
+    assert paper.task.qd.offset == (0.0, 0.0)

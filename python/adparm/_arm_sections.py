@@ -410,7 +410,7 @@ class SinusoidTrajectory:
     amplitude: Vector | Matrix = setting(
         (0.5, 0.3),
         '``kind = "sinusoid"``: qd_j = offset_j + sum_k amplitude_jk sin(frequency_jk t + '
-        "phase_jk) (rad). A pair, or a 2 x n matrix for n sinusoids per joint.",
+        "phase_jk) (rad). One per joint, or a joints x k matrix for k sinusoids per joint.",
         via="task.qd (desired.trajectory_settings)",
     )
     frequency: Vector | Matrix = setting(
@@ -419,8 +419,10 @@ class SinusoidTrajectory:
     phase: Vector | Matrix | None = setting(
         None, "rad, same shape as amplitude.", via="task.qd (desired.trajectory_settings)"
     )
-    offset: Vector = setting(
-        (0.0, 0.0), "rad, one per joint.", via="task.qd (desired.trajectory_settings)"
+    offset: Vector | None = setting(
+        None,
+        "rad, one per joint; None (the default): 0 on every joint.",
+        via="task.qd (desired.trajectory_settings)",
     )
 
     def __post_init__(self) -> None:
@@ -430,7 +432,8 @@ class SinusoidTrajectory:
         object.__setattr__(self, "frequency", rows_value(self.frequency, "task.qd.frequency", n))
         phase = ((0.0,) * n,) * len(amplitude) if self.phase is None else self.phase
         object.__setattr__(self, "phase", rows_value(phase, "task.qd.phase", n))
-        object.__setattr__(self, "offset", vector_value(self.offset, "task.qd.offset", None))
+        offset = (0.0,) * len(amplitude) if self.offset is None else self.offset  # one per joint
+        object.__setattr__(self, "offset", vector_value(offset, "task.qd.offset", None))
         for key in ("frequency", "phase"):
             if len(getattr(self, key)[0]) != n:
                 raise ValueError(
