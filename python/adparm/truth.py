@@ -34,7 +34,7 @@ from .divergence import (
 )
 from .identification import identifier_diagnosis, judged_config, model_gap_text
 from .optimal import basis, lqr_value, optimal_weights, policy
-from .progress import half_time_index, longer_run_advice, longer_run_estimate
+from .progress import SETTLED_FALL, half_time_index, longer_run_advice, longer_run_estimate
 from .residual import hjb_residual, residual_settings
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
 from .simulation import SimulationDiverged, simulate
@@ -450,7 +450,7 @@ def _diagnose_learning(
             advice.append(_exact_cost_advice(config))
         else:
             earlier = _half_time_residual(result, config, X_fit, target, t_end)
-            settled = earlier is not None and residual >= 0.98 * earlier
+            settled = earlier is not None and residual >= (1.0 - SETTLED_FALL) * earlier
             if settled and best > 1e-6:  # not round-off: V* is not in the basis
                 out["approximation"] = "basis"
                 problems.append(
