@@ -53,6 +53,7 @@ LAYERS = {
     "identification": 4,
     "progress": 4,
     "against_plant": 4,
+    "saturation": 4,
     "truth": 4,
     "comparison": 4,
     # 5 output: files, figures, summaries

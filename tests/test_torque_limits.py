@@ -371,3 +371,52 @@ def test_saturated_time_does_not_depend_on_chunks() -> None:
     assert whole.status == chunked.status == "finished"
     assert np.all(whole.saturated_time > 0.0)
     np.testing.assert_array_equal(whole.saturated_time, chunked.saturated_time)
+
+
+def test_task_torque_is_pinocchios_rnea_along_the_trajectory() -> None:
+    # max |M ddqd + C dqd + G + F| over the desired trajectory, against Pinocchio's Python rnea
+    # (an independent implementation) on the planar 3-link arm, without friction
+    pinocchio = pytest.importorskip("pinocchio")
+    qd = {"kind": "sinusoid", "amplitude": [0.4, 0.3, 0.2], "frequency": [1.0, 2.0, 3.0]}
+    config = adparm.Config.from_dict(
+        {
+            "plant": {"urdf": "examples/arms/planar_3link.urdf", "coulomb": 0.0, "viscous": 0.0},
+            "task": {"qd": qd},
+            "sim": {"T": 2.0},
+        }
+    )
+    model = pinocchio.buildModelFromUrdf(config.plant.urdf)
+    assert config.plant.gravity is None  # the URDF default, Pinocchio's (0, 0, -9.81)
+    data = model.createData()
+    times = np.linspace(0.0, 2.0, adparm.dynamics.TASK_SAMPLES)
+    expected = np.zeros(3)
+    for q, dq, ddq in adparm.desired_state(config, times):
+        expected = np.maximum(expected, np.abs(pinocchio.rnea(model, data, q, dq, ddq)))
+    np.testing.assert_allclose(adparm.dynamics.task_torque(config), expected, rtol=1e-12)
+
+
+def test_limits_that_cannot_hold_the_task_are_named_with_a_change_that_works() -> None:
+    # 5 N m on every joint of the UR5: its shoulder needs 59.2 N m to hold qd = 0 against
+    # gravity. The verdict said the learning failed (a non-stabilising solution) and advised a
+    # slower actor; it now names the joints and limits that cannot hold the task, first, and
+    # advises limits with which the same run ends "ok"
+    try:
+        adparm.example_robot_urdf("ur5")
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    plant = {"urdf": "example-robot-data:ur5", "torque_limits": 5.0}
+    config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 5.0}})
+    with pytest.warns(adparm.ApproximationWarning):
+        diagnostics = adparm.simulate(config).diagnostics
+    verdict = diagnostics["verdict"]
+    assert verdict.startswith("the torque limits cannot hold the task: joint 2 needs 59.3 N m")
+    assert "joint 3 needs 15.8 N m" in verdict and "joint 1 needs" not in verdict
+    (advice,) = diagnostics["advice"]
+    assert advice.startswith("raise plant.torque_limits to [5, 119, 31.6, 5, 5, 5]")
+    raised = config.updated(
+        {"plant": {"torque_limits": [5, 119, 31.6, 5, 5, 5]}, "sim": {"T": 10.0}}
+    )
+    fixed = adparm.simulate(raised).diagnostics
+    assert fixed["verdict"].startswith("ok"), fixed["verdict"]
+    # limits that hold the task say nothing of it
+    assert adparm.saturation.limits_below_task(raised) is None

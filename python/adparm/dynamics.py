@@ -19,6 +19,7 @@ from .desired import desired_state
 from .urdf import config_arm
 
 __all__ = [
+    "TASK_SAMPLES",
     "arm_terms",
     "base_parameter_groups",
     "base_parameter_names",
@@ -32,6 +33,7 @@ __all__ = [
     "lqr_value",
     "saturated_cost",
     "solvable_cost",
+    "task_torque",
     "value_scale",
     "weight_vector",
 ]
@@ -93,6 +95,25 @@ def arm_terms(
 #: The two-link arm's beta, in which M ddq + C dq + G + F is linear (the online identifier's
 #: parameters, cpp/include/adparm/identifier.hpp).
 TWO_LINK_BASE_PARAMETERS = ("p1", "p2", "p3", "g1", "g2", "coulomb", "viscous")
+
+
+#: Samples of the desired trajectory over [0, sim.T] for task_torque (a set-point: one).
+TASK_SAMPLES = 200
+
+
+def task_torque(config: ConfigSchema, *, model: bool = False) -> np.ndarray:
+    """max over the desired trajectory of |h_i| = |M ddqd + C dqd + G + F|_i, per joint: the
+    torque that holds the arm on the task (the plant's, or the believed model's with ``model``),
+    at TASK_SAMPLES times over [0, sim.T] (a set-point: qd alone)."""
+    samples = 1 if config.task.is_set_point else TASK_SAMPLES
+    times = np.linspace(0.0, config.sim.T, samples)
+    states = np.unique(desired_state(config, times), axis=0)
+    feedforward = np.zeros(config.dof)
+    for qd, dqd, ddqd in states:
+        terms = arm_terms(config, qd, dqd, model=model)
+        h = terms["M"] @ ddqd + terms["C"] @ dqd + terms["G"] + terms["F"]
+        feedforward = np.maximum(feedforward, np.abs(h))
+    return feedforward
 
 
 def base_parameters(config: ConfigSchema, which: str = "plant") -> np.ndarray:

@@ -328,8 +328,6 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 #: input cost and policy equal the unbounded ones there (lambda = 1e6 reproduces the unbounded
 #: run to 1e-9, tests/test_input_bound.py).
 UNLIMITED_BOUND = 1e6
-#: Samples of the desired trajectory over [0, sim.T] (a set-point: one).
-_TASK_SAMPLES = 200
 
 
 def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
@@ -342,9 +340,10 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
 
         headroom_i = tau_bar_i - max_t |h_i(qd, dqd, ddqd)| - d_i - sum_k |amplitude_ik|,
 
-    h = M ddqd + C dqd + G + F of the believed model along the desired trajectory (200 samples
-    over [0, sim.T]; a set-point: one), d_i the amplitude of the disturbance (plant.disturbance:
-    RISE's mu cancels it, so the commanded torque carries it) and the probe's largest value on
+    h = M ddqd + C dqd + G + F of the believed model along the desired trajectory
+    (dynamics.task_torque: 200 samples over [0, sim.T]; a set-point: one), d_i the amplitude of
+    the disturbance (plant.disturbance: RISE's mu cancels it, so the commanded torque carries
+    it) and the probe's largest value on
     joint i (while it probes: probe.until > 0), "auto" takes lambda_i = headroom_i / 2: the other
     half is left to the rest of RISE's mu (its transient, model error) and to h away from the
     desired trajectory, which are not bounded a priori. A heuristic margin, conservative while
@@ -352,8 +351,7 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
     show whether the drive clipped. A joint without a limit (inf) gets
     UNLIMITED_BOUND (unbounded in practice). Refused, naming the fields, when no joint is limited
     or a limit does not hold the task's feedforward and the probe."""
-    from .desired import desired_state
-    from .dynamics import arm_terms
+    from .dynamics import task_torque
 
     n = config.dof
     limits = config.plant.limit_vector(n)
@@ -363,14 +361,7 @@ def auto_input_bound(config: ConfigSchema) -> tuple[tuple[float, ...], str]:
             'limited (plant.torque_limits is left out, "none" or inf); give cost.input_bound '
             "numbers, or set plant.torque_limits"
         )
-    samples = 1 if config.task.is_set_point else _TASK_SAMPLES
-    times = np.linspace(0.0, config.sim.T, samples)
-    states = np.unique(desired_state(config, times), axis=0)
-    feedforward = np.zeros(n)
-    for qd, dqd, ddqd in states:
-        terms = arm_terms(config, qd, dqd, model=True)
-        h = terms["M"] @ ddqd + terms["C"] @ dqd + terms["G"] + terms["F"]
-        feedforward = np.maximum(feedforward, np.abs(h))
+    feedforward = task_torque(config, model=True)
     disturbance = np.abs(np.asarray(config.plant.disturbance, dtype=float))
     probing = config.probe.until > 0.0
     probe = np.abs(config.probe.amplitude_matrix(n)).sum(axis=1) if probing else np.zeros(n)

@@ -37,6 +37,7 @@ from .optimal import basis, lqr_value, optimal_weights, policy
 from .progress import SETTLED_FALL, half_time_index, longer_run_advice, longer_run_estimate
 from .residual import hjb_residual, residual_settings
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
+from .saturation import limits_below_task, saturation_text
 from .simulation import SimulationDiverged, simulate
 from .yardstick import OptimalCost, default_horizon, optimal_cost
 
@@ -223,42 +224,6 @@ def _half_time_residual(
     return _relative_residual(config, X, Wc, Wa, t_end)
 
 
-def saturation_text(result: SimulationResult) -> str | None:
-    """What the actuator limits did to a run (None when no joint's torque was clipped): which
-    joints were clipped at ``plant.torque_limits`` and for how long, and that the theory's
-    assumption of unlimited torque was broken while the controller's own input was unbounded (or
-    inside its bound, ``cost.input_bound``): clipping is not a failure of the learning."""
-    config = result.config
-    seconds = np.asarray(result.saturated_time, dtype=float)
-    if config.plant.limit_vector(config.dof).size == 0 or not np.any(seconds > 0.0):
-        return None
-    duration = float(result.t[-1] - result.t[0]) if result.t.size > 1 else config.sim.T
-    duration = max(duration, float(seconds.max()))
-    joints = ", ".join(
-        f"joint {i + 1} for {value:.3g} s ({100.0 * value / duration:.3g} %)"
-        for i, value in enumerate(seconds)
-        if value > 0.0
-    )
-    text = f"the applied torque was clipped at plant.torque_limits: {joints} of {duration:.3g} s"
-    limit = config.cost.bound_vector(config.dof)
-    if limit.size == 0:
-        return (
-            text + "; the controller's input is unbounded, so the theory's assumption (the "
-            "commanded torque is applied) was broken, not the learning"
-        )
-    # a constrained-input controller: was its input inside its bound while clipped?
-    clipped = result.tau != result.tau_commanded
-    inside = np.any(clipped & (np.abs(result.u) <= limit), axis=1)
-    if not np.any(inside):
-        return text
-    rows = result.t[1] - result.t[0] if result.t.size > 1 else config.sim.dt
-    return (
-        text + f"; for about {np.count_nonzero(inside) * rows:.3g} s of it the controller's input "
-        "was inside its bound (cost.input_bound), so the theory's assumption (the commanded "
-        "torque is applied) was broken, not the learning"
-    )
-
-
 def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
     """The truth about a run, with what the actuator limits did:
     ``saturated_time`` (seconds per joint) and ``saturation`` (:func:`saturation_text`, None when
@@ -280,6 +245,10 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     out["saturation"] = saturation_text(result)
     if out["saturation"] is not None:
         out["verdict"] += "; " + out["saturation"]
+        below = limits_below_task(result.config)
+        if below is not None:  # no change of learning helps: the limits or the task must change
+            out["verdict"] = below[0] + "; " + out["verdict"]  # the cause first
+            out["advice"] = [below[1]]
     return out
 
 

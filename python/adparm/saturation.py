@@ -1,0 +1,86 @@
+"""What the actuator limits did to a run (saturation_text) and whether they can hold its task at
+all (limits_below_task): the torque the arm needs along the desired trajectory against
+``plant.torque_limits``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .config import Config
+from .dynamics import task_torque
+from .result import SimulationResult
+
+__all__ = ["limits_below_task", "saturation_text"]
+
+
+def saturation_text(result: SimulationResult) -> str | None:
+    """What the actuator limits did to a run (None when no joint's torque was clipped): which
+    joints were clipped at ``plant.torque_limits`` and for how long, and that the theory's
+    assumption of unlimited torque was broken while the controller's own input was unbounded (or
+    inside its bound, ``cost.input_bound``): clipping is not a failure of the learning."""
+    config = result.config
+    seconds = np.asarray(result.saturated_time, dtype=float)
+    if config.plant.limit_vector(config.dof).size == 0 or not np.any(seconds > 0.0):
+        return None
+    duration = float(result.t[-1] - result.t[0]) if result.t.size > 1 else config.sim.T
+    duration = max(duration, float(seconds.max()))
+    joints = ", ".join(
+        f"joint {i + 1} for {value:.3g} s ({100.0 * value / duration:.3g} %)"
+        for i, value in enumerate(seconds)
+        if value > 0.0
+    )
+    text = f"the applied torque was clipped at plant.torque_limits: {joints} of {duration:.3g} s"
+    limit = config.cost.bound_vector(config.dof)
+    if limit.size == 0:
+        return (
+            text + "; the controller's input is unbounded, so the theory's assumption (the "
+            "commanded torque is applied) was broken, not the learning"
+        )
+    # a constrained-input controller: was its input inside its bound while clipped?
+    clipped = result.tau != result.tau_commanded
+    inside = np.any(clipped & (np.abs(result.u) <= limit), axis=1)
+    if not np.any(inside):
+        return text
+    rows = result.t[1] - result.t[0] if result.t.size > 1 else config.sim.dt
+    return (
+        text + f"; for about {np.count_nonzero(inside) * rows:.3g} s of it the controller's input "
+        "was inside its bound (cost.input_bound), so the theory's assumption (the commanded "
+        "torque is applied) was broken, not the learning"
+    )
+
+
+def _ceil3(value: float) -> float:
+    """value rounded up to three significant digits."""
+    step = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return float(f"{math.ceil(value / step - 1e-9) * step:.3g}")
+
+
+def limits_below_task(config: Config) -> tuple[str, str] | None:
+    """(what the verdict adds, the advice) when some joint's limit (plant.torque_limits) is below
+    the torque the plant needs on the task: max over the desired trajectory of |M ddqd + C dqd +
+    G + F| (dynamics.task_torque) plus the disturbance's amplitude; None otherwise. No change of
+    the learning helps such a run: the UR5 with 5 N m on every joint needs 59.2 N m on its
+    shoulder to hold qd = 0 against gravity; with the limits the advice names (twice the task's
+    torque on the joints short of it, the others as given) the same run ends "ok"."""
+    n = config.dof
+    limits = config.plant.limit_vector(n)
+    if limits.size == 0:
+        return None
+    need = task_torque(config) + np.abs(np.asarray(config.plant.disturbance, dtype=float))
+    short = np.flatnonzero(np.isfinite(limits) & (need > limits))
+    if short.size == 0:
+        return None
+    joints = ", ".join(
+        f"joint {i + 1} needs {need[i]:.3g} N m, its limit is {limits[i]:.3g}" for i in short
+    )
+    raised = [_ceil3(2.0 * need[i]) if i in short else limits[i] for i in range(n)]
+    text = ", ".join("inf" if math.isinf(v) else f"{v:g}" for v in raised)
+    return (
+        f"the torque limits cannot hold the task: {joints} (max |M ddqd + C dqd + G + F| over "
+        "the desired trajectory, with the disturbance): no controller follows this task within "
+        "them, and no change of the learning helps",
+        f"raise plant.torque_limits to [{text}] (twice the task's torque on the joints short of "
+        "it), or choose a task.qd that needs less torque",
+    )
