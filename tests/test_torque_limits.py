@@ -409,8 +409,11 @@ def test_limits_that_cannot_hold_the_task_are_named_with_a_change_that_works() -
     with pytest.warns(adparm.ApproximationWarning):
         diagnostics = adparm.simulate(config).diagnostics
     verdict = diagnostics["verdict"]
-    assert verdict.startswith("the torque limits cannot hold the task: joint 2 needs 59.3 N m")
-    assert "joint 3 needs 15.8 N m" in verdict and "joint 1 needs" not in verdict
+    assert verdict.startswith(
+        "the torque limits cannot hold the task (max |M ddqd + C dqd + G + F| over the desired "
+        "trajectory, with the disturbance): joint 2 needs 59.3 N m (limit 5 N m), joint 3 needs "
+        "15.8 N m (limit 5 N m); no controller can follow this task within them"
+    )
     (advice,) = diagnostics["advice"]
     assert advice.startswith("raise plant.torque_limits to [5, 119, 31.6, 5, 5, 5]")
     raised = config.updated(

@@ -73,13 +73,13 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
     if short.size == 0:
         return None
     joints = ", ".join(
-        f"joint {i + 1} needs {need[i]:.3g} N m, its limit is {limits[i]:.3g}" for i in short
+        f"joint {i + 1} needs {need[i]:.3g} N m (limit {limits[i]:.3g} N m)" for i in short
     )
     raised = [_ceil3(2.0 * need[i]) if i in short else limits[i] for i in range(n)]
     text = ", ".join("inf" if math.isinf(v) else f"{v:g}" for v in raised)
     return (
-        f"the torque limits cannot hold the task: {joints} (max |M ddqd + C dqd + G + F| over "
-        "the desired trajectory, with the disturbance): no controller follows this task within "
+        "the torque limits cannot hold the task (max |M ddqd + C dqd + G + F| over the desired "
+        f"trajectory, with the disturbance): {joints}; no controller can follow this task within "
         "them, and no change of the learning helps",
         f"raise plant.torque_limits to [{text}] (twice the task's torque on the joints short of "
         "it), or choose a task.qd that needs less torque",
