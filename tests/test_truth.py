@@ -196,6 +196,7 @@ def test_verdict_reaches_summary_sweep_rows_and_cli(tmp_path, capsys) -> None:
     assert status == 0
     err = capsys.readouterr().err
     assert "verdict: ended away from the known W*" in err and "not converged" in err
+    assert "adparm run: try: a longer run will not help" in err  # the advice, as summary.md
     saved = (tmp_path / "out" / "summary.json").read_text()
     assert '"verdict": "ended away from the known W*' in saved
 

@@ -358,6 +358,8 @@ def _run_checked(
         print(f"step size (first {check['transient']:g} s against dt/2): {check['verdict']}")
     if summary["verdict"] not in ("ok", "not a learning run", "diverged"):
         _say(command, f"verdict: {summary['verdict']}")
+        for advice in (summary.get("diagnostics") or {}).get("advice") or ():
+            _say(command, f"try: {advice}")
     if signals.received is not None:  # after the run: its files are complete
         _say(command, f"{signals.name()} received after the run; its files are complete")
         return signals.status()
