@@ -462,7 +462,7 @@ class ControllerConfig:
     ``adp`` u = u_hat + probe (the paper; critic and actor learn), ``rise`` u = 0,
     ``pd`` u = -(kp e1 + kd de1), ``optimal`` u = -R^-1 e2 (the exact optimal policy).
     Only adp learns and probes. ``rise = false`` drops the RISE term mu (not with kind rise).
-    kp, kd: a number (times I) or a 2 x 2 matrix, used by pd only (our choice 50 and 10).
+    kp, kd: a number (times I) or an n x n matrix, pd only (two-link 50, 10; URDF: derived).
 
     basis: the critic/actor basis. ``augmented`` (default) is the paper's 8 functions over the
     augmented state [x; qd] with cos x2 replaced by cos(qd2 - x2) = cos q2: identical to the
@@ -506,11 +506,11 @@ class ControllerConfig:
     )
     kp: float | Matrix = setting(
         50.0,
-        "PD gain (a number times I, or 2 x 2), ``pd`` only.",
+        "PD gain (a number times I, or n x n), ``pd`` only; a URDF arm's: 5 kd (derived).",
         via="controller.kp, a matrix (gain_matrix)",
     )
     kd: float | Matrix = setting(
-        10.0, "PD gain on de1, ``pd`` only.", via="controller.kd, a matrix (gain_matrix)"
+        10.0, "PD gain on de1, ``pd`` only; URDF: diag(10 M_ii(qd))", via="controller.kd, matrix"
     )
 
     def __post_init__(self) -> None:

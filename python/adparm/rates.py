@@ -224,6 +224,9 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
             tuple(map(tuple, R)),
             "diag(1 / (10 M_ii(qd))): u* = -R^-1 e2 acts at about 10/s on every joint",
         )
+    kd = POLICY_RATE * joint_inertia  # the pd baseline acts at about the policy's rate
+    put("controller.kd", tuple(map(tuple, np.diag(kd))), "diag(10 M_ii(qd)): about 10/s")
+    put("controller.kp", tuple(map(tuple, np.diag(5.0 * kd))), "5 kd (the two-link 50 to 10)")
     if "cost.Q" not in explicit:
         alpha = float(np.linalg.eigvals(alpha1).real.min())
         if "cost.R" in explicit:  # a K that keeps Q positive definite for any R
