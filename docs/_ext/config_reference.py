@@ -30,6 +30,7 @@ RESOLVED_DEFAULTS = {
     ("critic", "epsilon_T"): "1e-6; 1e-3 with extrapolation points",
     ("probe", "phases"): "k rad for sinusoid k, both joints",
     ("task.qd sinusoid", "phase"): "zeros",
+    ("task.qd sinusoid", "offset"): "zeros",
     ("task.qd samples", "file"): "none",
     ("controller", "degree"): "none (only with the polynomial basis, where it must be set)",
     ("init", "*"): "the basis' default: all ones (paper, augmented); [1, 0, 1, p1, p2, p3] "
