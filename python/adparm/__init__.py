@@ -62,7 +62,7 @@ from .summary import summarize  # noqa: F401 - registers SimulationResult.summar
 from .sweep import SweepResult, grid_points, sweep
 from .truth import ApproximationWarning, check_step_size, diagnose, lqr_value, optimal_cost
 from .urdf import EXAMPLE_ROBOTS, UrdfArm, example_robot_urdf
-from .urdf_payload import urdf_with_payload
+from .urdf_payload import urdf_with_payload, urdf_with_scaled_inertia
 
 __version__ = "0.1.0"
 
@@ -124,6 +124,7 @@ __all__ = [
     "sweep",
     "two_link_parameters",
     "urdf_with_payload",
+    "urdf_with_scaled_inertia",
     "value_scale",
     "write_report",
 ]

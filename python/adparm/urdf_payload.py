@@ -1,11 +1,14 @@
-"""A payload added to a URDF arm: the plant of a run whose model does not know what the arm carries
-(guide: Unknown dynamics). Writes a new URDF; the original is not changed."""
+"""Model errors written as URDFs (guide: Unknown dynamics): a payload added to an arm
+(urdf_with_payload, the plant of a run whose model does not know what the arm carries) and links'
+masses and inertias scaled (urdf_with_scaled_inertia, a model whose inertia is off). Each writes a
+new URDF; the original is not changed."""
 
 from __future__ import annotations
 
 import math
 import os
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +17,7 @@ from numpy.typing import ArrayLike
 from ._files import write_text
 from .term_checks import did_you_mean
 
-__all__ = ["urdf_with_payload"]
+__all__ = ["urdf_with_payload", "urdf_with_scaled_inertia"]
 
 
 def urdf_with_payload(
@@ -64,11 +67,48 @@ def urdf_with_payload(
     return write_text(path, ET.tostring(root, encoding="unicode", xml_declaration=True))
 
 
+def urdf_with_scaled_inertia(
+    urdf: str | os.PathLike[str],
+    scale: float | Mapping[str, float],
+    *,
+    path: str | os.PathLike[str],
+) -> Path:
+    """Write the URDF at ``urdf`` with its links' masses and inertias multiplied by ``scale`` (a
+    number: every link; a mapping {link name: factor}: those links) to ``path`` (atomically) and
+    return ``path``; the centres of mass stay where they are, so M(q) and G(q) of the arm are
+    ``scale`` times the original's. Use it as ``[model] urdf``: a model whose inertia is off
+    (``model.scale`` of the two-link arm). Raises ValueError naming the argument: a factor not
+    > 0, an unknown link (with the closest name) or one without ``<inertial>``."""
+    tree = ET.parse(os.fspath(urdf))
+    links = {element.get("name", ""): element for element in tree.getroot().findall("link")}
+    if isinstance(scale, Mapping):
+        factors = {name: _positive(value, f"scale[{name!r}]", "") for name, value in scale.items()}
+        for name in factors:
+            if name not in links:
+                raise ValueError(f"scale: {urdf} has no link {name!r}{did_you_mean(name, links)}")
+            if links[name].find("inertial") is None:
+                raise ValueError(f"scale: link {name!r} of {urdf} has no <inertial>")
+    else:
+        factor = _positive(scale, "scale", "")
+        factors = {
+            name: factor for name, link in links.items() if link.find("inertial") is not None
+        }
+    for name, factor in factors.items():
+        inertial = links[name].find("inertial")
+        for tag in ("mass", "inertia"):
+            element = inertial.find(tag) if inertial is not None else None
+            for key, value in element.attrib.items() if element is not None else ():
+                element.set(key, repr(float(value) * factor))
+    return write_text(path, ET.tostring(tree.getroot(), encoding="unicode", xml_declaration=True))
+
+
 def _positive(value: object, name: str, unit: str) -> float:
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         number = math.nan
     if isinstance(value, bool) or not (math.isfinite(number) and number > 0.0):
-        raise ValueError(f"{name}: must be a finite number > 0 ({unit}), got {value!r}")
+        raise ValueError(
+            f"{name}: must be a finite number > 0{f' ({unit})' if unit else ''}, got {value!r}"
+        )
     return number
