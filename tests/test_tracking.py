@@ -129,3 +129,29 @@ def test_a_sinusoid_on_a_urdf_arm_needs_no_offset_or_phase() -> None:
     assert adparm.simulate(config, diagnose=False).status == "finished"
     paper = adparm.paper_config().updated({"task": {"qd": {"kind": "sinusoid"}}})
     assert paper.task.qd.offset == (0.0, 0.0)
+
+
+def test_samples_on_a_urdf_arm(tmp_path) -> None:
+    # a 3-joint arm's samples, inline and from a CSV file: the core's spline equals SciPy's
+    # CubicSpline (it raised "cannot reshape array of size 264 into shape (22,8)": the
+    # coefficients were laid out for two joints)
+    from scipy.interpolate import CubicSpline
+
+    t = np.linspace(-0.1, 2.1, 23)
+    q = np.stack([0.2 * np.sin(t), 0.1 * np.sin(2 * t), 0.05 * np.cos(t)], axis=1)
+    plant = {"urdf": "examples/arms/planar_3link.urdf"}
+    inline = {"kind": "samples", "t": t.tolist(), "q": q.tolist()}
+    config = adparm.Config.from_dict({"plant": plant, "task": {"qd": inline}, "sim": {"T": 2.0}})
+    spline, times = CubicSpline(t, q), np.array([0.03, 0.77, 1.95])
+    expected = np.stack([spline(times), spline(times, 1), spline(times, 2)], axis=1)
+    np.testing.assert_allclose(adparm.desired_state(config, times), expected, rtol=0, atol=1e-12)
+    assert adparm.simulate(config, diagnose=False).status == "finished"
+    path = tmp_path / "qd.csv"
+    path.write_text(
+        "t,qd1,qd2,qd3\n"
+        + "\n".join(",".join(repr(float(v)) for v in row) for row in np.column_stack([t, q]))
+    )
+    from_file = config.updated({"task": {"qd": {"kind": "samples", "file": str(path)}}})
+    np.testing.assert_array_equal(
+        adparm.desired_state(from_file, times), adparm.desired_state(config, times)
+    )

@@ -447,10 +447,10 @@ class SampledTrajectory:
     """qd(t) through samples (t_i, qd_i), interpolated by a cubic spline
     (scipy.interpolate.CubicSpline with bc_type = boundary), which gives dqd and ddqd too.
 
-    Either ``file``, a CSV file with columns t, qd1, qd2 (a header line and # comments are
-    skipped; a relative path in a TOML file is relative to that file), or ``t`` (n,) and ``q``
-    (n, 2) inline. The first sample must be at t <= 0 and the last at t >= sim.T. In TOML:
-    ``[task.qd]`` with ``kind = "samples"``."""
+    Either ``file``, a CSV file with columns t, qd1, ..., qdn (a header line and # comments are
+    skipped; a relative path in a TOML file is relative to that file), or ``t`` (m,) and ``q``
+    (m, n) inline (n joints). The first sample must be at t <= 0 and the last at t >= sim.T. In
+    TOML: ``[task.qd]`` with ``kind = "samples"``."""
 
     kind: ClassVar[str] = "samples"
     t: Vector = setting(
@@ -461,12 +461,12 @@ class SampledTrajectory:
     )
     q: Matrix = setting(
         (),
-        "Samples of qd, one row [qd1, qd2] per time (rad).",
+        "Samples of qd, one row [qd1, ..., qdn] per time (rad).",
         via="task.qd (desired.trajectory_settings)",
     )
     file: str | None = setting(
         None,
-        "Instead of t and q: a CSV file with columns t, qd1, qd2 (relative to the TOML file).",
+        "Instead of t and q: a CSV file with columns t, qd1, ..., qdn (relative to the TOML file).",
         via="task.qd (desired.trajectory_settings)",
     )
     boundary: str = setting(

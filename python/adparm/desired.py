@@ -28,9 +28,10 @@ def trajectory_settings(config: ConfigSchema) -> _core.TrajectorySettings:
         spline = qd.spline()
         # scipy's c[m, i, j]: coefficient of (t - x_i)^(3 - m) for joint j -> rows i, 4 j + m
         trajectory.kind = _core.TrajectoryKind.spline
+        trajectory.offset = np.zeros(spline.c.shape[2])  # unused; its size is the joint count
         trajectory.breaks = np.array(spline.x)
         trajectory.coefficients = np.ascontiguousarray(
-            np.transpose(spline.c, (1, 2, 0)).reshape(spline.c.shape[1], 8)
+            np.transpose(spline.c, (1, 2, 0)).reshape(spline.c.shape[1], 4 * spline.c.shape[2])
         )
     else:
         trajectory.offset = np.array(qd)
