@@ -472,3 +472,23 @@ def test_arms_beyond_the_dynamic_bounds_are_refused() -> None:
         _core.UrdfStructuredBasis(arm)
     # a chain within the bounds is accepted
     assert _core.UrdfStructuredBasis(_core.UrdfArm.from_xml(chain_urdf(5))).size <= 128
+
+
+def test_a_basis_beyond_the_core_names_locking_joints_and_that_works(tmp_path) -> None:
+    # a random 12-joint chain: 78 e1 functions and 78 base parameters, beyond the core's 128; the
+    # message names plant.locked_joints, and with the last two joints locked (119 functions) the
+    # arm runs
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    import every_arm
+
+    path = tmp_path / "chain12.urdf"
+    path.write_text(every_arm.random_chain_urdf(np.random.default_rng(5), 12))
+    with pytest.raises(ValueError, match=r"at most 128: lock joints \(plant\.locked_joints\)"):
+        adparm.Config.from_dict({"plant": {"urdf": str(path)}})
+    locked = {"joint11": 0.0, "joint12": 0.0}
+    plant = {"urdf": str(path), "locked_joints": locked}
+    config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.01}})
+    assert (config.dof, config.basis_size) == (10, 119)
+    assert adparm.simulate(config, diagnose=False).status == "finished"

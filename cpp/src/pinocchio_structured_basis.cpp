@@ -163,7 +163,8 @@ PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
                                 " has " + std::to_string(size_) + " functions (" +
                                 std::to_string(e1_size()) + " for e1 and " + std::to_string(r) +
                                 " base inertial parameters); the core supports at most " +
-                                std::to_string(kMaxBasisSize));
+                                std::to_string(kMaxBasisSize) +
+                                ": lock joints (plant.locked_joints) to learn on the others");
   for (int i = 0; i < n; ++i)
     for (int j = i; j < n; ++j)
       s.names.push_back(i == j ? "e1_" + std::to_string(i + 1) + "^2"
