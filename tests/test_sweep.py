@@ -334,3 +334,17 @@ def test_a_sweep_solves_each_J_star_problem_once(monkeypatch) -> None:
     run_optimal_cost(base, **options)
     run_optimal_cost(base, **options)
     assert len(calls) == 2
+
+
+def test_a_verdict_with_norms_stays_in_its_markdown_cell() -> None:
+    # "critic ||Wc - W*|| / ||W*||" in a verdict split the sweep table's row into extra columns;
+    # the cell escapes "|" and a Markdown parser (markdown-it, with tables) reads it back whole
+    from markdown_it import MarkdownIt
+
+    from adparm.table import rows_markdown
+
+    verdict = "ended away from the known W*: critic ||Wc - W*|| / ||W*|| = 0.016"
+    text = rows_markdown(["controller", "verdict"], [{"controller": "adp", "verdict": verdict}])
+    tokens = MarkdownIt("commonmark").enable("table").parse(text)
+    cells = [t.children[0].content for t in tokens if t.type == "inline"]
+    assert cells == ["controller", "verdict", "adp", verdict]

@@ -78,7 +78,7 @@ def rows_markdown(
     formats = formats or {}
     headers = [formats.get(column, (column, "{}"))[0] for column in columns]
     lines = [
-        "| " + " | ".join(headers) + " |",
+        "| " + " | ".join(_escaped(header) for header in headers) + " |",
         "|" + "|".join("---" if i == 0 else "---:" for i in range(len(headers))) + "|",
     ]
     for row in rows:
@@ -95,8 +95,13 @@ def rows_markdown(
                 cells.append(json.dumps(value))
             else:
                 cells.append(str(value))
-        lines.append("| " + " | ".join(cells) + " |")
+        lines.append("| " + " | ".join(_escaped(cell) for cell in cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _escaped(cell: str) -> str:
+    """A cell's text as Markdown keeps it in its column: a verdict's "||Wc - W*||" would end it."""
+    return cell.replace("|", "\\|").replace("\n", " ")
 
 
 def rows_dataframe(columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> pandas.DataFrame:
