@@ -150,8 +150,7 @@ def deviations(config: Config) -> list[dict[str, Any]]:
         printed = _PAPER_PRINTED.get(name)
         if printed is not None and _same(printed, value):
             continue
-        # the value adparm takes when the setting is left out: given or not, the same run (a
-        # model key equal to the plant's is the exact model, no deviation)
+        # adparm's value when left out: the same run (a model key equal to the plant's: none)
         resolved = name in left_out and _equal(left_out[name][0], value)
         if resolved and name.startswith("model."):
             continue
@@ -312,8 +311,7 @@ def summarize(
     if not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance: expected a number in (0, 1), got {tolerance!r}")
     t = result.t
-    # The steps after the run (W*, the diagnosis and its yardsticks, the deviations) never lose
-    # the run: a failure of one is reported in "post_run_errors" and the rest is summarised.
+    # The steps after the run never lose it: a failure is in "post_run_errors", the rest is kept.
     post_run_errors: list[str] = []
     try:
         # an identifying run's critic is judged against the plant's W* (as its diagnosis)
@@ -347,7 +345,7 @@ def summarize(
         "saturated_time": result.saturated_time.tolist(),
         "wall_time": _number(result.wall_time),
         "tolerance": tolerance,
-        "paper_claim_time": PAPER_CLAIM_TIME,
+        "paper_claim_time": PAPER_CLAIM_TIME if result.config.plant.urdf is None else None,
         "deviations": deviation_rows,
     }
     try:
@@ -376,7 +374,8 @@ def summarize(
         error = relative_weight_error(weights, target)
         out[f"{name}_weight_error"] = (weights[-1] - target).tolist() if t.size else None
         out[f"{name}_relative_error"] = _number(error[-1]) if t.size else None
-        out[f"{name}_relative_error_at_claim"] = _number(_value_at(t, error, PAPER_CLAIM_TIME))
+        claim = out["paper_claim_time"]  # the paper's arm only
+        out[f"{name}_relative_error_at_claim"] = claim and _number(_value_at(t, error, claim))
         out[f"{name}_time_within_tolerance"] = _time_to_stay_within(
             t, error, tolerance, finished=result.status == "finished"
         )
@@ -395,11 +394,12 @@ def _fmt(value: Any) -> str:
 
 def claim_text(summary: dict[str, Any], name: str = "critic", fmt: str = ".6g") -> str:
     """The relative error of ``name`` ("critic" or "actor") at the paper's 110 s, "<error> at
-    t = 110 s", or that the run did not reach 110 s: a time beyond the run's end is never
-    quoted with a value."""
+    t = 110 s", or that the run did not reach 110 s (never a value beyond the run's end); ""
+    on a URDF arm (paper_claim_time None: the paper claims nothing of it)."""
     claim = summary.get("paper_claim_time", PAPER_CLAIM_TIME)
-    value = summary.get(f"{name}_relative_error_at_claim")
-    end = summary.get("t_end")
+    value, end = summary.get(f"{name}_relative_error_at_claim"), summary.get("t_end")
+    if claim is None:
+        return ""
     if value is None or end is None or end < claim - 1e-9:
         ends = f"the run ends at t = {_fmt(end)} s" if end is not None else "nothing recorded"
         return f"t = {claim:g} s (the paper's claim) not reached: {ends}"
@@ -555,7 +555,8 @@ def summary_markdown(summary: dict[str, Any]) -> str:
                 settled = f"no time within {tol:g} %: the run {summary['status']}"
             lines.append(
                 f"- {name}: ||W - W*|| / ||W*|| = {_fmt(summary[f'{name}_relative_error'])} {end}, "
-                f"{claim_text(summary, name)}; {settled}"
+                + "".join(f"{text}; " for text in [claim_text(summary, name)] if text)
+                + settled
             )
         lines += [
             "",
@@ -573,11 +574,8 @@ def summary_markdown(summary: dict[str, Any]) -> str:
             )
         ]
         for i, name in enumerate(summary["basis"]):
-            lines.append(
-                f"| {name} | {_fmt(target[i])} | "
-                + " | ".join(_fmt(column[i]) for column in columns)
-                + " |"
-            )
+            values = " | ".join(_fmt(column[i]) for column in columns)
+            lines.append(f"| {name} | {_fmt(target[i])} | {values} |")
     lines += [
         "",
         "## Settings that differ from the paper's printed values or that it leaves open",
