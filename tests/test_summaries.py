@@ -174,3 +174,18 @@ def test_a_urdf_run_quotes_no_paper_claim() -> None:
     assert summary["critic_relative_error_at_claim"] is None
     text = adparm.summary.summary_markdown(summary)
     assert "- critic: ||W - W*|| / ||W*|| = " in text and "the paper's claim" not in text
+
+
+def test_the_urdf_default_basis_is_not_called_set_by_the_configuration() -> None:
+    plant = {"urdf": "examples/arms/planar_3link.urdf"}
+    for controller in ({}, {"basis": "structured"}):
+        config = adparm.Config.from_dict({"plant": plant, "controller": controller})
+        (row,) = [
+            r for r in adparm.summary.deviations(config) if r["parameter"] == "controller.basis"
+        ]
+        assert row["reason"].startswith("A URDF arm's default"), row
+    quadratic = adparm.Config.from_dict({"plant": plant, "controller": {"basis": "quadratic"}})
+    (row,) = [
+        r for r in adparm.summary.deviations(quadratic) if r["parameter"] == "controller.basis"
+    ]
+    assert row["reason"].startswith("Set by this configuration")

@@ -162,6 +162,8 @@ def deviations(config: Config) -> list[dict[str, Any]]:
             first_of_section.setdefault(section, name)
         if name in config.derived:  # left out, derived for this arm (rates.urdf_defaults)
             reason = f"Derived for this arm: {config.derived[name]}."
+        elif name == "controller.basis" and config.plant.urdf and value == "structured":
+            reason = "A URDF arm's default (its W* is known for a cost of the exact family)."
         elif not resolved and not _equal(value, default.get(name)):
             reason = "Set by this configuration (differs from adparm's default)."
         elif printed is None and reason is None:
