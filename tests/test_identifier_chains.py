@@ -216,3 +216,22 @@ def test_a_stack_whose_equations_disagree_is_not_used(tmp_path) -> None:
     verdict = result.diagnostics["verdict"]
     assert "never became informative: its equations disagree" in verdict
     assert "above identifier.max_uncertainty = 0.05" in verdict
+
+
+def test_a_model_of_other_kinematics_is_refused_when_identifying(tmp_path) -> None:
+    # the identifier estimates masses and inertias on the model's kinematics: two random 3-joint
+    # chains (other axes and link frames) ended at a non-stabilising solution with a stack that
+    # "never became informative"; now refused before the run, naming model.urdf. The same model
+    # without identification runs (judged against its own W*), and a model of the plant's
+    # kinematics with other inertia identifies as before
+    paths = []
+    for seed in (1, 2):
+        paths.append(tmp_path / f"chain3_{seed}.urdf")
+        paths[-1].write_text(every_arm.random_chain_urdf(np.random.default_rng(seed), 3))
+    data = {"plant": {"urdf": str(paths[0])}, "model": {"urdf": str(paths[1])}}
+    with pytest.raises(ValueError, match=r"^model\.urdf: its kinematics .* differ from the plant"):
+        adparm.Config.from_dict({**data, "identifier": {"enabled": True}})
+    assert adparm.Config.from_dict(data).model.urdf == str(paths[1])
+    scaled = adparm.urdf_with_scaled_inertia(paths[0], 1.2, path=tmp_path / "scaled.urdf")
+    same = {"plant": {"urdf": str(paths[0])}, "model": {"urdf": str(scaled)}}
+    assert adparm.Config.from_dict({**same, "identifier": {"enabled": True}}).identifier.enabled

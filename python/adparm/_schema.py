@@ -106,6 +106,7 @@ class ConfigSchema:
             model = self.model.resolve(self.plant)
             check_arm(model["p1"], model["p2"], model["p3"], "model")
         self._check_basis()
+        self._check_identifier()
         if self.resolved_epsilon_T >= self.critic.gamma0:
             raise ValueError(
                 f"critic.epsilon_T: must be < critic.gamma0 = {self.critic.gamma0:g}, "
@@ -121,6 +122,9 @@ class ConfigSchema:
 
     def _check_basis(self) -> None:
         """The initial weights and the basis against the arm (adparm.Config)."""
+
+    def _check_identifier(self) -> None:
+        """An identifying run's model against the plant's kinematics (adparm.Config)."""
 
     def _arm_defaults(self) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
         """The settings a URDF arm derives, with their reasons (adparm.Config)."""

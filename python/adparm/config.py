@@ -183,6 +183,32 @@ class Config(ConfigSchema):
         if not family.finite_everywhere:
             self._check_basis_at_start(family)
 
+    def _check_identifier(self) -> None:
+        """An identifying URDF run estimates the model's masses and inertias on the model's
+        kinematics: a model.urdf whose joints or link frames differ from the plant's cannot reach
+        the plant. Told by the mass regressor dM/dpi, which depends on the kinematics alone, at
+        three seeded positions within the joint limits."""
+        if not self.identifier.enabled or self.plant.urdf is None or self.model.urdf is None:
+            return
+        from .urdf import config_arm
+
+        plant, model = config_arm(self), config_arm(self, model=True)
+        low = np.maximum(plant.limits["lower"], -np.pi)
+        high = np.minimum(plant.limits["upper"], np.pi)
+        for q in np.random.default_rng(0).uniform(low, high, size=(3, self.dof)):
+            ours, theirs = plant.mass_regressor(q), model.mass_regressor(q)
+            scale = max(float(np.abs(ours).max()), 1.0)
+            if ours.shape != theirs.shape or not np.allclose(
+                ours, theirs, rtol=0, atol=1e-9 * scale
+            ):
+                raise ValueError(
+                    "model.urdf: its kinematics (joint axes, link frames) differ from the plant's "
+                    "(plant.urdf), and identifier.enabled estimates masses and inertias only, on "
+                    "the model's kinematics: give a model.urdf with the plant's joints and frames "
+                    "(e.g. adparm.urdf_with_scaled_inertia of the plant's URDF), or turn the "
+                    "identifier off (a wrong model is then judged against its own W*)"
+                )
+
     def _arm_defaults(self) -> tuple[dict[tuple[str, str], Any], dict[str, str]]:
         return urdf_defaults(self)
 
