@@ -423,3 +423,28 @@ def test_limits_that_cannot_hold_the_task_are_named_with_a_change_that_works() -
     assert fixed["verdict"].startswith("ok"), fixed["verdict"]
     # limits that hold the task say nothing of it
     assert adparm.saturation.limits_below_task(raised) is None
+
+
+def test_a_prismatic_joint_needs_newtons(tmp_path) -> None:
+    # a vertical slide carrying 3 kg needs 29.5 N against gravity, a force: "N", not "N m"
+    path = tmp_path / "slider.urdf"
+    path.write_text(
+        """<?xml version="1.0"?>
+<robot name="slider_arm">
+  <link name="base"/>
+  <link name="carriage"><inertial><origin xyz="0 0 0"/><mass value="2.0"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="arm"><inertial><origin xyz="0.2 0 0"/><mass value="1.0"/>
+    <inertia ixx="0.002" iyy="0.015" izz="0.015" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="slide" type="prismatic"><parent link="base"/><child link="carriage"/>
+    <axis xyz="0 0 1"/><limit lower="-0.5" upper="0.5" effort="200" velocity="1"/></joint>
+  <joint name="shoulder" type="revolute"><parent link="carriage"/><child link="arm"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="30" velocity="2"/>
+  </joint>
+</robot>
+"""
+    )
+    config = adparm.Config.from_dict({"plant": {"urdf": str(path), "torque_limits": [5.0, 5.0]}})
+    text, advice = adparm.saturation.limits_below_task(config)
+    assert "joint 1 needs 29.5 N (limit 5 N)" in text and "joint 2" not in text
+    assert advice.startswith("raise plant.torque_limits to [59.1, 5]")

@@ -11,6 +11,7 @@ import numpy as np
 from .config import Config
 from .dynamics import task_torque
 from .result import SimulationResult
+from .urdf import config_arm
 
 __all__ = ["limits_below_task", "saturation_text"]
 
@@ -72,8 +73,12 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
     short = np.flatnonzero(np.isfinite(limits) & (need > limits))
     if short.size == 0:
         return None
+    units = ["N m"] * n  # a prismatic joint's force in N
+    if config.plant.urdf is not None:
+        units = ["N" if kind == "prismatic" else "N m" for kind in config_arm(config).joint_types]
     joints = ", ".join(
-        f"joint {i + 1} needs {need[i]:.3g} N m (limit {limits[i]:.3g} N m)" for i in short
+        f"joint {i + 1} needs {need[i]:.3g} {units[i]} (limit {limits[i]:.3g} {units[i]})"
+        for i in short
     )
     raised = [_ceil3(2.0 * need[i]) if i in short else limits[i] for i in range(n)]
     text = ", ".join("inf" if math.isinf(v) else f"{v:g}" for v in raised)
