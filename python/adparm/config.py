@@ -83,6 +83,7 @@ from .rates import (
     auto_input_bound,
     auto_step,
     closed_loop_rates,
+    limits_box,
     urdf_defaults,
 )
 
@@ -193,8 +194,7 @@ class Config(ConfigSchema):
         from .urdf import config_arm
 
         plant, model = config_arm(self), config_arm(self, model=True)
-        low = np.maximum(plant.limits["lower"], -np.pi)
-        high = np.minimum(plant.limits["upper"], np.pi)
+        low, high = limits_box(plant)
         for q in np.random.default_rng(0).uniform(low, high, size=(3, self.dof)):
             ours, theirs = plant.mass_regressor(q), model.mass_regressor(q)
             scale = max(float(np.abs(ours).max()), 1.0)

@@ -101,7 +101,7 @@ def _inertia_range(
 
     arm = shared_arm(urdf, locked_joints=dict(locked) or None)
     n = arm.dof
-    low, high = _limits_box(arm)
+    low, high = limits_box(arm)
     rng = np.random.default_rng(_SEED)
     positions = np.vstack([np.clip(np.zeros(n), low, high), rng.uniform(low, high, (_SAMPLES, n))])
     smallest, largest = math.inf, 0.0
@@ -111,7 +111,7 @@ def _inertia_range(
     return float(smallest), float(largest)
 
 
-def _limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
+def limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
     """The joint-limit box clipped to [-pi, pi] (a continuous joint: [-pi, pi])."""
     limits = arm.limits
     low = np.clip(np.nan_to_num(limits["lower"], nan=-np.pi), -np.pi, np.pi)
