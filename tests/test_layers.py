@@ -22,6 +22,7 @@ LAYERS = {
     "physical": 0,
     "urdf": 0,
     "urdf_payload": 0,
+    "joint_limits": 0,
     "term_checks": 0,
     "bases": 0,
     "_files": 0,

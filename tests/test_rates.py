@@ -134,9 +134,10 @@ def test_the_box_rule_stays_within_the_limits() -> None:
     far = np.full(1, 9.0)
     b1, _ = extrapolation_box(np.zeros(1), np.zeros(1), -far, far, np.eye(1))
     assert np.allclose(b1, [np.pi])
-    # the Z1 (qd = 0 on the limit of three joints): the symmetric box stays within the limits,
-    # but on those three joints, which get the floor (its derived box is extrapolation_range's)
-    z1 = _bare(_example("z1"))
+    # the Z1 with qd = 0 (on the limit of three joints; its default qd is 0.4 rad inside): the
+    # symmetric box stays within the limits, but on those three joints, which get the floor
+    # (its derived box is extrapolation_range's)
+    z1 = _bare(_example("z1"), task={"qd": [0.0] * 7})
     limits = adparm.urdf.config_arm(z1).limits
     low, high = np.asarray(limits["lower"]), np.asarray(limits["upper"])
     qd, q0 = np.asarray(z1.task.qd, dtype=float), np.asarray(z1.task.q0, dtype=float)

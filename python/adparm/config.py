@@ -77,13 +77,13 @@ from ._sections import (
 )
 from .basis_family import BasisFamily, basis_for
 from .desired import desired_state
+from .joint_limits import limits_box
 from .optimal import initial_error_state
 from .rates import (
     EPSILON_T_URDF,
     auto_input_bound,
     auto_step,
     closed_loop_rates,
-    limits_box,
     urdf_defaults,
 )
 

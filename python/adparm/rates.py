@@ -32,6 +32,7 @@ import numpy as np
 
 from ._sections import EPSILON_T_PROBING
 from .extrapolation_region import extrapolation_box, extrapolation_range  # re-exported
+from .joint_limits import HOME_MARGIN, limits_box, rest_position
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._schema import ConfigSchema
@@ -111,14 +112,6 @@ def _inertia_range(
     return float(smallest), float(largest)
 
 
-def limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The joint-limit box clipped to [-pi, pi] (a continuous joint: [-pi, pi])."""
-    limits = arm.limits
-    low = np.clip(np.nan_to_num(limits["lower"], nan=-np.pi), -np.pi, np.pi)
-    high = np.clip(np.nan_to_num(limits["upper"], nan=np.pi), -np.pi, np.pi)
-    return low, np.maximum(high, low)
-
-
 def rise_ks(smallest: float) -> float:
     """control.ks for lambda_min(M) = ``smallest``: ks + 1 = max(30 lambda_min, min(1, 1000
     lambda_min)); below 0 (the paper: ks >= 0) only where a gain of 1 acts beyond 1000/s."""
@@ -142,8 +135,9 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     plant), for the keys the config leaves out, and the reason for each (for the summary).
 
     With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF (the rules and their
-    reasons: docs, URDF arms, "Defaults derived from the arm"): the task (qd = 0 within the
-    limits, q0 = qd + 0.1 rad), plant.disturbance, plant.torque_limits (``<limit effort>``),
+    reasons: docs, URDF arms, "Defaults derived from the arm"): the task (qd =
+    joint_limits.rest_position of the plant's joint limits, q0 = qd + 0.1 rad),
+    plant.disturbance, plant.torque_limits (``<limit effort>``),
     control.alpha1 = 2 I, control.ks (:func:`rise_ks`), the cost (R = diag(1 / (POLICY_RATE
     M_ii(qd))), Q = solvable_cost(alpha / 2 R^-1, alpha1, R)), actor.e2_margin, .weight_bound,
     the learning (extrapolation points and :func:`extrapolation_box`, no probing, epsilon_T,
@@ -171,10 +165,15 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 
     from .urdf import config_arm
 
-    limits = config_arm(config, model=True).limits
+    limits = config_arm(config).limits  # the plant's: the real arm's joint stops
     low, high = np.asarray(limits["lower"], dtype=float), np.asarray(limits["upper"], dtype=float)
-    qd = np.clip(np.zeros(n), low, high)
-    put("task.qd", tuple(qd), "0 within the joint limits")
+    qd = rest_position(low, high)
+    put(
+        "task.qd",
+        tuple(qd),
+        f"0, moved to at least {HOME_MARGIN:g} rad (at most a quarter of the range) inside the "
+        "joint limits",
+    )
     if "task.qd" in explicit:
         from .desired import desired_state
 

@@ -1,6 +1,7 @@
 """What the actuator limits did to a run (saturation_text) and whether they can hold its task at
 all (limits_below_task): the torque the arm needs along the desired trajectory against
-``plant.torque_limits``."""
+``plant.torque_limits``; and where a URDF arm's joints left their position limits
+(position_limits_text)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from .dynamics import task_torque
 from .result import SimulationResult
 from .urdf import config_arm
 
-__all__ = ["limits_below_task", "saturation_text"]
+__all__ = ["limits_below_task", "position_limits_text", "saturation_text"]
 
 
 def saturation_text(result: SimulationResult) -> str | None:
@@ -88,4 +89,63 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
         "them, and no change of the learning helps",
         f"raise plant.torque_limits to [{text}] (twice the task's torque on the joints short of "
         "it), or choose a task.qd that needs less torque",
+    )
+
+
+#: How far (rad, or m for a prismatic joint) past a URDF's position limit a joint may go before
+#: the verdict says so: round-off of a task at the limit, not a motion.
+POSITION_LIMIT_SLACK = 1e-6
+
+
+def position_limits_text(result: SimulationResult) -> str | None:
+    """Where the plant's joints went past the URDF's position limits (``<limit lower upper>``;
+    None when none did, for the two-link arm, and for continuous joints): per joint, the farthest
+    position and for how long, and whether the task itself (qd over the run, or q0) lies outside.
+    The simulation has no joint stops: such a run is not one the real arm can make."""
+    config = result.config
+    if config.plant.urdf is None or result.t.size == 0:
+        return None
+    arm = config_arm(config)
+    low = np.asarray(arm.limits["lower"], dtype=float)
+    high = np.asarray(arm.limits["upper"], dtype=float)
+    q = np.asarray(result.q, dtype=float)
+    past = np.maximum(low - q, q - high)  # > 0 outside
+    went_past = np.flatnonzero(np.nanmax(past, axis=0) > POSITION_LIMIT_SLACK)
+    if went_past.size == 0:
+        return None
+    rows = float(result.t[1] - result.t[0]) if result.t.size > 1 else config.sim.dt
+    units = ["m" if kind == "prismatic" else "rad" for kind in arm.joint_types]
+    names = arm.joint_names
+    joints = []
+    for i in went_past:
+        far = int(np.nanargmax(past[:, i]))
+        joints.append(
+            f"joint {i + 1} ('{names[i]}') reached {q[far, i]:.3g} {units[i]}, "
+            f"{past[far, i]:.2g} {units[i]} past its limits [{low[i]:.3g}, {high[i]:.3g}], for "
+            "about "
+            f"{np.count_nonzero(past[:, i] > POSITION_LIMIT_SLACK) * rows:.3g} s"
+        )
+
+    def outside(values: np.ndarray) -> bool:
+        slack = POSITION_LIMIT_SLACK
+        return bool(np.any((values < low - slack) | (values > high + slack)))
+
+    causes = []
+    if outside(np.asarray(result.qd, dtype=float)):
+        causes.append(
+            "task.qd lies outside the limits (left out, it is derived within them)"
+            if isinstance(config.task.qd, tuple)
+            else "task.qd leaves the limits (choose its offset and amplitude within them)"
+        )
+    if outside(np.asarray(config.task.q0, dtype=float)):
+        causes.append("task.q0 lies outside the limits (left out, it is derived within them)")
+    cause = (
+        "; ".join(causes)
+        if causes
+        else "the task lies within them and the transient went past them: choose a task.qd "
+        "at least that much farther from those limits"
+    )
+    return (
+        f"the joints went past the URDF's position limits, which the simulation does not enforce "
+        f"(no joint stops): {'; '.join(joints)}; {cause}"
     )

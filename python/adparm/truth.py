@@ -37,7 +37,7 @@ from .optimal import basis, lqr_value, optimal_weights, policy
 from .progress import SETTLED_FALL, half_time_index, longer_run_advice, longer_run_estimate
 from .residual import hjb_residual, residual_settings
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
-from .saturation import limits_below_task, saturation_text
+from .saturation import limits_below_task, position_limits_text, saturation_text
 from .simulation import SimulationDiverged, simulate
 from .yardstick import OptimalCost, default_horizon, optimal_cost
 
@@ -227,7 +227,9 @@ def _half_time_residual(
 def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
     """The truth about a run, with what the actuator limits did:
     ``saturated_time`` (seconds per joint) and ``saturation`` (:func:`saturation_text`, None when
-    no torque was clipped), which the verdict ends with."""
+    no torque was clipped), which the verdict ends with, and ``position_limits``
+    (:func:`position_limits_text`: where a URDF arm's joints went past their position limits, None
+    when none did), which it adds last."""
     out = _diagnose_learning(result, tolerance=tolerance)
     identifier = identifier_diagnosis(result)
     out["identifier"] = identifier
@@ -249,6 +251,9 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
         if below is not None:  # no change of learning helps: the limits or the task must change
             out["verdict"] = below[0] + "; " + out["verdict"]  # the cause first
             out["advice"] = [below[1]]
+    out["position_limits"] = position_limits_text(result)
+    if out["position_limits"] is not None:
+        out["verdict"] += "; " + out["position_limits"]
     return out
 
 

@@ -1,0 +1,109 @@
+"""A URDF arm's joint position limits: the default set-point lies inside them on every arm of
+example-robot-data (adparm.joint_limits.rest_position), a URDF that leaves its limits out reads
+no limit, and a run whose joints went past them says so in its verdict, naming the joint, and
+whether the task or the transient took them there (adparm.saturation.position_limits_text)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import adparm
+from adparm.joint_limits import HOME_MARGIN, rest_position
+from adparm.saturation import POSITION_LIMIT_SLACK
+from adparm.urdf import EXAMPLE_LOCKED_JOINTS, EXAMPLE_ROBOTS
+
+pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
+
+
+def _plant(name: str) -> dict:
+    try:
+        adparm.example_robot_urdf(name)
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    plant: dict = {"urdf": f"example-robot-data:{name}"}
+    if name in EXAMPLE_LOCKED_JOINTS:
+        plant["locked_joints"] = EXAMPLE_LOCKED_JOINTS[name]
+    return plant
+
+
+def test_the_rest_position_is_0_moved_inside_the_limits() -> None:
+    inf = np.inf
+    low = np.array([-inf, -3.0, -3.0718, 0.82, 0.0, -0.2])
+    high = np.array([inf, 3.0, -0.0698, 5.46, 0.4, 2.0])
+    qd = rest_position(low, high)
+    # unlimited and wide: 0; the Panda's joint 4 and the Kinova's joint 2: HOME_MARGIN inside the
+    # nearer limit; a 0.4 range: a quarter of it; a gripper's: HOME_MARGIN past its lower limit
+    assert np.allclose(qd, [0.0, 0.0, -0.0698 - HOME_MARGIN, 0.82 + HOME_MARGIN, 0.1, 0.2])
+
+
+def test_a_urdf_without_position_limits_reads_none() -> None:
+    # the double pendulum's revolute joints give no lower and upper: urdfdom reads 0 and 0
+    arm = adparm.UrdfArm(str(adparm.example_robot_urdf("double_pendulum")))
+    assert np.all(arm.limits["lower"] == -np.inf) and np.all(arm.limits["upper"] == np.inf)
+    config = adparm.Config.from_dict({"plant": _plant("double_pendulum")})
+    assert config.task.qd == (0.0, 0.0) and config.task.q0 == (0.1, 0.1)
+
+
+@pytest.mark.parametrize("name", sorted(EXAMPLE_ROBOTS))
+def test_the_default_task_lies_within_the_joint_limits(name: str) -> None:
+    # before: qd = 0 clipped into the limits, on a limit of the Kinova, Panda, SO-100, Talos arm
+    # and Z1 (the transient then ran past it)
+    config = adparm.Config.from_dict({"plant": _plant(name)})
+    arm = adparm.urdf.config_arm(config)
+    low, high = arm.limits["lower"], arm.limits["upper"]
+    margin = np.minimum(HOME_MARGIN, (high - low) / 4.0)
+    qd, q0 = np.array(config.task.qd), np.array(config.task.q0)
+    assert np.all(qd >= low + margin - 1e-12) and np.all(qd <= high - margin + 1e-12)
+    assert np.all(q0 >= low) and np.all(q0 <= high)
+
+
+def _limits_text(plant: dict, **sections: dict) -> str | None:
+    config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.5}, **sections})
+    diagnostics = adparm.simulate(config).diagnostics
+    text = diagnostics["position_limits"]
+    assert (text is None) == ("position limits" not in diagnostics["verdict"])
+    return text
+
+
+def test_a_task_outside_the_limits_is_told_and_leaving_it_out_mends_it() -> None:
+    plant = _plant("panda")
+    # qd = 0: the Panda's joint 4 has limits [-3.07, -0.07] (before: "ok", the simulation having
+    # no joint stops)
+    text = _limits_text(plant, task={"qd": [0.0] * 7})
+    assert text is not None and "joint 4 ('panda_joint4')" in text
+    assert "task.qd lies outside the limits (left out, it is derived within them)" in text
+    assert "task.q0" not in text  # derived from the qd given: -0.1 on joint 4, inside
+    assert _limits_text(plant) is None  # the fix the text names
+    text = _limits_text(plant, task={"q0": [0.1, 0.1, 0.1, 0.0, 0.1, 0.1, 0.1]})
+    assert text is not None and "task.q0 lies outside the limits" in text
+    assert "task.qd" not in text
+
+
+def test_a_trajectory_leaving_the_limits_is_told() -> None:
+    qd = {"kind": "sinusoid", "amplitude": [0.0, 0.0, 0.0, 0.3, 0.0, 0.0, 0.0]}
+    qd["frequency"] = [1.0] * 7
+    text = _limits_text(_plant("panda"), task={"qd": {**qd, "offset": [0, 0, 0, -0.2, 0, 0, 0]}})
+    assert text is not None and "task.qd leaves the limits" in text and "joint 4" in text
+    text = _limits_text(_plant("panda"), task={"qd": {**qd, "offset": [0, 0, 0, -1, 0, 0, 0]}})
+    assert text is None
+
+
+def test_a_transient_past_the_limits_is_told_and_its_fix_works() -> None:
+    # the SO-101's gripper (limits [-0.175, 1.75], M = 1.6e-5 kg m^2): the disturbance's 0.1 N m
+    # swings it about 0.5 rad before RISE takes it up, past the lower limit from its default qd
+    plant = _plant("so101")
+    config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.5}})
+    result = adparm.simulate(config)
+    text = result.diagnostics["position_limits"]
+    assert text is not None and "joint 6 ('gripper')" in text
+    assert "the transient went past them: choose a task.qd at least that much farther" in text
+    past = float(np.max(config_low(config)[5] - result.q[:, 5]))
+    assert past > POSITION_LIMIT_SLACK
+    qd = list(config.task.qd)
+    qd[5] += 2.0 * past  # farther from the lower limit by twice what it went past
+    assert _limits_text(plant, task={"qd": qd}) is None
+
+
+def config_low(config: adparm.Config) -> np.ndarray:
+    return np.asarray(adparm.urdf.config_arm(config).limits["lower"])
