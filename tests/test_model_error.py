@@ -80,14 +80,56 @@ def test_bad_model_scales_are_refused_naming_the_field(value, error, message) ->
         adparm.paper_config().updated({"model": {"scale": value}})
 
 
-def test_model_scale_is_refused_on_a_urdf_arm() -> None:
-    with pytest.raises(ValueError, match="model.scale: the two-link arm only"):
-        adparm.Config.from_dict(
-            {
-                "plant": {"urdf": adparm.example_path("arms/planar_3link.urdf")},
-                "model": {"scale": 0.9},
-            }
+def _urdf_scaled(tmp_path, scale: float) -> tuple[adparm.Config, adparm.Config]:
+    """A URDF arm with model.scale, and the same with model.urdf = the URDF written with every
+    link's mass and inertia times scale (adparm.urdf_with_scaled_inertia, tested against
+    Pinocchio's crba and gravity)."""
+    plant = {"urdf": adparm.example_path("arms/planar_3link.urdf")}
+    written = adparm.urdf_with_scaled_inertia(plant["urdf"], scale, path=tmp_path / "model.urdf")
+    T = {"sim": {"T": 0.3}}
+    return (
+        adparm.Config.from_dict({"plant": plant, "model": {"scale": scale}, **T}),
+        adparm.Config.from_dict({"plant": plant, "model": {"urdf": str(written)}, **T}),
+    )
+
+
+@pytest.mark.parametrize("scale", [0.7, 1.3])
+def test_model_scale_on_a_urdf_arm_is_the_urdf_with_scaled_inertia(tmp_path, scale) -> None:
+    # before: refused ("the two-link arm only"; write the model with urdf_with_scaled_inertia)
+    by_key, by_file = _urdf_scaled(tmp_path, scale)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        q, dq = rng.uniform(-2, 2, 3), rng.uniform(-1, 1, 3)
+        believed = adparm.arm_terms(by_key, q, dq, model=True)
+        plant = adparm.arm_terms(by_key, q, dq)
+        for term in ("M", "C", "G"):
+            np.testing.assert_allclose(believed[term], scale * plant[term], rtol=1e-12, atol=1e-12)
+    # the settings derived from the believed inertia, W* and the run itself: those of the file
+    assert by_key.derived.keys() == by_file.derived.keys()
+    for key in by_key.derived:
+        section, name = key.split(".")
+        np.testing.assert_allclose(
+            np.asarray(getattr(getattr(by_key, section), name), dtype=float),
+            np.asarray(getattr(getattr(by_file, section), name), dtype=float),
+            rtol=1e-12,
+            err_msg=key,
         )
+    np.testing.assert_allclose(
+        adparm.optimal_weights(by_key), adparm.optimal_weights(by_file), rtol=1e-12
+    )
+    first = adparm.simulate(by_key, diagnose=False)
+    second = adparm.simulate(by_file, diagnose=False)
+    np.testing.assert_allclose(first.critic_weights, second.critic_weights, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(first.q, second.q, rtol=1e-9, atol=1e-12)
+    assert by_key.model.differs(by_key.plant)
+    assert not by_key.updated({"model": {"scale": 1.0}}).model.differs(by_key.plant)
+
+
+@pytest.mark.parametrize("scale", [0.0, -1.0, float("nan"), float("inf")])
+def test_the_cores_inertia_scale_is_checked_naming_it(scale) -> None:
+    arm = adparm.UrdfArm(adparm.example_path("arms/planar_3link.urdf"))
+    with pytest.raises(ValueError, match="^inertia_scale: must be finite and > 0"):
+        arm.with_inertia_scaled(scale)
 
 
 def test_an_identifying_runs_summary_judges_the_critic_against_the_plant() -> None:

@@ -86,8 +86,9 @@ def test_bad_arguments_are_refused_naming_them(tmp_path, arguments, message) -> 
 
 def test_scaled_inertia_scales_m_and_g_and_is_the_model_scale_of_a_urdf_arm(tmp_path) -> None:
     # every link's mass and inertia times 1.2 (centres of mass kept): M(q) and G(q) 1.2 times the
-    # original's in Pinocchio's Python bindings; one link alone by a mapping; model.scale's
-    # refusal on a URDF arm names this helper, and the written file works as model.urdf
+    # original's in Pinocchio's Python bindings; one link alone by a mapping; the written file
+    # works as model.urdf, with the base parameters model.scale gives (tests/test_model_error.py:
+    # the same run)
     urdf = adparm.example_path("arms/planar_3link.urdf")
     scaled = adparm.urdf_with_scaled_inertia(urdf, 1.2, path=tmp_path / "m.urdf")
     original, heavier = (pinocchio.buildModelFromUrdf(str(p)) for p in (urdf, scaled))
@@ -115,13 +116,13 @@ def test_scaled_inertia_scales_m_and_g_and_is_the_model_scale_of_a_urdf_arm(tmp_
     assert after == {
         name: mass * (2.0 if name == "link3" else 1.0) for name, mass in before.items()
     }
-    with pytest.raises(ValueError, match=r"adparm\.urdf_with_scaled_inertia\(plant\.urdf, s"):
-        adparm.Config.from_dict({"plant": {"urdf": str(urdf)}, "model": {"scale": 1.2}})
+    by_key = adparm.Config.from_dict({"plant": {"urdf": str(urdf)}, "model": {"scale": 1.2}})
     config = adparm.Config.from_dict(
         {"plant": {"urdf": str(urdf)}, "model": {"urdf": str(scaled)}, "sim": {"T": 0.05}}
     )
     beta = adparm.base_parameters(config, "model")[:3]
     np.testing.assert_allclose(beta, 1.2 * adparm.base_parameters(config, "plant")[:3], rtol=1e-12)
+    np.testing.assert_allclose(adparm.base_parameters(by_key, "model")[:3], beta, rtol=1e-12)
     assert adparm.simulate(config, diagnose=False).status == "finished"
     for scale, message in (
         (0.0, r"^scale: must be a finite number > 0"),

@@ -445,6 +445,18 @@ PinocchioArm PinocchioArm::with_gravity_and_friction(const Eigen::Vector3d& grav
   return PinocchioArm(std::move(impl));
 }
 
+PinocchioArm PinocchioArm::with_inertia_scaled(double scale) const {
+  if (!std::isfinite(scale) || scale <= 0.0)
+    throw std::invalid_argument("inertia_scale: must be finite and > 0, got " + number_text(scale));
+  if (scale == 1.0) return *this;
+  auto impl = std::make_shared<Impl>(*impl_);
+  for (pinocchio::Model* model : {&impl->model, &impl->model_without_gravity})
+    for (pinocchio::Inertia& inertia : model->inertias)
+      inertia = pinocchio::Inertia(scale * inertia.mass(), inertia.lever(),
+                                   scale * inertia.inertia().matrix());
+  return PinocchioArm(std::move(impl));
+}
+
 PinocchioArm::PinocchioArm(const PinocchioArm& other) = default;
 PinocchioArm& PinocchioArm::operator=(const PinocchioArm& other) = default;
 

@@ -338,12 +338,11 @@ class ModelConfig:
     )
     scale: float | None = setting(
         None,
-        "A factor on the believed model's p1, p2, p3, g1 and g2 (each given or the plant's): its "
-        "M, C and G are those of the other keys times scale, the friction is left alone; left "
-        "out: 1; e.g. 0.7 for a model 30 % light. In [0.1, 10]; the two-link arm only (a URDF "
-        "model: ``model.urdf``). The one key a sweep over the model's error varies "
-        "(:doc:`/guide/unknown-dynamics`).",
-        via="folded into model.p1 ... model.g2 by ModelConfig.resolve",
+        "A factor on the believed model's p1, p2, p3, g1, g2 (two-link arm) or every link's mass "
+        "and inertia (URDF arm): its M, C and G are the other keys' times scale, friction left "
+        "alone; left out: 1; e.g. 0.7 for a model 30 % light. In [0.1, 10]. The one key a sweep "
+        "over the model's error varies (:doc:`/guide/unknown-dynamics`).",
+        via="two-link: ModelConfig.resolve; URDF: model_urdf.inertia_scale (urdf_settings)",
     )
 
     def __post_init__(self) -> None:
@@ -386,7 +385,7 @@ class ModelConfig:
 
     def resolve_urdf(self, plant: PlantConfig) -> dict[str, Any]:
         """The believed URDF arm: urdf, gravity, coulomb, viscous, locked_joints, each the
-        plant's when left out (a URDF plant only)."""
+        plant's when left out (a URDF plant only), and scale (None: 1, the URDF's inertia)."""
         return {
             "urdf": plant.urdf if self.urdf is None else self.urdf,
             "gravity": plant.resolved_gravity if self.gravity is None else self.gravity,
@@ -395,6 +394,7 @@ class ModelConfig:
             "locked_joints": (
                 plant.locked_joints if self.locked_joints is None else self.locked_joints
             ),
+            "scale": None if self.scale == 1.0 else self.scale,
         }
 
 

@@ -656,7 +656,7 @@ class SimSettings:
         ...
 class UrdfArmSettings:
     """
-    A URDF arm of the loop: urdf (path; empty: the two-link arm), gravity (3,), coulomb and viscous (n, 1 or 0 values), locked_joints ([(name, position), ...]).
+    A URDF arm of the loop: urdf (path; empty: the two-link arm), gravity (3,), coulomb and viscous (n, 1 or 0 values), locked_joints ([(name, position), ...]), inertia_scale (every link's mass and inertia times it: M, C and G times it; 1: as the URDF).
     """
     urdf: str
     def __init__(self) -> None:
@@ -672,6 +672,12 @@ class UrdfArmSettings:
         ...
     @gravity.setter
     def gravity(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"]) -> None:
+        ...
+    @property
+    def inertia_scale(self) -> float:
+        ...
+    @inertia_scale.setter
+    def inertia_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def locked_joints(self) -> list[tuple[str, float]]:
@@ -817,6 +823,10 @@ class UrdfArm:
     def with_gravity_and_friction(self, gravity: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[3, 1]"] = ..., coulomb: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0, viscous: typing.SupportsFloat | typing.SupportsIndex | typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] = 0.0) -> UrdfArm:
         """
         The arm the constructor would read with this gravity and friction, without reading the URDF again (the parsed model is shared or copied).
+        """
+    def with_inertia_scaled(self, scale: typing.SupportsFloat | typing.SupportsIndex) -> UrdfArm:
+        """
+        This arm with every link's mass and inertia times scale > 0: M, C and G times scale, friction and kinematics unchanged (1: this arm).
         """
     @property
     def coulomb(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:

@@ -217,12 +217,6 @@ class ConfigSchema:
                     )
             check_urdf_arm(self.model, "model")
             return
-        if self.model.scale is not None:
-            raise ValueError(
-                "model.scale: the two-link arm only; a URDF arm's model error is another URDF "
-                "(model.urdf), gravity or friction: for its inertia times s, write the model with "
-                "adparm.urdf_with_scaled_inertia(plant.urdf, s, path=...) and give it as model.urdf"
-            )
         check_urdf_arm(dataclasses.replace(self.model, urdf=self.plant.urdf), "model")
         if self.model.urdf is not None or self.model.locked_joints is not None:
             believed = self.model.resolve_urdf(self.plant)

@@ -147,6 +147,8 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 
     believed = config.model.resolve_urdf(config.plant)
     smallest, largest = inertia_range(believed["urdf"], believed["locked_joints"])
+    if believed["scale"] is not None:  # M times scale (model.scale)
+        smallest, largest = believed["scale"] * smallest, believed["scale"] * largest
     explicit = config.explicit_keys
     n = config.dof
     eye = np.eye(n)

@@ -110,6 +110,8 @@ def _urdf(config: ConfigSchema, q: Any, dq: Any) -> dict[str, Any]:
     dMdt = casadi.reshape(casadi.mtimes(dM, velocity), n, n)
     C = 0.5 * (dMdt + A - A.T)
     M, C, G = casadi.Function("terms", [position, velocity], [M, C, G])(q, dq)
+    if believed["scale"] is not None:  # model.scale: every link's mass and inertia times it
+        M, C, G = believed["scale"] * M, believed["scale"] * C, believed["scale"] * G
     coulomb = np.broadcast_to(np.asarray(arm.coulomb, float), (n,)).copy()
     viscous = np.broadcast_to(np.asarray(arm.viscous, float), (n,)).copy()
     F = _friction(coulomb, viscous, dq)

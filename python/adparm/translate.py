@@ -110,15 +110,18 @@ def urdf_settings(
     coulomb: float | tuple[float, ...],
     viscous: float | tuple[float, ...],
     locked_joints: dict[str, float] | None = None,
+    scale: float | None = None,
 ) -> _core.UrdfArmSettings:
     """The core's description of a URDF arm (friction: one value per joint, or one for all;
-    locked joints: {name: position} or None)."""
+    locked joints: {name: position} or None; scale: its links' masses and inertias times it,
+    None: 1)."""
     arm = _core.UrdfArmSettings()
     arm.urdf = urdf
     arm.gravity = np.array(gravity, dtype=float)
     arm.coulomb = np.atleast_1d(np.array(coulomb, dtype=float))
     arm.viscous = np.atleast_1d(np.array(viscous, dtype=float))
     arm.locked_joints = [(name, float(value)) for name, value in (locked_joints or {}).items()]
+    arm.inertia_scale = 1.0 if scale is None else float(scale)
     return arm
 
 

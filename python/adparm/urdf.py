@@ -250,6 +250,16 @@ class UrdfArm:
         )
         return arm
 
+    def with_inertia_scaled(self, scale: float) -> UrdfArm:
+        """This arm with every link's mass and inertia times ``scale`` > 0 (M, C and G times it:
+        ``model.scale``), without reading the URDF again. 1: this arm."""
+        if scale == 1.0:
+            return self
+        arm = copy.copy(self)
+        arm._arm = self._arm.with_inertia_scaled(float(scale))
+        arm.__dict__.pop("_structured_basis", None)  # its weights hold the inertia
+        return arm
+
     @property
     def dof(self) -> int:
         """Number of joints n."""
@@ -452,7 +462,12 @@ def config_arm(config: Any, *, model: bool = False) -> UrdfArm:
         }
     )
     return shared_arm(
-        arm["urdf"], arm["gravity"], arm["coulomb"], arm["viscous"], arm["locked_joints"]
+        arm["urdf"],
+        arm["gravity"],
+        arm["coulomb"],
+        arm["viscous"],
+        arm["locked_joints"],
+        arm.get("scale"),
     )
 
 
@@ -498,11 +513,12 @@ def _shared_arm(
     viscous: float | tuple[float, ...],
     locked: tuple[tuple[str, float], ...],
     thread: int,
+    inertia_scale: float = 1.0,
 ) -> UrdfArm:
     parsed = _parsed_arm(path, mtime_ns, size, locked, thread)
-    if gravity == (0.0, 0.0, -9.81) and coulomb == 0.0 and viscous == 0.0:
-        return parsed
-    return parsed.with_gravity_and_friction(gravity, coulomb, viscous)
+    if gravity != (0.0, 0.0, -9.81) or coulomb != 0.0 or viscous != 0.0:
+        parsed = parsed.with_gravity_and_friction(gravity, coulomb, viscous)
+    return parsed.with_inertia_scaled(inertia_scale)
 
 
 def shared_arm(
@@ -511,11 +527,13 @@ def shared_arm(
     coulomb: float | ArrayLike = 0.0,
     viscous: float | ArrayLike = 0.0,
     locked_joints: Mapping[str, float] | None = None,
+    inertia_scale: float | None = None,
 ) -> UrdfArm:
     """``UrdfArm(urdf, gravity, coulomb, viscous, locked_joints)``, read once per version of the
     file (its modification time and size), locked joints and thread, and shared: a config's
-    checks, defaults, basis and optimum all use the one parse (an arm with other gravity or
-    friction is ``with_gravity_and_friction`` of it). Read it, do not change it."""
+    checks, defaults, basis and optimum all use the one parse (other gravity or friction: its
+    ``with_gravity_and_friction``; inertia_scale: ``with_inertia_scaled``). Do not change it."""
+    scale = 1.0 if inertia_scale is None else float(inertia_scale)
     try:
         stat = os.stat(urdf)
         key = (
@@ -525,8 +543,10 @@ def shared_arm(
             tuple((str(k), float(v)) for k, v in (locked_joints or {}).items()),
         )
     except (OSError, TypeError, ValueError):  # UrdfArm names the problem
-        return UrdfArm(urdf, gravity, coulomb, viscous, locked_joints)
-    return _shared_arm(str(urdf), stat.st_mtime_ns, stat.st_size, *key, threading.get_ident())
+        return UrdfArm(urdf, gravity, coulomb, viscous, locked_joints).with_inertia_scaled(scale)
+    return _shared_arm(
+        str(urdf), stat.st_mtime_ns, stat.st_size, *key, threading.get_ident(), scale
+    )
 
 
 def _example_robot_data_root() -> Path | None:

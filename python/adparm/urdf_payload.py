@@ -76,9 +76,10 @@ def urdf_with_scaled_inertia(
     """Write the URDF at ``urdf`` with its links' masses and inertias multiplied by ``scale`` (a
     number: every link; a mapping {link name: factor}: those links) to ``path`` (atomically) and
     return ``path``; the centres of mass stay where they are, so M(q) and G(q) of the arm are
-    ``scale`` times the original's. Use it as ``[model] urdf``: a model whose inertia is off
-    (``model.scale`` of the two-link arm). Raises ValueError naming the argument: a factor not
-    > 0, an unknown link (with the closest name) or one without ``<inertial>``."""
+    ``scale`` times the original's. Use it as ``[model] urdf``: a model whose inertia is off (a
+    single factor is what ``[model] scale`` gives without a file). Raises ValueError naming the
+    argument: a factor not > 0, an unknown link (with the closest name) or one without
+    ``<inertial>``."""
     tree = ET.parse(os.fspath(urdf))
     links = {element.get("name", ""): element for element in tree.getroot().findall("link")}
     if isinstance(scale, Mapping):

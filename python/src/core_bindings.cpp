@@ -217,13 +217,15 @@ void bind_settings(py::module_& m) {
   py::class_<UrdfArmSettings>(m, "UrdfArmSettings",
                               "A URDF arm of the loop: urdf (path; empty: the two-link arm), "
                               "gravity (3,), coulomb and viscous (n, 1 or 0 values), locked_joints "
-                              "([(name, position), ...]).")
+                              "([(name, position), ...]), inertia_scale (every link's mass and "
+                              "inertia times it: M, C and G times it; 1: as the URDF).")
       .def(py::init<>())
       .def_readwrite("urdf", &UrdfArmSettings::urdf)
       .def_readwrite("gravity", &UrdfArmSettings::gravity)
       .def_readwrite("coulomb", &UrdfArmSettings::coulomb)
       .def_readwrite("viscous", &UrdfArmSettings::viscous)
-      .def_readwrite("locked_joints", &UrdfArmSettings::locked_joints);
+      .def_readwrite("locked_joints", &UrdfArmSettings::locked_joints)
+      .def_readwrite("inertia_scale", &UrdfArmSettings::inertia_scale);
   py::class_<Settings>(m, "Settings",
                        "All settings of one run. Eigen members and the arms (plant, model, "
                        "plant_urdf, model_urdf) are copied on access: assign them whole. Q (2 n, "
@@ -364,6 +366,9 @@ void bind_urdf_arm(py::module_& m) {
           py::arg("viscous") = 0.0,
           "The arm the constructor would read with this gravity and friction, without reading "
           "the URDF again (the parsed model is shared or copied).")
+      .def("with_inertia_scaled", &PinocchioArm::with_inertia_scaled, py::arg("scale"),
+           "This arm with every link's mass and inertia times scale > 0: M, C and G times "
+           "scale, friction and kinematics unchanged (1: this arm).")
       .def_property_readonly("dof", &PinocchioArm::dof)
       .def_property_readonly("source", &PinocchioArm::source)
       .def_property_readonly("joint_names", &PinocchioArm::joint_names)

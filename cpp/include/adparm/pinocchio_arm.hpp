@@ -116,6 +116,10 @@ class PinocchioArm {
   PinocchioArm with_gravity_and_friction(const Eigen::Vector3d& gravity,
                                          const Eigen::VectorXd& coulomb,
                                          const Eigen::VectorXd& viscous) const;
+  // This arm with every link's mass and inertia (its spatial inertia) times `scale` > 0: M, C and
+  // G times scale, friction and kinematics unchanged (a model whose inertia is off). scale = 1:
+  // this arm, shared.
+  PinocchioArm with_inertia_scaled(double scale) const;
 
   // Copies share the parsed model.
   PinocchioArm(const PinocchioArm& other);

@@ -58,11 +58,15 @@ struct UrdfArmSettings {
   Eigen::VectorXd viscous;
   // Joints held at a position (rad or m), by name (PinocchioArm's locked joints).
   std::vector<std::pair<std::string, double>> locked_joints;
+  // Every link's mass and inertia times this (> 0): M, C and G times it, friction unchanged (a
+  // believed model whose inertia is off: model.scale; PinocchioArm::with_inertia_scaled).
+  double inertia_scale = 1.0;
 
   friend bool operator==(const UrdfArmSettings& a, const UrdfArmSettings& b) {
     return a.urdf == b.urdf && a.gravity == b.gravity && a.coulomb.size() == b.coulomb.size() &&
            a.coulomb == b.coulomb && a.viscous.size() == b.viscous.size() &&
-           a.viscous == b.viscous && a.locked_joints == b.locked_joints;
+           a.viscous == b.viscous && a.locked_joints == b.locked_joints &&
+           a.inertia_scale == b.inertia_scale;
   }
 };
 

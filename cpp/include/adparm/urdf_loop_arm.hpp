@@ -128,7 +128,12 @@ class UrdfArmCache {
     PinocchioArm arm;
   };
 
+  // The arm of `settings`: the parse below, its inertia scaled (UrdfArmSettings::inertia_scale).
   PinocchioArm parsed(const UrdfArmSettings& settings) {
+    return unscaled(settings).with_inertia_scaled(settings.inertia_scale);
+  }
+
+  PinocchioArm unscaled(const UrdfArmSettings& settings) {
     const auto read = [&] {
       return PinocchioArm(settings.urdf, settings.gravity, settings.coulomb, settings.viscous,
                           settings.locked_joints);
