@@ -130,6 +130,18 @@ def test_the_advice_for_an_uninformative_stack_works(tmp_path) -> None:
     assert f"a larger probe (e.g. probe.amplitude = [{text}], 10 times)" in verdict
     stronger = adparm.simulate(weak.updated({"probe": {"amplitude": larger}}))
     assert stronger.diagnostics["identifier"]["ever_informative"]
+    # a URDF arm with its probe off (the derived default): on at 10 times its derived amplitude
+    # at once (the derived amplitude alone left the UR5's, the Panda's and the Kinova's stacks
+    # uninformative)
+    off = chain_config(tmp_path, 2, 4, sim={"T": 4.0})
+    assert off.probe.until == 0.0
+    verdict = adparm.simulate(off).diagnostics["verdict"]
+    assert (
+        f"switch the probe on at 10 times its amplitude (probe.until = 100, probe.amplitude = "
+        f"[{text}], sim.T = 30)" in verdict
+    )
+    on = off.updated({"probe": {"until": 100.0, "amplitude": larger}})
+    assert adparm.simulate(on).diagnostics["identifier"]["ever_informative"]
     # a controller that does not learn applies no probe: the advice is a moving trajectory
     pd = adparm.simulate(rest.updated({"controller": {"kind": "pd"}, "sim": {"T": 1.0}}))
     assert "excite the arm with a moving desired trajectory (task.qd" in pd.diagnostics["verdict"]
