@@ -89,6 +89,21 @@ def test_a_trajectory_leaving_the_limits_is_told() -> None:
     assert text is None
 
 
+def test_a_sinusoid_without_an_offset_moves_about_the_rest_position() -> None:
+    # before: about 0 on every joint, outside the Panda's joint 4 and its limits' verdict
+    plant = _plant("panda")
+    qd = {"kind": "sinusoid", "amplitude": [0.1] * 7, "frequency": [1.0] * 7}
+    config = adparm.Config.from_dict({"plant": plant, "task": {"qd": qd}})
+    rest = adparm.Config.from_dict({"plant": plant}).task.qd
+    assert config.task.qd.offset == rest and rest[3] == pytest.approx(-0.0698 - HOME_MARGIN)
+    assert "task.qd" in config.derived
+    np.testing.assert_allclose(adparm.desired_state(config, 0.0)[0], rest)
+    assert np.allclose(config.task.q0, np.array(rest) + 0.1)
+    assert _limits_text(plant, task={"qd": qd}) is None
+    two_link = adparm.paper_config().updated({"task": {"qd": {"kind": "sinusoid"}}})
+    assert two_link.task.qd.offset == (0.0, 0.0)
+
+
 def test_a_transient_past_the_limits_is_told_and_its_fix_works() -> None:
     # the SO-101's gripper (limits [-0.175, 1.75], M = 1.6e-5 kg m^2): the disturbance's 0.1 N m
     # swings it about 0.5 rad before RISE takes it up, past the lower limit from its default qd

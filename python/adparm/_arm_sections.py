@@ -421,7 +421,8 @@ class SinusoidTrajectory:
     )
     offset: Vector | None = setting(
         None,
-        "rad, one per joint; None (the default): 0 on every joint.",
+        "rad, one per joint; None (the default): the arm's rest position, 0 on the two-link "
+        "arm and on a URDF arm task.qd's derived set-point (0 moved inside the joint limits).",
         via="task.qd (desired.trajectory_settings)",
     )
 
@@ -432,8 +433,8 @@ class SinusoidTrajectory:
         object.__setattr__(self, "frequency", rows_value(self.frequency, "task.qd.frequency", n))
         phase = ((0.0,) * n,) * len(amplitude) if self.phase is None else self.phase
         object.__setattr__(self, "phase", rows_value(phase, "task.qd.phase", n))
-        offset = (0.0,) * len(amplitude) if self.offset is None else self.offset  # one per joint
-        object.__setattr__(self, "offset", vector_value(offset, "task.qd.offset", None))
+        if self.offset is not None:  # one per joint; None: the arm's rest position (below)
+            object.__setattr__(self, "offset", vector_value(self.offset, "task.qd.offset", None))
         for key in ("frequency", "phase"):
             if len(getattr(self, key)[0]) != n:
                 raise ValueError(

@@ -255,6 +255,9 @@ class ConfigSchema:
                 current = getattr(self, section)
                 if getattr(current, key) == getattr(SECTIONS[section](), key):
                     object.__setattr__(self, section, dataclasses.replace(current, **{key: value}))
+        qd = self.task.qd
+        if isinstance(qd, SinusoidTrajectory) and qd.offset is None:  # rest: 0 (URDF: derived)
+            self._replace_fields({("task", "qd"): dataclasses.replace(qd, offset=(0.0,) * n)})
         check_sizes(self, n)
 
     def _replace_fields(self, values: Mapping[tuple[str, str], Any]) -> None:
@@ -376,7 +379,8 @@ def check_sizes(config: ConfigSchema, n: int) -> None:
     qd = config.task.qd
     if isinstance(qd, SinusoidTrajectory):
         k = len(qd.amplitude[0])
-        check_shape(qd.offset, "task.qd.offset", (n,), n)
+        if qd.offset is not None:  # None: the rest position (a URDF arm's derived below)
+            check_shape(qd.offset, "task.qd.offset", (n,), n)
         for key in ("amplitude", "frequency", "phase"):
             check_shape(getattr(qd, key), f"task.qd.{key}", (n, k), n)
     elif isinstance(qd, SampledTrajectory):

@@ -299,7 +299,7 @@ class Comparison:
       fails, e.g. IPOPT, or a URDF arm with locked joints);
     - rms_e1: ``sqrt(1/T int |e1|^2 dt)`` over the recorded rows (trapezoid rule), rad;
     - final_e1: ``|e1|`` at the last row, rad;
-    - peak_torque: max ``|tau|`` over both joints and all rows, N m;
+    - peak_torque: max ``|tau|`` over every joint and row, N m;
     - critic_relative_error_plant: ||Wc(T) - W*|| / ||W*|| with the *plant's* W*
       (:func:`plant_critic_error`; the learning runs only, None where W* is not known): a run
       that believes a wrong model ends at the model's W*, an identifying one at the plant's;
@@ -370,7 +370,7 @@ class Comparison:
                 text += "RISE adds mu to every controller's input, so even optimal is above J*. "
         text += (
             "e1 RMS = sqrt(1/T int |e1|^2 dt), e1 final = |e1(T)|, tau peak = max |tau_j| "
-            "over both joints. critic vs plant's W* = ||Wc(T) - W*|| / ||W*|| with the plant's "
+            "over the joints. critic vs plant's W* = ||Wc(T) - W*|| / ||W*|| with the plant's "
             "W* (learning runs); beta_hat vs beta = the largest relative error of the believed "
             "base parameters at the end against the plant's (the model's, or the identifying "
             "run's estimate)."

@@ -20,7 +20,8 @@ def trajectory_settings(config: ConfigSchema) -> _core.TrajectorySettings:
     trajectory = _core.TrajectorySettings()
     if isinstance(qd, SinusoidTrajectory):
         trajectory.kind = _core.TrajectoryKind.sinusoid
-        trajectory.offset = np.array(qd.offset)
+        joints = len(qd.amplitude)  # offset None: 0 (a URDF arm's is derived: rates)
+        trajectory.offset = np.zeros(joints) if qd.offset is None else np.array(qd.offset)
         trajectory.amplitude = np.array(qd.amplitude)
         trajectory.frequency = np.array(qd.frequency)
         trajectory.phase = np.array(qd.phase)

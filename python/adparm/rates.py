@@ -24,6 +24,7 @@ model's inertia over its joint-limit box (docs: URDF arms, "Defaults derived fro
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from typing import TYPE_CHECKING, Any
@@ -170,16 +171,20 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     limits = config_arm(config).limits  # the plant's: the real arm's joint stops
     low, high = np.asarray(limits["lower"], dtype=float), np.asarray(limits["upper"], dtype=float)
     qd = rest_position(low, high)
-    put(
-        "task.qd",
-        tuple(qd),
-        f"0, moved to at least {HOME_MARGIN:g} rad (at most a quarter of the range) inside the "
-        "joint limits",
-    )
+    margin = f"{HOME_MARGIN:g} rad (at most a quarter of the range)"
+    put("task.qd", tuple(qd), f"0, moved to at least {margin} inside the joint limits")
     if "task.qd" in explicit:
+        from ._arm_sections import SinusoidTrajectory
         from .desired import desired_state
 
-        qd = desired_state(config, 0.0)[0]
+        given = config.task.qd
+        if isinstance(given, SinusoidTrajectory) and given.offset is None:
+            rest = tuple(float(v) for v in qd)  # the sinusoids about the rest position
+            values[("task", "qd")] = dataclasses.replace(given, offset=rest)
+            reasons["task.qd"] = "the sinusoids' offset: the rest position (as a set-point's qd)"
+            qd = qd + np.sum(np.asarray(given.amplitude) * np.sin(given.phase), axis=1)
+        else:
+            qd = desired_state(config, 0.0)[0]
     q0 = np.where(qd + 0.1 <= high, qd + 0.1, qd - 0.1)
     put("task.q0", tuple(q0), "qd(0) + 0.1 rad")
     if "task.q0" in explicit:
