@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import adparm
+from adparm import dynamics
 from adparm.joint_limits import HOME_MARGIN, rest_position
-from adparm.saturation import POSITION_LIMIT_SLACK
+from adparm.saturation import POSITION_LIMIT_SLACK, limits_below_task
 from adparm.urdf import EXAMPLE_LOCKED_JOINTS, EXAMPLE_ROBOTS
 
 pytestmark = pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
@@ -122,3 +123,23 @@ def test_a_transient_past_the_limits_is_told_and_its_fix_works() -> None:
 
 def config_low(config: adparm.Config) -> np.ndarray:
     return np.asarray(adparm.urdf.config_arm(config).limits["lower"])
+
+
+def test_a_rest_position_the_arm_cannot_hold_gives_way_to_one_it_can() -> None:
+    # Baxter's left arm at 0: its shoulder needs 56.4 N m against its 50 (before: the default
+    # run was told "the torque limits cannot hold the task")
+    plant = _plant("baxter")
+    config = adparm.Config.from_dict({"plant": plant})
+    assert "least loads the actuators against gravity" in config.derived["task.qd"]
+    assert limits_below_task(config) is None
+    held = dynamics.task_torque(config) + 0.1
+    assert np.all(held <= 0.3 * np.asarray(config.plant.torque_limits))
+    at_zero = config.updated({"task": {"qd": [0.0] * 7}})
+    assert limits_below_task(at_zero) is not None
+    arm = adparm.urdf.config_arm(config)
+    low, high = arm.limits["lower"], arm.limits["upper"]
+    margin = np.minimum(HOME_MARGIN, (high - low) / 4.0)
+    qd = np.array(config.task.qd)
+    assert np.all(qd >= low + margin - 1e-9) and np.all(qd <= high - margin + 1e-9)
+    # an arm that holds its rest position keeps it
+    assert adparm.Config.from_dict({"plant": _plant("ur5")}).task.qd == (0.0,) * 6

@@ -405,7 +405,11 @@ def test_limits_that_cannot_hold_the_task_are_named_with_a_change_that_works() -
     except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
         pytest.skip("example-robot-data is not installed")
     plant = {"urdf": "example-robot-data:ur5", "torque_limits": 5.0}
-    config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 5.0}})
+    # left out, qd is a pose the arm holds within these limits (joint_limits.default_set_point)
+    derived = adparm.Config.from_dict({"plant": plant})
+    assert adparm.saturation.limits_below_task(derived) is None
+    task = {"qd": [0.0] * 6}
+    config = adparm.Config.from_dict({"plant": plant, "task": task, "sim": {"T": 5.0}})
     with pytest.warns(adparm.ApproximationWarning):
         diagnostics = adparm.simulate(config).diagnostics
     verdict = diagnostics["verdict"]

@@ -33,7 +33,7 @@ import numpy as np
 
 from ._sections import EPSILON_T_PROBING
 from .extrapolation_region import extrapolation_box, extrapolation_range  # re-exported
-from .joint_limits import HOME_MARGIN, limits_box, rest_position
+from .joint_limits import default_set_point, limits_box
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._schema import ConfigSchema
@@ -170,9 +170,8 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 
     limits = config_arm(config).limits  # the plant's: the real arm's joint stops
     low, high = np.asarray(limits["lower"], dtype=float), np.asarray(limits["upper"], dtype=float)
-    qd = rest_position(low, high)
-    margin = f"{HOME_MARGIN:g} rad (at most a quarter of the range)"
-    put("task.qd", tuple(qd), f"0, moved to at least {margin} inside the joint limits")
+    qd, reason = default_set_point(config)
+    put("task.qd", tuple(float(v) for v in qd), reason)
     if "task.qd" in explicit:
         from ._arm_sections import SinusoidTrajectory
         from .desired import desired_state
