@@ -8,7 +8,11 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["HOME_MARGIN", "default_set_point", "limits_box", "rest_position"]
+__all__ = ["DISTURBANCE", "HOME_MARGIN", "default_set_point", "limits_box", "rest_position"]
+
+#: A URDF arm's default plant.disturbance amplitude on every joint (N m), the paper's: the
+#: default set-point must be held against it too (rates.urdf_defaults derives it).
+DISTURBANCE = 0.1
 
 
 def limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -64,7 +68,7 @@ def default_set_point(config: Any) -> tuple[np.ndarray, str]:
     disturbance = (
         np.abs(np.asarray(config.plant.disturbance, dtype=float))
         if "plant.disturbance" in config.explicit_keys
-        else np.full(n, 0.1)  # its default (rates.urdf_defaults)
+        else np.full(n, DISTURBANCE)
     )
     model = config_arm(config, model=True)
     zero, finite = np.zeros(n), np.isfinite(limits)

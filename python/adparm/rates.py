@@ -33,7 +33,7 @@ import numpy as np
 
 from ._sections import EPSILON_T_PROBING
 from .extrapolation_region import extrapolation_box, extrapolation_range  # re-exported
-from .joint_limits import default_set_point, limits_box
+from .joint_limits import DISTURBANCE, default_set_point, limits_box
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._schema import ConfigSchema
@@ -137,7 +137,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 
     With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF (the rules and their
     reasons: docs, URDF arms, "Defaults derived from the arm"): the task (qd =
-    joint_limits.rest_position of the plant's joint limits, q0 = qd + 0.1 rad),
+    joint_limits.default_set_point, inside the plant's limits, q0 = qd + 0.1 rad),
     plant.disturbance, plant.torque_limits (``<limit effort>``),
     control.alpha1 = 2 I, control.ks (:func:`rise_ks`), the cost (R = diag(1 / (POLICY_RATE
     M_ii(qd))), Q = solvable_cost(alpha / 2 R^-1, alpha1, R)), actor.e2_margin, .weight_bound,
@@ -189,7 +189,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     if "task.q0" in explicit:
         q0 = np.array(config.task.q0, dtype=float)
     put("task.dq0", (0.0,) * n, "at rest")
-    put("plant.disturbance", (0.1,) * n, "0.1 N m per joint, as the paper's")
+    put("plant.disturbance", (DISTURBANCE,) * n, f"{DISTURBANCE:g} N m per joint, as the paper's")
     effort = np.asarray(config_arm(config).limits["effort"], dtype=float)
     effort = np.where(effort > 0.0, effort, np.inf)  # 0 or none given: no limit
     if np.all(np.isinf(effort)):
