@@ -185,7 +185,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
         else:
             qd = desired_state(config, 0.0)[0]
     q0 = np.where(qd + 0.1 <= high, qd + 0.1, qd - 0.1)
-    put("task.q0", tuple(q0), "qd(0) + 0.1 rad")
+    put("task.q0", tuple(q0), "qd(0) + 0.1 (rad, or m on a prismatic joint)")
     if "task.q0" in explicit:
         q0 = np.array(config.task.q0, dtype=float)
     put("task.dq0", (0.0,) * n, "at rest")
