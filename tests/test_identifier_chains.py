@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import adparm
-from adparm.identification import identified_parameters, plant_model_config
+from adparm.identification import _excitation_advice, identified_parameters, plant_model_config
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -247,3 +247,15 @@ def test_a_model_of_other_kinematics_is_refused_when_identifying(tmp_path) -> No
     scaled = adparm.urdf_with_scaled_inertia(paths[0], 1.2, path=tmp_path / "scaled.urdf")
     same = {"plant": {"urdf": str(paths[0])}, "model": {"urdf": str(scaled)}}
     assert adparm.Config.from_dict({**same, "identifier": {"enabled": True}}).identifier.enabled
+
+
+def test_the_advice_names_a_matrix_probe_amplitude_plainly(tmp_path) -> None:
+    # a joints x k amplitude is not spelled out: "probe.amplitude 10 times larger", probe on or off
+    off = chain_config(tmp_path, 2, 4, probe={"amplitude": [[0.1, 0.2, 0.3, 0.4]] * 4})
+    assert off.probe.until == 0.0
+    advice = _excitation_advice(off)
+    assert "(probe.until = 100, probe.amplitude 10 times larger, sim.T = 30)" in advice
+    on = off.updated({"probe": {"until": 100.0}})
+    assert _excitation_advice(on) == (
+        "excite the arm more: a larger probe (probe.amplitude 10 times larger)"
+    )

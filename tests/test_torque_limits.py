@@ -452,3 +452,14 @@ def test_a_prismatic_joint_needs_newtons(tmp_path) -> None:
     text, advice = adparm.saturation.limits_below_task(config)
     assert "joint 1 needs 29.5 N (limit 5 N)" in text and "joint 2" not in text
     assert advice.startswith("raise plant.torque_limits to [59.1, 5]")
+    # the summary names each limit with its unit (a summary without units: N m, as before)
+    assert adparm.saturation.effort_units(config) == ["N", "N m"]
+    with pytest.warns(adparm.ApproximationWarning, match="cannot hold the task"):
+        short = adparm.simulate(config.updated({"sim": {"T": 0.05}})).summary()
+    assert short["torque_limit_units"] == ["N", "N m"]
+    from adparm.summary import summary_markdown
+
+    assert "- torque limits 5 N, 5 N m: saturated joint 1" in summary_markdown(short)
+    short.pop("torque_limit_units")
+    assert "- torque limits 5, 5 N m: saturated" in summary_markdown(short)
+    assert adparm.saturation.torque_limits_text([None, 2.0], ["N", "N m"]) == "none, 2 N m"

@@ -22,6 +22,8 @@
 #include <pinocchio/parsers/urdf.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include "adparm/types.hpp"
 #include "pinocchio_arm_impl.hpp"
@@ -159,7 +161,18 @@ void check_bodies(const pinocchio::Model& model, const std::string& source) {
   }
 }
 
-// Where joint `name` stands in Pinocchio's configuration, and its limits (+-inf: continuous).
+// A joint's position limits: +-inf for a continuous joint, and for one whose lower equals its
+// upper (a URDF that leaves <limit lower upper> out reads 0 and 0, which no moving joint means).
+std::pair<double, double> position_limits(const pinocchio::Model& model,
+                                          pinocchio::JointIndex joint) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const int iq = model.idx_qs[joint];
+  if (model.nqs[joint] == 2 || model.lowerPositionLimit[iq] == model.upperPositionLimit[iq])
+    return {-inf, inf};
+  return {model.lowerPositionLimit[iq], model.upperPositionLimit[iq]};
+}
+
+// Where joint `name` stands in Pinocchio's configuration, and its limits (position_limits).
 struct JointSlot {
   pinocchio::JointIndex index;
   int iq;
@@ -170,10 +183,8 @@ struct JointSlot {
 JointSlot joint_slot(const pinocchio::Model& model, const std::string& name) {
   const pinocchio::JointIndex index = model.getJointId(name);
   const int iq = model.idx_qs[index];
-  const bool continuous = model.nqs[index] == 2;
-  const double inf = std::numeric_limits<double>::infinity();
-  return {index, iq, continuous, continuous ? -inf : model.lowerPositionLimit[iq],
-          continuous ? inf : model.upperPositionLimit[iq]};
+  const auto [lower, upper] = position_limits(model, index);
+  return {index, iq, model.nqs[index] == 2, lower, upper};
 }
 
 [[noreturn]] void refuse_locked(const std::string& problem) {
@@ -358,7 +369,6 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
   impl->limits.upper.resize(dof);
   impl->limits.velocity.resize(dof);
   impl->limits.effort.resize(dof);
-  const double inf = std::numeric_limits<double>::infinity();
   for (int i = 0; i < dof; ++i) {
     const pinocchio::JointIndex joint = static_cast<pinocchio::JointIndex>(i + 1);
     const int nq = model.nqs[joint];
@@ -377,8 +387,7 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
     impl->joint_names.push_back(model.names[joint]);
     impl->joint_types.push_back(urdf_joint ? urdf_type_name(urdf_joint->type)
                                            : (continuous ? "continuous" : "revolute"));
-    impl->limits.lower[i] = continuous ? -inf : model.lowerPositionLimit[iq];
-    impl->limits.upper[i] = continuous ? inf : model.upperPositionLimit[iq];
+    std::tie(impl->limits.lower[i], impl->limits.upper[i]) = position_limits(model, joint);
     impl->limits.velocity[i] = model.velocityLimit[iv];
     impl->limits.effort[i] = model.effortLimit[iv];
   }

@@ -161,21 +161,21 @@ def _excitation_advice(config: Config) -> str:
         )
     amplitude = np.asarray(config.probe.amplitude, dtype=float)
     if amplitude.ndim == 0:
-        larger = f"{10.0 * float(amplitude):.3g}"
+        larger = f"probe.amplitude = {10.0 * float(amplitude):.3g}"
     elif amplitude.ndim == 1:
-        larger = "[" + ", ".join(f"{10.0 * a:.3g}" for a in amplitude) + "]"
+        larger = "probe.amplitude = [" + ", ".join(f"{10.0 * a:.3g}" for a in amplitude) + "]"
     else:
-        larger = "10 times the present"
+        larger = "probe.amplitude 10 times larger"
     if config.probe.until <= 0.0:
         longer = ", sim.T = 30" if config.sim.T < 30.0 else ""
         return (
             f"switch the probe on at 10 times its amplitude (probe.until = 100, "
-            f"probe.amplitude = {larger}{longer}): identifier.stop_probe ends it once beta_hat "
+            f"{larger}{longer}): identifier.stop_probe ends it once beta_hat "
             "settles, and the critic settles after it"
         )
     if amplitude.ndim > 1:
-        return "excite the arm more: a larger probe (probe.amplitude 10 times larger)"
-    return f"excite the arm more: a larger probe (e.g. probe.amplitude = {larger}, 10 times)"
+        return f"excite the arm more: a larger probe ({larger})"
+    return f"excite the arm more: a larger probe (e.g. {larger}, 10 times)"
 
 
 def _probe_stopped_time(result: SimulationResult) -> float | None:

@@ -74,9 +74,7 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
     short = np.flatnonzero(np.isfinite(limits) & (need > limits))
     if short.size == 0:
         return None
-    units = ["N m"] * n  # a prismatic joint's force in N
-    if config.plant.urdf is not None:
-        units = ["N" if kind == "prismatic" else "N m" for kind in config_arm(config).joint_types]
+    units = effort_units(config)
     joints = ", ".join(
         f"joint {i + 1} needs {need[i]:.3g} {units[i]} (limit {limits[i]:.3g} {units[i]})"
         for i in short
@@ -90,6 +88,32 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
         f"raise plant.torque_limits to [{text}] (twice the task's torque on the joints short of "
         "it), or choose a task.qd that needs less torque",
     )
+
+
+def effort_units(config: Config) -> list[str]:
+    """Per joint, the unit of its torque: "N m", or "N" (a force) on a prismatic joint."""
+    if config.plant.urdf is None:
+        return ["N m"] * config.dof
+    return ["N" if kind == "prismatic" else "N m" for kind in config_arm(config).joint_types]
+
+
+def torque_limit_values(config: Config) -> list[float | None] | None:
+    """plant.torque_limits per joint (None: no limit on that joint), or None without limits."""
+    limits = config.plant.limit_vector(config.dof)
+    if limits.size == 0:
+        return None
+    return [float(v) if np.isfinite(v) else None for v in limits]
+
+
+def torque_limits_text(limits: list[float | None], units: list[str] | None) -> str:
+    """plant.torque_limits per joint with their units ("60, 15 N m"; "none" for no limit; each
+    with its own unit where they differ: "80 N m, 200 N"); units None (a summary written
+    before they were stored): N m."""
+    units = units or ["N m"] * len(limits)
+    values = ["none" if v is None else f"{v:g}" for v in limits]
+    if len(set(units)) == 1:
+        return ", ".join(values) + f" {units[0]}"
+    return ", ".join(v if v == "none" else f"{v} {u}" for v, u in zip(values, units, strict=True))
 
 
 #: How far (rad, or m for a prismatic joint) past a URDF's position limit a joint may go before
@@ -108,8 +132,17 @@ def position_limits_text(result: SimulationResult) -> str | None:
     arm = config_arm(config)
     low = np.asarray(arm.limits["lower"], dtype=float)
     high = np.asarray(arm.limits["upper"], dtype=float)
+
+    def past_limits(values: object) -> np.ndarray:
+        """How far each position lies past its limits (> 0 outside)."""
+        values = np.asarray(values, dtype=float)
+        return np.maximum(low - values, values - high)
+
+    def outside(values: object) -> bool:
+        return bool(np.any(past_limits(values) > POSITION_LIMIT_SLACK))
+
     q = np.asarray(result.q, dtype=float)
-    past = np.maximum(low - q, q - high)  # > 0 outside
+    past = past_limits(q)
     went_past = np.flatnonzero(np.nanmax(past, axis=0) > POSITION_LIMIT_SLACK)
     if went_past.size == 0:
         return None
@@ -126,18 +159,14 @@ def position_limits_text(result: SimulationResult) -> str | None:
             f"{np.count_nonzero(past[:, i] > POSITION_LIMIT_SLACK) * rows:.3g} s"
         )
 
-    def outside(values: np.ndarray) -> bool:
-        slack = POSITION_LIMIT_SLACK
-        return bool(np.any((values < low - slack) | (values > high + slack)))
-
     causes = []
-    if outside(np.asarray(result.qd, dtype=float)):
+    if outside(result.qd):
         causes.append(
             "task.qd lies outside the limits (left out, it is derived within them)"
             if isinstance(config.task.qd, tuple)
             else "task.qd leaves the limits (choose its offset and amplitude within them)"
         )
-    if outside(np.asarray(config.task.q0, dtype=float)):
+    if outside(config.task.q0):
         causes.append("task.q0 lies outside the limits (left out, it is derived within them)")
     cause = (
         "; ".join(causes)

@@ -16,6 +16,7 @@ from .config import Config, paper_config
 from .identification import judged_config
 from .optimal import basis_names, optimal_weights
 from .result import SimulationResult, post_run_failure, register, stop_time
+from .saturation import effort_units, torque_limit_values, torque_limits_text
 from .truth import diagnose
 
 __all__ = [
@@ -230,14 +231,6 @@ def accumulated_cost(result: SimulationResult, *, include_probe: bool = True) ->
     return float(np.sum(0.5 * (r[1:] + r[:-1]) * np.diff(result.t)))
 
 
-def _limits(config: Config) -> list[float | None] | None:
-    """plant.torque_limits per joint (None: no limit on that joint), or None without limits."""
-    limits = config.plant.limit_vector(config.dof)
-    if limits.size == 0:
-        return None
-    return [float(v) if np.isfinite(v) else None for v in limits]
-
-
 def _cost_against_optimum(
     result: SimulationResult, options: Any, post_run_errors: list[str]
 ) -> dict[str, Any]:
@@ -343,7 +336,8 @@ def summarize(
         "accumulated_cost": accumulated_cost(result),
         "accumulated_cost_without_probe": accumulated_cost(result, include_probe=False),
         "covariance_resets": result.covariance_resets,
-        "torque_limits": _limits(result.config),
+        "torque_limits": torque_limit_values(result.config),
+        "torque_limit_units": effort_units(result.config),
         "saturated_time": result.saturated_time.tolist(),
         "wall_time": _number(result.wall_time),
         "tolerance": tolerance,
@@ -521,9 +515,8 @@ def summary_markdown(summary: dict[str, Any]) -> str:
     if limits is not None:
         saturated = summary.get("saturated_time") or []
         lines.append(
-            "- torque limits "
-            + ", ".join("none" if v is None else f"{v:g}" for v in limits)
-            + " N m: saturated "
+            f"- torque limits {torque_limits_text(limits, summary.get('torque_limit_units'))}"
+            + ": saturated "
             + ", ".join(f"joint {i + 1} {_fmt(v)} s" for i, v in enumerate(saturated))
         )
     for problem in summary.get("post_run_errors") or ():

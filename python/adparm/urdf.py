@@ -297,12 +297,7 @@ class UrdfArm:
         """The URDF's joint limits: "lower", "upper" (+-inf for a continuous joint, and for a
         joint whose lower equals upper: a URDF that leaves them out reads 0 and 0, which no
         moving joint means), "velocity" and "effort" (inf where the URDF gives none)."""
-        limits = dict(self._arm.limits)
-        unset = limits["lower"] == limits["upper"]
-        if np.any(unset):
-            limits["lower"] = np.where(unset, -np.inf, limits["lower"])
-            limits["upper"] = np.where(unset, np.inf, limits["upper"])
-        return limits
+        return dict(self._arm.limits)
 
     @property
     def inertial_parameters(self) -> NDArray[np.float64]:

@@ -84,8 +84,9 @@ class PinocchioArm {
     Workspace workspace;           // compute()'s (this arm's)
   };
 
-  // Joint position limits (+-inf for a continuous joint), velocity and effort limits, as the URDF
-  // gives them (0 where it gives none).
+  // Joint position limits (+-inf for a continuous joint, and where the URDF's lower equals its
+  // upper: left out, it reads 0 and 0), velocity and effort limits, as the URDF gives them (0
+  // where it gives none).
   struct Limits {
     Eigen::VectorXd lower, upper, velocity, effort;
   };
