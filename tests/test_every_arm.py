@@ -200,3 +200,22 @@ def test_a_non_stabilising_e2_block_names_a_change_that_works(folder: Path) -> N
     assert diagnostics["advice"][0].endswith("the actor followed the critic before it settled")
     result = adparm.simulate(config.updated(_suggested(diagnostics["advice"][0])))
     assert result.diagnostics["verdict"] == "ok", result.diagnostics["verdict"]
+
+
+def test_a_policy_taken_before_the_weights_settled_is_told_a_run_long_enough(folder) -> None:
+    """The UR10 with its own cost (seed 46) from the default weights: at 10 s the weights are
+    within 0.1 % of W*, but the policy's error, taken over the last second while they were still
+    settling (within 1 % only from 8.9 s), is 1.2 %; the advice named sim.T = 10 s (the weights'
+    own estimate) and now names 20 s, with which the run ends "ok"."""
+    config = _own_cost("ur10", 46, folder)
+    diagnostics = adparm.simulate(config, diagnose=False).diagnostics
+    assert diagnostics["critic_relative_error"] < 0.01 > diagnostics["actor_relative_error"]
+    assert diagnostics["policy_relative_error"] > 0.01
+    found = re.search(
+        r"the policy's error is taken over the last 10 % of the run \(from 9 s\)"
+        r", while they were still settling: sim\.T = ([0-9.]+) s takes it after",
+        " ".join(diagnostics["advice"]),
+    )
+    assert found, diagnostics["advice"]
+    longer = adparm.simulate(config.updated({"sim": {"T": float(found[1])}}), diagnose=False)
+    assert longer.diagnostics["verdict"] == "ok", longer.diagnostics["verdict"]

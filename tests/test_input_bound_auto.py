@@ -99,7 +99,12 @@ def test_the_ur5_takes_its_urdf_efforts_less_its_gravity_torque() -> None:
     data = model.createData()
     qd = np.array(config.task.qd, dtype=float)
     gravity = pin.rnea(model, data, qd, np.zeros(6), np.zeros(6))
-    expected = (effort - np.abs(gravity) - 0.1) / 2  # the derived disturbance: 0.1 N m per joint
+    # the derived disturbance: min(0.1, 0.1 M_jj(qd)) N m per joint (the wrists' M_jj < 1 kg m^2)
+    inertia = np.diag(pin.crba(model, data, qd))
+    disturbance = np.minimum(0.1, 0.1 * inertia)
+    assert disturbance[5] < 0.1
+    np.testing.assert_allclose(config.plant.disturbance, disturbance, rtol=1e-3)
+    expected = (effort - np.abs(gravity) - np.asarray(config.plant.disturbance)) / 2
     np.testing.assert_allclose(config.cost.input_bound, expected, 1e-9)
 
 

@@ -106,9 +106,14 @@ def test_a_sinusoid_without_an_offset_moves_about_the_rest_position() -> None:
 
 
 def test_a_transient_past_the_limits_is_told_and_its_fix_works() -> None:
-    # the SO-101's gripper (limits [-0.175, 1.75], M = 1.6e-5 kg m^2): the disturbance's 0.1 N m
-    # swings it about 0.5 rad before RISE takes it up, past the lower limit from its default qd
+    # the SO-101's gripper (limits [-0.175, 1.75], M = 1.6e-5 kg m^2): the former default
+    # disturbance, 0.1 N m on every joint, swings it about 0.5 rad before RISE takes it up, past
+    # the lower limit from its default qd; the derived one (0.1 M_jj on it) does not
     plant = _plant("so101")
+    derived = adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.5}})
+    assert derived.plant.disturbance[5] < 1e-5
+    assert adparm.simulate(derived).diagnostics["position_limits"] is None
+    plant["disturbance"] = [0.1] * 6
     config = adparm.Config.from_dict({"plant": plant, "sim": {"T": 0.5}})
     result = adparm.simulate(config)
     text = result.diagnostics["position_limits"]

@@ -8,9 +8,10 @@ The plant is the UR5 of example-robot-data carrying a 2 kg part 0.1 m from its l
 identifiable from motion: the kinetic energy's and those gravity sees) from a probe of 5 N m per
 joint, switches the probe off once the estimate has settled (``identifier.stop_probe``), and the
 critic then learns the *plant's* W*, not the believed arm's (:doc:`/guide/unknown-dynamics`).
-Measured (16 s, 2026-12-05): the stack is informative from 2.5 s, beta_hat within 1 % of beta
-from then on, the probe stops at 8.1 s, and beta_hat and the critic are both within 1 % of the
-plant's from 11.0 s (the critic ends 0.39 % from the plant's W*, 4e-15 from the W* of beta_hat).
+Measured (2026-12-06): the stack is informative from 2.5 s, beta_hat within 1 % of beta
+from 4.9 s, the probe stops at 9.7 s, and beta_hat and the critic are both within 1 % of the
+plant's from 11.9 s (at 16 s the critic is 0.37 % from the plant's W*, 5e-14 from the W* of
+beta_hat).
 About 20 s of computing.
 """
 

@@ -146,9 +146,9 @@ def _excitation_advice(config: Config) -> str:
     others (the probe acts only while the controller learns). A URDF arm's derived probe (sized
     to move e2 by about 0.1 rad/s) left the stack uninformative on the UR5, the Panda and the
     Kinova with a model 20 % light (minimum singular value 4e-4 to 2e-3 of the 0.01 needed), so
-    its probe is switched on at 10 times that, for 30 s: the UR5 is then informative at 3.2 s and
-    ends "ok" (critic 0.15 % from the plant's W*), the Panda stops its probe at 17 s and ends
-    within 0.1 %."""
+    its probe is switched on at 10 times that, for 30 s: the UR5 is then informative at 3.0 s and
+    ends "ok" (critic 0.12 % from the plant's W*), the Panda stops its probe at 12 s and ends
+    within 0.12 % (docs: unknown dynamics)."""
     if config.controller.kind != "adp":  # only adp learns and probes
         return (
             f"a {config.controller.kind!r} controller applies no probe: excite the arm with a "

@@ -8,11 +8,22 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DISTURBANCE", "HOME_MARGIN", "default_set_point", "limits_box", "rest_position"]
+__all__ = [
+    "DISTURBANCE",
+    "DISTURBANCE_RATE",
+    "HOME_MARGIN",
+    "default_set_point",
+    "limits_box",
+    "rest_position",
+]
 
-#: A URDF arm's default plant.disturbance amplitude on every joint (N m), the paper's: the
-#: default set-point must be held against it too (rates.urdf_defaults derives it).
+#: A URDF arm's default plant.disturbance amplitude (N m) is min(DISTURBANCE, DISTURBANCE_RATE
+#: M_jj(qd)) on joint j (rates.urdf_defaults): the paper's 0.1 N m, but at most 0.1 rad/s^2 on
+#: the joint alone, as on the paper's second link (0.1 N m on M_22 = p2 = 1 kg m^2). 0.1 N m on
+#: every joint swung the SO-101's gripper (1.6e-5 kg m^2) 0.5 rad past its set-point and biased
+#: the Kinova's identified parameters. The default set-point is held against DISTURBANCE too.
 DISTURBANCE = 0.1
+DISTURBANCE_RATE = 0.1
 
 
 def limits_box(arm: Any) -> tuple[np.ndarray, np.ndarray]:

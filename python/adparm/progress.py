@@ -63,7 +63,15 @@ def longer_run_estimate(
 LONGER_RUN_LIMIT = 20.0
 
 
-def longer_run_advice(result: SimulationResult, target: np.ndarray | None, tolerance: float) -> str:
+def longer_run_advice(
+    result: SimulationResult,
+    target: np.ndarray | None,
+    tolerance: float,
+    policy_error: float | None = None,
+) -> str:
+    """What a longer run would do, from :func:`longer_run_estimate`; ``policy_error`` (rms |u_hat -
+    u*| / rms |u*| over the last 10 %): weights within the tolerance whose policy is not were
+    still settling over that window, and twice the run's horizon takes it after them."""
     estimate = longer_run_estimate(result, target, tolerance)
     if estimate is None:
         return "run longer (sim.T)"
@@ -71,6 +79,14 @@ def longer_run_advice(result: SimulationResult, target: np.ndarray | None, toler
         f"the weights' error went from {estimate['error_mid']:.3g} at t = "
         f"{estimate['t_mid']:.3g} s to {estimate['error_end']:.3g} at {estimate['t_end']:.3g} s"
     )
+    if estimate["error_end"] < tolerance and policy_error is not None and policy_error > tolerance:
+        t = result.t
+        window = float(t[0] + 0.9 * (t[-1] - t[0]))
+        return (
+            f"run longer: {progress}, within the tolerance; the policy's error is taken over the "
+            f"last 10 % of the run (from {window:.3g} s), while they were still settling: sim.T = "
+            f"{nice_ceil(2.0 * estimate['t_end']):g} s takes it after they settled"
+        )
     if math.isfinite(estimate["T"]) and estimate["T"] <= LONGER_RUN_LIMIT * result.config.sim.T:
         return (
             f"run longer: {progress}; at that rate sim.T = {estimate['T']:g} s reaches the "

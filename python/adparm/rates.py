@@ -33,7 +33,7 @@ import numpy as np
 
 from ._sections import EPSILON_T_PROBING
 from .extrapolation_region import extrapolation_box, extrapolation_range  # re-exported
-from .joint_limits import DISTURBANCE, default_set_point, limits_box
+from .joint_limits import DISTURBANCE, DISTURBANCE_RATE, default_set_point, limits_box
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._schema import ConfigSchema
@@ -137,12 +137,11 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 
     With lambda_min, lambda_max = :func:`inertia_range` of the model's URDF (the rules and their
     reasons: docs, URDF arms, "Defaults derived from the arm"): the task (qd =
-    joint_limits.default_set_point, inside the plant's limits, q0 = qd + 0.1 rad),
-    plant.disturbance, plant.torque_limits (``<limit effort>``),
-    control.alpha1 = 2 I, control.ks (:func:`rise_ks`), the cost (R = diag(1 / (POLICY_RATE
-    M_ii(qd))), Q = solvable_cost(alpha / 2 R^-1, alpha1, R)), actor.e2_margin, .weight_bound,
-    the learning (extrapolation points and :func:`extrapolation_box`, no probing, epsilon_T,
-    eta_a1, eta_a2), sim.T = 10 s and sim.dt = "auto".
+    joint_limits.default_set_point, q0 = qd + 0.1 rad), plant.disturbance (the plant's M_jj),
+    plant.torque_limits (``<limit effort>``), control.alpha1 = 2 I, control.ks (:func:`rise_ks`),
+    the cost (R = diag(1 / (POLICY_RATE M_ii(qd))), Q = solvable_cost(alpha / 2 R^-1, alpha1,
+    R)), actor.e2_margin, .weight_bound, the learning (extrapolation points and
+    :func:`extrapolation_box`, no probing, epsilon_T, eta_a1, eta_a2), sim.T = 10 s, dt "auto".
     """
     from .optimal import solvable_cost
 
@@ -189,7 +188,6 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     if "task.q0" in explicit:
         q0 = np.array(config.task.q0, dtype=float)
     put("task.dq0", (0.0,) * n, "at rest")
-    put("plant.disturbance", (DISTURBANCE,) * n, f"{DISTURBANCE:g} N m per joint, as the paper's")
     effort = np.asarray(config_arm(config).limits["effort"], dtype=float)
     effort = np.where(effort > 0.0, effort, np.inf)  # 0 or none given: no limit
     if np.all(np.isinf(effort)):
@@ -217,6 +215,11 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     from .optimal import inertia_matrices
 
     joint_inertia = np.diag(inertia_matrices(config, qd[None, :], model=True)[0]).copy()
+    plant_inertia = np.diag(inertia_matrices(config, qd[None, :])[0])  # the plant's own joints
+    disturbance = np.minimum(DISTURBANCE, DISTURBANCE_RATE * plant_inertia)  # on the plant
+    rule = f"min({DISTURBANCE:g}, {DISTURBANCE_RATE:g} M_jj(qd)) N m per joint"
+    why = "the paper's 0.1 N m, at most its second link's 0.1 rad/s^2 on a joint alone"
+    put("plant.disturbance", tuple(float(f"{v:.4g}") for v in disturbance), f"{rule}: {why}")
     if "cost.R" in explicit:
         R = np.array(config.cost.R)
     elif "cost.Q" in explicit:

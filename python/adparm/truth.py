@@ -450,7 +450,9 @@ def _diagnose_learning(
                     longer = "a longer run may lower the residual, but without a known W* "
                     longer += "nothing tells how far or how soon"
                 else:
-                    longer = longer_run_advice(result, target, tolerance)
+                    longer = longer_run_advice(
+                        result, target, tolerance, out["policy_relative_error"]
+                    )
                 if not chased:
                     advice.append(
                         longer
@@ -467,7 +469,7 @@ def _diagnose_learning(
         out["approximation"] = "not converged"
         if not chased:  # a longer run at the same rate keeps the non-stabilising solution
             advice.append(
-                longer_run_advice(result, target, tolerance)
+                longer_run_advice(result, target, tolerance, out["policy_relative_error"])
                 + (
                     ", or add Bellman-error extrapolation (extrapolation.points)"
                     if config.extrapolation.points == 0
