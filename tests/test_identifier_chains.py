@@ -259,3 +259,53 @@ def test_the_advice_names_a_matrix_probe_amplitude_plainly(tmp_path) -> None:
     assert _excitation_advice(on) == (
         "excite the arm more: a larger probe (probe.amplitude 10 times larger)"
     )
+
+
+def test_a_critic_at_its_estimate_s_optimum_is_told_the_estimate_is_what_is_left(tmp_path) -> None:
+    # W*(beta_hat): the structured basis' W* is [K terms; s beta] with Q22 = s^2 R^-1, so the
+    # optimum of the estimate is the plant's W* with s beta_hat's kinetic-energy parameters
+    from types import SimpleNamespace
+
+    from adparm.identification import estimate_critic_error
+    from adparm.truth import IDENTIFICATION_ADVICE, _estimate_optimum_learned
+
+    config = chain_config(tmp_path, 2, 3, sim={"T": 0.2})
+    result = adparm.simulate(config, diagnose=False)
+    plant = plant_model_config(config)
+    W = adparm.optimal_weights(plant)
+    beta = adparm.base_parameters(config, "plant")
+    kinetic = W.size - 6  # after the 6 e1 products of a 3-joint arm
+    Q22, R = np.array(config.cost.Q)[3:, 3:], np.array(config.cost.R)
+    s = np.sqrt(Q22[0, 0] * R[0, 0])  # Q22 = s^2 R^-1 (R diagonal here)
+    np.testing.assert_allclose(W[-kinetic:], s * beta[:kinetic], rtol=1e-9, atol=1e-12)
+    beta_hat = np.asarray(result.model_parameters[-1])
+    own = W.copy()
+    own[-kinetic:] = s * beta_hat[:kinetic]
+    gap = np.linalg.norm(own - W) / np.linalg.norm(W)
+    assert gap > 0.01  # the model is 0.7-1.3 off and barely identified after 0.2 s
+
+    def at(weights: np.ndarray) -> SimpleNamespace:
+        rows = np.tile(weights, (result.t.size, 1))
+        return SimpleNamespace(
+            config=config,
+            t=result.t,
+            model_parameters=result.model_parameters,
+            critic_weights=rows,
+        )
+
+    assert estimate_critic_error(at(own)) < 1e-12
+    assert estimate_critic_error(at(W)) == pytest.approx(gap, rel=1e-9)
+    # the verdict's part: only a critic ten times closer to its estimate's optimum than to W*
+    text = _estimate_optimum_learned(at(own), {"critic_relative_error": gap})
+    assert text is not None and text.startswith("||Wc - W*(beta_hat)|| / ||W*|| = ")
+    assert _estimate_optimum_learned(at(W), {"critic_relative_error": 0.0}) is None
+    assert "a longer run will not help" in IDENTIFICATION_ADVICE
+    # not identifying: nothing to say
+    assert (
+        estimate_critic_error(
+            SimpleNamespace(
+                **{**vars(at(own)), "config": config.updated({"identifier": {"enabled": False}})}
+            )
+        )
+        is None
+    )

@@ -9,12 +9,14 @@ from typing import Any
 
 import numpy as np
 
+from .basis_family import UrdfStructuredBasis, basis_for
 from .config import Config
 from .dynamics import base_parameter_groups, base_parameter_names
 from .optimal import base_parameters, optimal_weights
 from .result import SimulationResult
 
 __all__ = [
+    "estimate_critic_error",
     "identified_parameters",
     "identifier_diagnosis",
     "judged_config",
@@ -208,6 +210,29 @@ def plant_critic_error(result: SimulationResult) -> float | None:
     if norm == 0.0:  # pragma: no cover - W* holds K > 0
         return None
     return float(np.linalg.norm(result.critic_weights[-1] - target) / norm)
+
+
+def estimate_critic_error(result: SimulationResult) -> float | None:
+    """||Wc(T) - W*(beta_hat(T))|| / ||W*||: how far an identifying run's critic ends from the
+    optimum of its own final estimate, for a URDF arm's structured basis, whose W* is [K terms;
+    s beta] (adparm.optimal_weights): the plant's W* with s beta_hat's kinetic-energy parameters
+    as its tail. Small where the critic learned what its estimate leads to and beta_hat's error is
+    what is left. None otherwise (not identifying, another basis, W* not known)."""
+    config = result.config
+    if not config.identifier.enabled or result.model_parameters is None or result.t.size == 0:
+        return None
+    if not isinstance(basis_for(config), UrdfStructuredBasis):
+        return None
+    try:
+        W = optimal_weights(plant_model_config(config))
+    except ValueError:  # W* unknown for this cost or task
+        return None
+    beta = base_parameters(config, "plant")
+    tail = W.size - config.dof * (config.dof + 1) // 2  # the kinetic-energy parameters
+    s = float(W[-tail:] @ beta[:tail] / (beta[:tail] @ beta[:tail]))
+    target = W.copy()
+    target[-tail:] = s * np.asarray(result.model_parameters[-1], dtype=float)[:tail]
+    return float(np.linalg.norm(result.critic_weights[-1] - target) / np.linalg.norm(W))
 
 
 def model_gap_text(result: SimulationResult, verdict: str) -> str | None:

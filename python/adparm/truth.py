@@ -32,7 +32,12 @@ from .divergence import (
     slow_actor_change,
     structured_e2_block_min_eigenvalue,
 )
-from .identification import identifier_diagnosis, judged_config, model_gap_text
+from .identification import (
+    estimate_critic_error,
+    identifier_diagnosis,
+    judged_config,
+    model_gap_text,
+)
 from .optimal import basis, lqr_value, optimal_weights, policy
 from .progress import SETTLED_FALL, half_time_index, longer_run_advice, longer_run_estimate
 from .residual import hjb_residual, residual_settings
@@ -257,6 +262,26 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     return out
 
 
+#: What helps an identifying run whose critic learned its estimate's optimum but whose estimate
+#: is off (docs: unknown dynamics).
+IDENTIFICATION_ADVICE = (
+    "a longer run will not help: the critic follows beta_hat, whose error is what is left (an "
+    "unmodelled torque, plant.disturbance or friction not identified, biases the parameters that "
+    "move the arm least)"
+)
+
+
+def _estimate_optimum_learned(result: SimulationResult, out: dict[str, Any]) -> str | None:
+    """For an identifying run whose critic ended ten times closer to the optimum of its own
+    estimate, W*(beta_hat), than to the plant's W* (estimate_critic_error): the distances, as
+    the verdict says them; None otherwise (then learning itself has not converged)."""
+    own = estimate_critic_error(result)
+    plant = out.get("critic_relative_error")
+    if own is None or plant is None or not own < 0.1 * plant:
+        return None
+    return f"||Wc - W*(beta_hat)|| / ||W*|| = {own:.2g}, from the plant's W* {plant:.3g}"
+
+
 def _diagnose_learning(
     result: SimulationResult, *, tolerance: float | None = None
 ) -> dict[str, Any]:
@@ -435,6 +460,14 @@ def _diagnose_learning(
                 )
                 if not chased:  # a longer run at the same rate keeps the non-stabilising solution
                     advice.append("a longer run will not help; " + _exact_cost_advice(config))
+            elif (own := _estimate_optimum_learned(result, out)) is not None:
+                out["approximation"] = "identification"
+                problems.append(
+                    f"the critic learned the optimum of its estimate ({own}), and beta_hat's "
+                    f"error leaves the plant's HJB residual at {residual:.3g} of x^T Q x over "
+                    f"{region}, where the basis can reach {best:.3g}"
+                )
+                advice.append(IDENTIFICATION_ADVICE)
             else:
                 out["approximation"] = "not converged"
                 problems.append(
