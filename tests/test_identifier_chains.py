@@ -266,8 +266,8 @@ def test_a_critic_at_its_estimate_s_optimum_is_told_the_estimate_is_what_is_left
     # optimum of the estimate is the plant's W* with s beta_hat's kinetic-energy parameters
     from types import SimpleNamespace
 
-    from adparm.identification import estimate_critic_error
-    from adparm.truth import IDENTIFICATION_ADVICE, _estimate_optimum_learned
+    from adparm.identification import ESTIMATE_ADVICE, estimate_advice, estimate_critic_error
+    from adparm.truth import _estimate_optimum_learned
 
     config = chain_config(tmp_path, 2, 3, sim={"T": 0.2})
     result = adparm.simulate(config, diagnose=False)
@@ -299,7 +299,11 @@ def test_a_critic_at_its_estimate_s_optimum_is_told_the_estimate_is_what_is_left
     text = _estimate_optimum_learned(at(own), {"critic_relative_error": gap})
     assert text is not None and text.startswith("||Wc - W*(beta_hat)|| / ||W*|| = ")
     assert _estimate_optimum_learned(at(W), {"critic_relative_error": 0.0}) is None
-    assert "a longer run will not help" in IDENTIFICATION_ADVICE
+    # its advice: the estimate's error is what is left, or with a stack never informative (0.2 s
+    # of a derived probe that is off) what excites the arm
+    assert "a longer run will not help" in ESTIMATE_ADVICE
+    assert not result.diagnostics["identifier"]["ever_informative"]
+    assert estimate_advice(result).startswith("the model is not identified: switch the probe on")
     # not identifying: nothing to say
     assert (
         estimate_critic_error(

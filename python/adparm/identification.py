@@ -16,6 +16,8 @@ from .optimal import base_parameters, optimal_weights
 from .result import SimulationResult
 
 __all__ = [
+    "ESTIMATE_ADVICE",
+    "estimate_advice",
     "estimate_critic_error",
     "identified_parameters",
     "identifier_diagnosis",
@@ -233,6 +235,25 @@ def estimate_critic_error(result: SimulationResult) -> float | None:
     target = W.copy()
     target[-tail:] = s * np.asarray(result.model_parameters[-1], dtype=float)[:tail]
     return float(np.linalg.norm(result.critic_weights[-1] - target) / np.linalg.norm(W))
+
+
+#: The advice to an identifying run whose critic learned the optimum of its estimate from an
+#: informative stack, while the estimate's error leaves the plant's HJB residual large.
+ESTIMATE_ADVICE = (
+    "a longer run will not help: the critic follows beta_hat, whose error is what is left (an "
+    "unmodelled torque, plant.disturbance or friction not identified, biases the parameters that "
+    "move the arm least)"
+)
+
+
+def estimate_advice(result: SimulationResult) -> str:
+    """What to do when the critic learned the optimum of its estimate (estimate_critic_error):
+    ESTIMATE_ADVICE after an informative stack, else what excites the arm (the estimate stayed at
+    the model)."""
+    diagnosis = identifier_diagnosis(result)
+    if diagnosis is not None and not diagnosis["ever_informative"]:
+        return "the model is not identified: " + _excitation_advice(result.config)
+    return ESTIMATE_ADVICE
 
 
 def model_gap_text(result: SimulationResult, verdict: str) -> str | None:

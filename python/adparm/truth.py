@@ -33,6 +33,7 @@ from .divergence import (
     structured_e2_block_min_eigenvalue,
 )
 from .identification import (
+    estimate_advice,
     estimate_critic_error,
     identifier_diagnosis,
     judged_config,
@@ -262,15 +263,6 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     return out
 
 
-#: What helps an identifying run whose critic learned its estimate's optimum but whose estimate
-#: is off (docs: unknown dynamics).
-IDENTIFICATION_ADVICE = (
-    "a longer run will not help: the critic follows beta_hat, whose error is what is left (an "
-    "unmodelled torque, plant.disturbance or friction not identified, biases the parameters that "
-    "move the arm least)"
-)
-
-
 def _estimate_optimum_learned(result: SimulationResult, out: dict[str, Any]) -> str | None:
     """For an identifying run whose critic ended ten times closer to the optimum of its own
     estimate, W*(beta_hat), than to the plant's W* (estimate_critic_error): the distances, as
@@ -467,7 +459,7 @@ def _diagnose_learning(
                     f"error leaves the plant's HJB residual at {residual:.3g} of x^T Q x over "
                     f"{region}, where the basis can reach {best:.3g}"
                 )
-                advice.append(IDENTIFICATION_ADVICE)
+                advice.append(estimate_advice(result))
             else:
                 out["approximation"] = "not converged"
                 problems.append(
