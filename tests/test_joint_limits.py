@@ -148,3 +148,26 @@ def test_a_rest_position_the_arm_cannot_hold_gives_way_to_one_it_can() -> None:
     assert np.all(qd >= low + margin - 1e-9) and np.all(qd <= high - margin + 1e-9)
     # an arm that holds its rest position keeps it
     assert adparm.Config.from_dict({"plant": _plant("ur5")}).task.qd == (0.0,) * 6
+
+
+def test_a_probe_on_while_the_joints_went_past_is_named_as_their_cause() -> None:
+    # the Panda identifying a 1 kg payload with the advised probe (10 times the derived one) went
+    # 0.76 rad past joint 4's limit while the probe was on, and a qd farther from that limit sent
+    # every joint past its limits: the cause is the probe, not the transient
+    from types import SimpleNamespace
+
+    plant = _plant("so101")
+    config = adparm.Config.from_dict(
+        {"plant": plant, "probe": {"until": 100.0}, "sim": {"T": 0.05}}
+    )
+    result = adparm.simulate(config, diagnose=False)
+    high = np.asarray(adparm.urdf.config_arm(config).limits["upper"])
+    q = np.array(result.q)
+    q[-3:, 0] = high[0] + 0.1  # joint 1 past its upper limit over the last rows
+    probed = SimpleNamespace(config=config, t=result.t, q=q, qd=result.qd, probe=result.probe)
+    assert np.any(np.asarray(result.probe)[-3:] != 0.0)
+    text = adparm.saturation.position_limits_text(probed)
+    assert "joint 1 ('shoulder_pan') reached" in text
+    assert "the probe was on while they went past: it drove them" in text
+    quiet = SimpleNamespace(**{**vars(probed), "probe": np.zeros_like(result.probe)})
+    assert "the transient went past them" in adparm.saturation.position_limits_text(quiet)

@@ -168,6 +168,15 @@ def position_limits_text(result: SimulationResult) -> str | None:
         )
     if outside(config.task.q0):
         causes.append("task.q0 lies outside the limits (left out, it is derived within them)")
+    probe = np.asarray(result.probe, dtype=float)
+    outside_rows = np.any(past[:, went_past] > POSITION_LIMIT_SLACK, axis=1)
+    if not causes and np.any(probe[outside_rows] != 0.0):
+        # a strong probe moves the arm widely: a qd farther from the limits did not keep the
+        # Panda within them (measured; docs: URDF arms, joint limits)
+        causes.append(
+            "the task lies within them and the probe was on while they went past: it drove them "
+            "(a probe the real arm can take is smaller on those joints, and excites less)"
+        )
     cause = (
         "; ".join(causes)
         if causes
