@@ -261,7 +261,9 @@ def test_the_advice_names_a_matrix_probe_amplitude_plainly(tmp_path) -> None:
     )
 
 
-def test_a_critic_at_its_estimate_s_optimum_is_told_the_estimate_is_what_is_left(tmp_path) -> None:
+def test_a_critic_at_its_estimate_s_optimum_is_told_the_estimate_is_what_is_left(
+    tmp_path, monkeypatch
+) -> None:
     # W*(beta_hat): the structured basis' W* is [K terms; s beta] with Q22 = s^2 R^-1, so the
     # optimum of the estimate is the plant's W* with s beta_hat's kinetic-energy parameters
     from types import SimpleNamespace
@@ -304,6 +306,13 @@ def test_a_critic_at_its_estimate_s_optimum_is_told_the_estimate_is_what_is_left
     assert "a longer run will not help" in ESTIMATE_ADVICE
     assert not result.diagnostics["identifier"]["ever_informative"]
     assert estimate_advice(result).startswith("the model is not identified: switch the probe on")
+    # an informative stack: the estimate is what is left, and a probe still on may still move it
+    informative = {"ever_informative": True}
+    monkeypatch.setattr(adparm.identification, "identifier_diagnosis", lambda _: informative)
+    quiet = SimpleNamespace(config=config, probe=np.zeros((2, 3)))
+    assert estimate_advice(quiet) == ESTIMATE_ADVICE
+    probing = SimpleNamespace(config=config, probe=np.ones((2, 3)))
+    assert "as far as the probe, still on, improves beta_hat" in estimate_advice(probing)
     # not identifying: nothing to say
     assert (
         estimate_critic_error(

@@ -253,6 +253,11 @@ def estimate_advice(result: SimulationResult) -> str:
     diagnosis = identifier_diagnosis(result)
     if diagnosis is not None and not diagnosis["ever_informative"]:
         return "the model is not identified: " + _excitation_advice(result.config)
+    if np.any(np.asarray(result.probe)[-1] != 0.0):  # still probing: beta_hat may still move
+        return (
+            "the critic follows beta_hat, whose error is what is left: a longer run helps as far "
+            "as the probe, still on, improves beta_hat"
+        )
     return ESTIMATE_ADVICE
 
 

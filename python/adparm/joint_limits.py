@@ -21,7 +21,8 @@ __all__ = [
 #: M_jj(qd)) on joint j (rates.urdf_defaults): the paper's 0.1 N m, but at most 0.1 rad/s^2 on
 #: the joint alone, as on the paper's second link (0.1 N m on M_22 = p2 = 1 kg m^2). 0.1 N m on
 #: every joint swung the SO-101's gripper (1.6e-5 kg m^2) 0.5 rad past its set-point and biased
-#: the Kinova's identified parameters. The default set-point is held against DISTURBANCE too.
+#: the Kinova's identified parameters. The default set-point is held against DISTURBANCE (the
+#: derived disturbance's bound: the derived one depends on the set-point).
 DISTURBANCE = 0.1
 DISTURBANCE_RATE = 0.1
 
