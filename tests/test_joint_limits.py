@@ -46,6 +46,35 @@ def test_a_urdf_without_position_limits_reads_none() -> None:
     assert config.task.qd == (0.0, 0.0) and config.task.q0 == (0.1, 0.1)
 
 
+def test_a_joint_whose_lower_equals_its_upper_reads_unlimited_in_the_core(tmp_path) -> None:
+    # <limit lower="0" upper="0" ...> (urdfdom's reading of limits left out; Pinocchio keeps
+    # [0, 0]): the core's limits (not only UrdfArm.limits) are +-inf, so its sampled poses and
+    # its locked-joint check see no point-sized range: locking the joint at 0.5 is accepted
+    path = tmp_path / "zero_width.urdf"
+    link = (
+        '<link name="{0}"><inertial><origin xyz="0.2 0 0"/><mass value="1.0"/><inertia '
+        'ixx="0.002" iyy="0.015" izz="0.015" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+    )
+    joint = (
+        '<joint name="{0}" type="revolute"><parent link="{1}"/><child link="{2}"/>'
+        '<origin xyz="{3} 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="0" upper="0" effort="30" velocity="2"/></joint>'
+    )
+    path.write_text(
+        '<?xml version="1.0"?><robot name="zero_width"><link name="base"/>'
+        + link.format("a")
+        + link.format("b")
+        + joint.format("j1", "base", "a", 0.0)
+        + joint.format("j2", "a", "b", 0.4)
+        + "</robot>"
+    )
+    arm = adparm.UrdfArm(str(path))
+    core = arm._arm.limits
+    assert np.all(core["lower"] == -np.inf) and np.all(core["upper"] == np.inf)
+    locked = adparm.UrdfArm(str(path), locked_joints={"j2": 0.5})
+    assert locked.dof == 1
+
+
 @pytest.mark.parametrize("name", sorted(EXAMPLE_ROBOTS))
 def test_the_default_task_lies_within_the_joint_limits(name: str) -> None:
     # before: qd = 0 clipped into the limits, on a limit of the Kinova, Panda, SO-100, Talos arm
