@@ -214,21 +214,26 @@ def plant_critic_error(result: SimulationResult) -> float | None:
     return float(np.linalg.norm(result.critic_weights[-1] - target) / norm)
 
 
-def estimate_critic_error(result: SimulationResult) -> float | None:
+def estimate_critic_error(
+    result: SimulationResult, plant_weights: np.ndarray | None = None
+) -> float | None:
     """||Wc(T) - W*(beta_hat(T))|| / ||W*||: how far an identifying run's critic ends from the
     optimum of its own final estimate, for a URDF arm's structured basis, whose W* is [K terms;
     s beta] (adparm.optimal_weights): the plant's W* with s beta_hat's kinetic-energy parameters
     as its tail. Small where the critic learned what its estimate leads to and beta_hat's error is
-    what is left. None otherwise (not identifying, another basis, W* not known)."""
+    what is left. None otherwise (not identifying, another basis, W* not known).
+    ``plant_weights``: the plant's W*, where the caller has it (adparm.truth)."""
     config = result.config
     if not config.identifier.enabled or result.model_parameters is None or result.t.size == 0:
         return None
     if not isinstance(basis_for(config), UrdfStructuredBasis):
         return None
-    try:
-        W = optimal_weights(plant_model_config(config))
-    except ValueError:  # W* unknown for this cost or task
-        return None
+    W = plant_weights
+    if W is None:
+        try:
+            W = optimal_weights(plant_model_config(config))
+        except ValueError:  # W* unknown for this cost or task
+            return None
     beta = base_parameters(config, "plant")
     tail = W.size - config.dof * (config.dof + 1) // 2  # the kinetic-energy parameters
     s = float(W[-tail:] @ beta[:tail] / (beta[:tail] @ beta[:tail]))

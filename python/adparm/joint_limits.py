@@ -12,7 +12,9 @@ __all__ = [
     "DISTURBANCE",
     "DISTURBANCE_RATE",
     "HOME_MARGIN",
+    "default_disturbance",
     "default_set_point",
+    "effort_limits",
     "limits_box",
     "rest_position",
 ]
@@ -49,6 +51,21 @@ def rest_position(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     return np.clip(np.zeros_like(low), low + margin, high - margin)
 
 
+def default_disturbance(inertia: np.ndarray) -> tuple[tuple[float, ...], str]:
+    """A URDF arm's default plant.disturbance from the plant's M_jj(qd) (``inertia``), with its
+    reason: min(DISTURBANCE, DISTURBANCE_RATE M_jj) N m on joint j, to 4 digits."""
+    disturbance = np.minimum(DISTURBANCE, DISTURBANCE_RATE * np.asarray(inertia, dtype=float))
+    rule = f"min({DISTURBANCE:g}, {DISTURBANCE_RATE:g} M_jj(qd)) N m per joint"
+    why = "the paper's 0.1 N m, at most its second link's 0.1 rad/s^2 on a joint alone"
+    return tuple(float(f"{v:.4g}") for v in disturbance), f"{rule}: {why}"
+
+
+def effort_limits(arm: Any) -> np.ndarray:
+    """A URDF arm's ``<limit effort>`` per joint, inf where it gives none (or 0): no limit."""
+    effort = np.asarray(arm.limits["effort"], dtype=float)
+    return np.where(effort > 0.0, effort, np.inf)
+
+
 def default_set_point(config: Any) -> tuple[np.ndarray, str]:
     """task.qd's default on a URDF arm, with its reason: :func:`rest_position` of the plant's
     joint limits; where the arm cannot hold that pose against gravity within its torque limits
@@ -73,8 +90,7 @@ def default_set_point(config: Any) -> tuple[np.ndarray, str]:
     if "plant.torque_limits" in config.explicit_keys:
         limits = config.plant.limit_vector(n)
     else:
-        limits = np.asarray(plant.limits["effort"], dtype=float)
-        limits = np.where(limits > 0.0, limits, np.inf)
+        limits = effort_limits(plant)
     if limits.size == 0 or not np.any(np.isfinite(limits)):
         return rest, reason
     disturbance = (

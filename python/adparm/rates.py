@@ -33,7 +33,7 @@ import numpy as np
 
 from ._sections import EPSILON_T_PROBING
 from .extrapolation_region import extrapolation_box, extrapolation_range  # re-exported
-from .joint_limits import DISTURBANCE, DISTURBANCE_RATE, default_set_point, limits_box
+from .joint_limits import default_disturbance, default_set_point, effort_limits, limits_box
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._schema import ConfigSchema
@@ -188,8 +188,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
     if "task.q0" in explicit:
         q0 = np.array(config.task.q0, dtype=float)
     put("task.dq0", (0.0,) * n, "at rest")
-    effort = np.asarray(config_arm(config).limits["effort"], dtype=float)
-    effort = np.where(effort > 0.0, effort, np.inf)  # 0 or none given: no limit
+    effort = effort_limits(config_arm(config))  # 0 or none given: no limit
     if np.all(np.isinf(effort)):
         put("plant.torque_limits", "none", "the URDF gives no <limit effort> (or 0)")
     else:
@@ -216,10 +215,7 @@ def urdf_defaults(config: ConfigSchema) -> tuple[dict[tuple[str, str], Any], dic
 
     joint_inertia = np.diag(inertia_matrices(config, qd[None, :], model=True)[0]).copy()
     plant_inertia = np.diag(inertia_matrices(config, qd[None, :])[0])  # the plant's own joints
-    disturbance = np.minimum(DISTURBANCE, DISTURBANCE_RATE * plant_inertia)  # on the plant
-    rule = f"min({DISTURBANCE:g}, {DISTURBANCE_RATE:g} M_jj(qd)) N m per joint"
-    why = "the paper's 0.1 N m, at most its second link's 0.1 rad/s^2 on a joint alone"
-    put("plant.disturbance", tuple(float(f"{v:.4g}") for v in disturbance), f"{rule}: {why}")
+    put("plant.disturbance", *default_disturbance(plant_inertia))
     if "cost.R" in explicit:
         R = np.array(config.cost.R)
     elif "cost.Q" in explicit:

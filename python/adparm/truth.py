@@ -263,11 +263,13 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     return out
 
 
-def _estimate_optimum_learned(result: SimulationResult, out: dict[str, Any]) -> str | None:
+def _estimate_optimum_learned(
+    result: SimulationResult, out: dict[str, Any], target: np.ndarray | None = None
+) -> str | None:
     """For an identifying run whose critic ended ten times closer to the optimum of its own
     estimate, W*(beta_hat), than to the plant's W* (estimate_critic_error): the distances, as
     the verdict says them; None otherwise (then learning itself has not converged)."""
-    own = estimate_critic_error(result)
+    own = estimate_critic_error(result, target)
     plant = out.get("critic_relative_error")
     if own is None or plant is None or not own < 0.1 * plant:
         return None
@@ -452,7 +454,7 @@ def _diagnose_learning(
                 )
                 if not chased:  # a longer run at the same rate keeps the non-stabilising solution
                     advice.append("a longer run will not help; " + _exact_cost_advice(config))
-            elif (own := _estimate_optimum_learned(result, out)) is not None:
+            elif (own := _estimate_optimum_learned(result, out, target)) is not None:
                 out["approximation"] = "identification"
                 problems.append(
                     f"the critic learned the optimum of its estimate ({own}), and beta_hat's "
