@@ -43,7 +43,8 @@
 //     a recorded row reuses the next step's first stage), then PinocchioArm::compute (M, C, G,
 //     M^-1, F) is timed over those states alone (a), and for the structured basis its Pinocchio
 //     pass (computeJointJacobiansTimeVariation, PinocchioStructuredBasis::pinocchio_passes) at the
-//     same states (b; 0 for the quadratic basis), fastest of 3 each, divided by the loop's best
+//     same states (b; 0 for the quadratic basis, and for the structured basis when it reuses the
+//     arm's kinematics, as the loop's does), fastest of 3 each, divided by the loop's best
 //     step time x. Before them
 //   bench=dense_kernels name=avx512|avx2|portable single_sample=avx512|avx2|portable
 //     the critic's dense kernels these loops run with points (name) and without (single_sample)
@@ -377,7 +378,8 @@ class RecordingArm : public LoopArm {
 // timed runs' states), then PinocchioArm::compute (M, C, G, M^-1, F) over them, and for the
 // structured basis its Pinocchio passes (PinocchioStructuredBasis::pinocchio_passes) at the same
 // states' x = [e1; e2] (the loop evaluates the basis once per compute(); fixed points are
-// prepared before the run), each the fastest of `repeats`. Seconds per run.
+// prepared before the run) when it runs them (not when it reuses the arm's kinematics: 0), each
+// the fastest of `repeats`. Seconds per run.
 struct PinocchioReplay {
   long calls = 0;  // -1: the recording run stopped early (reported, not replayed)
   double arm_seconds = 0.0;
@@ -419,7 +421,10 @@ PinocchioReplay replay_pinocchio(const adparm::Settings& settings, const adparm:
     }
     double seconds = seconds_since(start);
     if (r == 0 || seconds < replay.arm_seconds) replay.arm_seconds = seconds;
+    // the structured basis runs a Pinocchio pass of its own unless it reuses the arm's kinematics
+    // (PinocchioStructuredBasis::shares_kinematics: the loop's case; then 0)
     if constexpr (std::is_same_v<typename Case::Basis, adparm::PinocchioStructuredBasis>) {
+      if (basis.shares_kinematics(arm)) continue;
       auto workspace = basis.workspace();
       start = Clock::now();
       for (long i = 0; i < replay.calls; ++i) {

@@ -14,6 +14,7 @@ from scipy.linalg import qr as scipy_qr
 
 import adparm
 from adparm import _core
+from adparm.simulation import core_settings
 
 pin = pytest.importorskip("pinocchio")
 
@@ -401,6 +402,36 @@ def test_hjb_residual_vanishes_at_optimal_weights(arm, seed: int) -> None:
             for i in range(len(x))
         ]
         assert max(errors) > 1e-6
+
+
+def test_the_loops_basis_reuses_the_arms_kinematics_to_round_off(arm) -> None:
+    """In the loop the basis gets the model's terms at the same q and reuses the joints'
+    placements and world motion subspaces of the arm's Coriolis pass (with v and dJ of v = e2
+    formed from them) instead of its own forward pass: the core's HJB residual
+    (_core.hjb_residual, the loop's path) equals the residual above, whose basis runs its own
+    pass (UrdfArm.structured_basis) and whose dynamics are Pinocchio's Python bindings, for weights
+    off W*, on every checked arm (a prismatic joint, a branched tree, continuous joints)."""
+    ours, reference = arm
+    n = ours.dof
+    rng = np.random.default_rng(17)
+    K, alpha1, R, Q = random_exact_instance(rng, n)
+    qd = rng.uniform(-1.0, 1.0, n)
+    config = adparm.Config.from_dict(
+        {
+            "plant": {"urdf": str(ours.path)},
+            "controller": {"basis": "structured"},
+            "cost": {"Q": Q.tolist(), "R": R.tolist()},
+            "control": {"alpha1": alpha1.tolist()},
+            "task": {"qd": qd.tolist(), "q0": qd.tolist()},
+        }
+    )
+    W = ours.structured_weights(K)
+    x = rng.uniform(-1.0, 1.0, size=(12, 2 * n))
+    for Wc, Wa in ((W, W), (W + 0.3 * rng.normal(size=W.size), W + 0.2 * rng.normal(size=W.size))):
+        loop = _core.hjb_residual(core_settings(config), x, Wc, Wa, 0.0)
+        own = [hjb_residual(ours, reference, xi, qd, np.zeros(n), alpha1, Q, R, Wc, Wa) for xi in x]
+        scale = 1.0 + np.einsum("ni,ij,nj->n", x, Q, x)
+        np.testing.assert_allclose(loop / scale, np.array(own) / scale, rtol=0, atol=1e-10)
 
 
 # --- the two-link URDF against the two-link structured basis -------------------------------------

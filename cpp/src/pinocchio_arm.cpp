@@ -321,6 +321,7 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
   check_links(*tree, source);
   auto impl = std::make_unique<PinocchioArm::Impl>();
   impl->source = source;
+  impl->kinematics = std::make_shared<const char>('\0');
   pinocchio::Model full;
   try {
     pinocchio::urdf::buildModel(tree, full);  // mimic = false: a mimic joint is a joint of its own
@@ -573,6 +574,7 @@ void PinocchioArm::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
   // One pass over the bodies: the Coriolis matrix, then M (upper triangle, mirrored) and G from
   // what that pass leaves (mass_and_gravity_from_coriolis_pass).
   pinocchio::computeCoriolisMatrix(model, data, w.configuration, w.velocity);
+  w.kinematics = s.kinematics.get();  // data.oMi, data.J at q (an estimate: the same joints)
   terms.coriolis = data.C;
   mass_and_gravity_from_coriolis_pass(model, data, terms.gravity);
   terms.mass = data.M.selfadjointView<Eigen::Upper>();
@@ -646,6 +648,7 @@ void PinocchioArm::mass_regressor(const Eigen::Ref<const Eigen::VectorXd>& q,
   check_size(out, dof_, static_cast<Eigen::Index>(dof_) * parameter_count(), "out");
   const Impl& s = *impl_;
   WorkspaceData& w = *workspace;
+  w.kinematics = nullptr;  // data is overwritten below
   s.set_configuration(q, w.configuration);
   const Eigen::Index n = dof_;
   for (Eigen::Index j = 0; j < n; ++j) {

@@ -30,6 +30,11 @@ struct PinocchioArm::Impl {
   Eigen::Vector3d gravity;
   Eigen::VectorXd coulomb, viscous;
   LockedJoints locked;  // given and implied (mimic joints of locked joints)
+  // One token per parsed URDF, shared by the arms derived from it (with_gravity_and_friction,
+  // with_inertia_scaled, estimates: other gravity, friction or inertias, the same joints and
+  // placements), so that equal tokens mean equal kinematics (PinocchioStructuredBasis reuses
+  // the arm's oMi and J).
+  std::shared_ptr<const char> kinematics;
 
   // Pinocchio's configuration for joint angles/positions q.
   void set_configuration(const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -56,6 +61,10 @@ struct PinocchioArm::WorkspaceData {
   Eigen::VectorXd unit_acceleration;
   Eigen::MatrixXd mass_factor;     // the Cholesky factor L of M, for M^-1 (lower triangle)
   Eigen::MatrixXd inverse_factor;  // L^-1 (lower triangle)
+  // Set by PinocchioArm::compute to its arm's kinematics token: data.oMi and data.J hold the
+  // joints' placements and world motion subspaces at compute()'s q; nullptr otherwise (cleared
+  // by every other call that runs Pinocchio in this work space).
+  const char* kinematics = nullptr;
 
   explicit WorkspaceData(const pinocchio::Model& model)
       : data(model),

@@ -121,6 +121,7 @@ struct PinocchioStructuredBasis::Impl {
   std::vector<pinocchio::JointIndex> joint;  // per base parameter: the joint whose body it is
   std::vector<int> local;                    // per base parameter: its index 0..9 in that body
   std::vector<Group> groups;                 // the base parameters body by body
+  bool one_coordinate_joints = true;         // every joint: nq = 1 or 2 (continuous), nv = 1
 
   explicit Impl(std::shared_ptr<const PinocchioArm::Impl> arm_impl) : arm(std::move(arm_impl)) {}
 };
@@ -155,6 +156,9 @@ PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
                                 " has " + std::to_string(n) + " joints; the core supports 1 to " +
                                 std::to_string(kMaxDof));
   Impl& s = *impl_;
+  const pinocchio::Model& model = s.arm->model;
+  for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(model.njoints); ++i)
+    s.one_coordinate_joints = s.one_coordinate_joints && model.nvs[i] == 1;
   s.base = adparm::base_parameters(arm);
   const int r = static_cast<int>(s.base.columns.size());
   size_ = e1_size() + r;
@@ -253,13 +257,11 @@ Eigen::VectorXd PinocchioStructuredBasis::optimal_weights(
   return W;
 }
 
-void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                           const Eigen::Ref<const Eigen::VectorXd>& qd,
-                                           const Eigen::Ref<const Eigen::VectorXd>& dqd,
-                                           Eigen::Ref<Eigen::VectorXd> phi,
-                                           Eigen::Ref<Eigen::MatrixXd> jacobian,
-                                           Eigen::Ref<Eigen::VectorXd> desired_rate,
-                                           Workspace& workspace) const {
+void PinocchioStructuredBasis::evaluate_at(
+    const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& qd,
+    const Eigen::Ref<const Eigen::VectorXd>& dqd, Eigen::Ref<Eigen::VectorXd> phi,
+    Eigen::Ref<Eigen::MatrixXd> jacobian, Eigen::Ref<Eigen::VectorXd> desired_rate,
+    Workspace& workspace, const PinocchioArm::Terms* arm_terms) const {
   const Eigen::Index n = joints_;
   check_size(x, 2 * n, 1, "x");
   check_size(qd, n, 1, "qd");
@@ -283,16 +285,38 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
       jacobian(k, j) += x[i];
     }
 
-  // e2 block: 2 T_b(q, e2) at q = qd - e1, from one forward pass (oMi, the local velocities v,
-  // the world Jacobian J and its rate dJ = ov x J; Pinocchio's computeJointJacobiansTimeVariation)
-  w.position = qd - x.head(n);
-  arm.set_configuration(w.position, w.arm.configuration);
-  w.arm.velocity = x.tail(n);
-  pinocchio::computeJointJacobiansTimeVariation(arm.model, data, w.arm.configuration,
-                                                w.arm.velocity);
+  // e2 block: 2 T_b(q, e2) at q = qd - e1, from the placements oMi, the local velocities v, the
+  // world Jacobian J and its rate dJ = ov x J: Pinocchio's computeJointJacobiansTimeVariation, or
+  // oMi and J of the arm's terms at that q (their Coriolis pass) with v and dJ of v = e2 formed
+  // from them as Pinocchio's forward step forms them (header comment)
+  const PinocchioArm::WorkspaceData* shared =
+      arm_terms != nullptr && arm_terms->workspace != nullptr && s.one_coordinate_joints &&
+              arm_terms->workspace->kinematics == arm.kinematics.get()
+          ? arm_terms->workspace.get()
+          : nullptr;
+  if (shared != nullptr) {
+    const pinocchio::Data& kinematics = shared->data;
+    for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(arm.model.njoints);
+         ++i) {
+      const pinocchio::JointIndex parent = arm.model.parents[i];
+      const Eigen::Index column = arm.model.idx_vs[i];
+      const pinocchio::Motion along(kinematics.J.col(column) * x[n + column]);  // J_i e2_i
+      data.ov[i] = parent > 0 ? data.ov[parent] + along : along;
+      data.v[i] = kinematics.oMi[i].actInv(data.ov[i]);
+      data.dJ.col(column) =
+          data.ov[i].cross(pinocchio::Motion(kinematics.J.col(column))).toVector();
+    }
+  } else {
+    w.position = qd - x.head(n);
+    arm.set_configuration(w.position, w.arm.configuration);
+    w.arm.velocity = x.tail(n);
+    pinocchio::computeJointJacobiansTimeVariation(arm.model, data, w.arm.configuration,
+                                                  w.arm.velocity);
+  }
+  const pinocchio::Data& kinematics = shared != nullptr ? shared->data : data;  // oMi, J
   for (const Group& group : s.groups) {
     const auto& velocity = data.v[group.joint];
-    const pinocchio::SE3& placement = data.oMi[group.joint];
+    const pinocchio::SE3& placement = kinematics.oMi[group.joint];
     const Eigen::Index rows = group.end - group.begin;
     // per row, the gradient g of 2 T_b in the body's local velocity and the same in the world
     for (Eigen::Index b = 0; b < rows; ++b) {
@@ -305,7 +329,7 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
     // G dv/dv and G dv/dq per supporting joint (world_covector); q = qd - e1: d phi / d e1 =
     // -G dv/dq, and the desired rate is G dv/dq dqd
     for_each_supporting_column(arm.model, group.joint, [&](Eigen::Index column) {
-      const auto J = data.J.col(column);
+      const auto J = kinematics.J.col(column);
       const auto dJ = data.dJ.col(column);
       for (Eigen::Index b = 0; b < rows; ++b) {
         const double along_q = w.world_gradients.row(b).dot(dJ.transpose());
@@ -316,6 +340,10 @@ void PinocchioStructuredBasis::evaluate_at(const Eigen::Ref<const Eigen::VectorX
     });
     k += rows;
   }
+}
+
+bool PinocchioStructuredBasis::shares_kinematics(const PinocchioArm& arm) const {
+  return impl_->one_coordinate_joints && arm.impl().kinematics == impl_->arm->kinematics;
 }
 
 void PinocchioStructuredBasis::pinocchio_passes(const Eigen::Ref<const Eigen::VectorXd>& x,

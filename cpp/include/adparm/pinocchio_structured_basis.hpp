@@ -31,7 +31,13 @@
 //
 // The basis has the dynamic-size basis members the loop expects (basis.hpp, dynamic_size.hpp):
 // kSize = kStateDim = Dynamic, Vector, Jacobian, size(), evaluate(x, desired, [terms,] phi,
-// jacobian, desired_rate). The arm's terms are not used (the basis runs its own kinematics).
+// jacobian, desired_rate). Given the arm's terms (the loop's second form: the model's terms at
+// the same q = qd - e1, to round-off), the basis reuses the kinematics the arm's Coriolis pass
+// left, oMi and J at that q, when the arm is of the same parsed URDF as the basis' (its
+// kinematics token: derived arms with other inertias, gravity or friction share it), and forms
+// from them the world velocities of v = e2, ov_i = ov_parent(i) + J_i e2_i, the local ones
+// v_i = oMi^-1 ov_i and dJ_j = ov_j x J_j (Pinocchio's own recursions, in the world frame): no
+// forward pass of its own. Otherwise it runs computeJointJacobiansTimeVariation at qd - e1.
 // It has no paper e2 block (positive_block.hpp's HasPaperE2Block is false): its e2 block,
 // e2^T M_W(q) e2 with M_W(q) = sum_b W_b M_b(q), is not affine in one cos q2, so positivity at
 // every q cannot be checked at two end points. Instead (not in the paper), with actor.positive_e2
@@ -51,6 +57,8 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "adparm/pinocchio_arm.hpp"
@@ -125,12 +133,17 @@ class PinocchioStructuredBasis {
 
   // phi (size()), d phi / dx (size() x 2n) and (d phi / d qd) dqd (size()) at x = [e1; e2] (2n)
   // and the desired qd, dqd (n), in a work space of this basis; no heap allocation. Sizes are
-  // checked.
+  // checked. arm_terms: the arm's terms computed at q = qd - e1 (to round-off), whose kinematics
+  // are reused when shares_kinematics (above; the e2 block is then at their q); nullptr: none.
   void evaluate_at(const Eigen::Ref<const Eigen::VectorXd>& x,
                    const Eigen::Ref<const Eigen::VectorXd>& qd,
                    const Eigen::Ref<const Eigen::VectorXd>& dqd, Eigen::Ref<Eigen::VectorXd> phi,
                    Eigen::Ref<Eigen::MatrixXd> jacobian, Eigen::Ref<Eigen::VectorXd> desired_rate,
-                   Workspace& workspace) const;
+                   Workspace& workspace, const PinocchioArm::Terms* arm_terms = nullptr) const;
+
+  // Whether evaluate_at reuses the kinematics of `arm`'s terms: the same parsed URDF (and only
+  // revolute or prismatic joints of one coordinate each, which every URDF arm has).
+  bool shares_kinematics(const PinocchioArm& arm) const;
 
   // Only the Pinocchio pass of evaluate_at (computeJointJacobiansTimeVariation at q = qd - e1,
   // v = e2), without the basis' own products: the bench times it for the share of a loop step
@@ -147,10 +160,20 @@ class PinocchioStructuredBasis {
     desired_rate.resize(size_);
     evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate, workspace);
   }
+  // With the model's terms at the same q (the loop's second form): a URDF arm's (a member
+  // `pinocchio`, PinocchioArm::Terms) lend their kinematics; other terms are not used.
   template <class Desired, class Terms>
-  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,
-                Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
-    evaluate(x, desired, phi, jacobian, desired_rate, workspace);
+  void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms& terms,
+                Vector& phi, Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
+    if constexpr (HasPinocchioTerms<Terms>::value) {
+      phi.resize(size_);
+      jacobian.resize(size_, 2 * joints_);
+      desired_rate.resize(size_);
+      evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate, workspace,
+                  &terms.pinocchio);
+    } else {
+      evaluate(x, desired, phi, jacobian, desired_rate, workspace);
+    }
   }
 
   // The check positions of the positive_e2 projection (n x S, S >= 0) with `arm` the arm whose
@@ -168,6 +191,13 @@ class PinocchioStructuredBasis {
   struct Impl;  // opaque: Pinocchio's model and the basis' tables
 
  private:
+  template <class Terms, class = void>
+  struct HasPinocchioTerms : std::false_type {};
+  template <class Terms>
+  struct HasPinocchioTerms<Terms, std::void_t<decltype(std::declval<const Terms&>().pinocchio)>>
+      : std::is_same<std::decay_t<decltype(std::declval<const Terms&>().pinocchio)>,
+                     PinocchioArm::Terms> {};
+
   std::unique_ptr<Impl> impl_;
   int joints_ = 0;
   int size_ = 0;
