@@ -219,3 +219,22 @@ def test_a_policy_taken_before_the_weights_settled_is_told_a_run_long_enough(fol
     assert found, diagnostics["advice"]
     longer = adparm.simulate(config.updated({"sim": {"T": float(found[1])}}), diagnose=False)
     assert longer.diagnostics["verdict"] == "ok", longer.diagnostics["verdict"]
+
+
+def test_learning_that_levels_off_while_gamma_is_reset_is_told_a_lower_epsilon_t(folder) -> None:
+    """The Kinova with its own cost (seed 42) from the default weights: at 10 s it is told to run
+    20 s (the two-point estimate cannot see that it levels off), and at 20 s its weights are still
+    1.15 % from W* (under 2 % progress over the second half) while Gamma was reset about every
+    0.55 s: the advice says that a longer run will not help and names critic.epsilon_T 10 times
+    lower (1e-6: longer least-squares windows between resets), with which the run ends "ok"."""
+    config = _own_cost("kinova", 42, folder).updated({"sim": {"T": 20.0}})
+    assert config.critic.epsilon_T == 1e-5
+    diagnostics = adparm.simulate(config, diagnose=False).diagnostics
+    assert 0.01 < diagnostics["critic_relative_error"] < 0.02
+    advice = " ".join(diagnostics["advice"])
+    assert advice.startswith("a longer run will not help"), advice
+    found = re.search(r"lower critic\.epsilon_T to ([0-9.e+-]+): Gamma was reset", advice)
+    assert found, advice
+    assert float(found[1]) == pytest.approx(1e-6)
+    lower = adparm.simulate(config.updated({"critic": {"epsilon_T": float(found[1])}}))
+    assert lower.diagnostics["verdict"] == "ok", lower.diagnostics["verdict"]
