@@ -238,3 +238,17 @@ def test_learning_that_levels_off_while_gamma_is_reset_is_told_a_lower_epsilon_t
     assert float(found[1]) == pytest.approx(1e-6)
     lower = adparm.simulate(config.updated({"critic": {"epsilon_T": float(found[1])}}))
     assert lower.diagnostics["verdict"] == "ok", lower.diagnostics["verdict"]
+
+
+def test_learning_that_crawls_while_gamma_is_reset_often_is_told_a_lower_epsilon_t(folder) -> None:
+    """The xArm7 with its own cost (seed 58) from the default weights: Gamma is reset every 29 ms
+    over the second half and the weights crawl (1.05 -> 1.02 relative to W*): besides "learning
+    is slow", the advice names critic.epsilon_T = 1e-6, with which the run ends "ok"."""
+    config = _own_cost("xarm7", 58, folder)
+    diagnostics = adparm.simulate(config, diagnose=False).diagnostics
+    advice = " ".join(diagnostics["advice"])
+    assert advice.startswith("learning is slow"), advice
+    found = re.search(r"lower critic\.epsilon_T to ([0-9.e+-]+): Gamma was reset", advice)
+    assert found, advice
+    lower = adparm.simulate(config.updated({"critic": {"epsilon_T": float(found[1])}}))
+    assert lower.diagnostics["verdict"] == "ok", lower.diagnostics["verdict"]
