@@ -63,7 +63,8 @@ struct PinocchioArm::WorkspaceData {
   Eigen::MatrixXd inverse_factor;  // L^-1 (lower triangle)
   // Set by PinocchioArm::compute to its arm's kinematics token: data.oMi and data.J hold the
   // joints' placements and world motion subspaces at compute()'s q; nullptr otherwise (cleared
-  // by every other call that runs Pinocchio in this work space).
+  // by mass_regressor, the one other call that runs Pinocchio in an arm's work space; the
+  // regressors of urdf_regressor.cpp run in work spaces of their own, never marked).
   const char* kinematics = nullptr;
 
   explicit WorkspaceData(const pinocchio::Model& model)

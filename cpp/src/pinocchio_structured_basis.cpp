@@ -124,6 +124,12 @@ struct PinocchioStructuredBasis::Impl {
   bool one_coordinate_joints = true;         // every joint: nq = 1 or 2 (continuous), nv = 1
 
   explicit Impl(std::shared_ptr<const PinocchioArm::Impl> arm_impl) : arm(std::move(arm_impl)) {}
+
+  // Whether kinematics marked with `token` (PinocchioArm::Impl::kinematics, WorkspaceData::
+  // kinematics) are this basis' arm's: the same parsed URDF, one coordinate per joint.
+  bool shares(const char* token) const {
+    return one_coordinate_joints && token != nullptr && token == arm->kinematics.get();
+  }
 };
 
 // The work space of one evaluation.
@@ -289,11 +295,11 @@ void PinocchioStructuredBasis::evaluate_at(
   // world Jacobian J and its rate dJ = ov x J: Pinocchio's computeJointJacobiansTimeVariation, or
   // oMi and J of the arm's terms at that q (their Coriolis pass) with v and dJ of v = e2 formed
   // from them as Pinocchio's forward step forms them (header comment)
-  const PinocchioArm::WorkspaceData* shared =
-      arm_terms != nullptr && arm_terms->workspace != nullptr && s.one_coordinate_joints &&
-              arm_terms->workspace->kinematics == arm.kinematics.get()
-          ? arm_terms->workspace.get()
-          : nullptr;
+  const PinocchioArm::WorkspaceData* shared = arm_terms != nullptr &&
+                                                      arm_terms->workspace != nullptr &&
+                                                      s.shares(arm_terms->workspace->kinematics)
+                                                  ? arm_terms->workspace.get()
+                                                  : nullptr;
   if (shared != nullptr) {
     const pinocchio::Data& kinematics = shared->data;
     for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(arm.model.njoints);
@@ -343,7 +349,7 @@ void PinocchioStructuredBasis::evaluate_at(
 }
 
 bool PinocchioStructuredBasis::shares_kinematics(const PinocchioArm& arm) const {
-  return impl_->one_coordinate_joints && arm.impl().kinematics == impl_->arm->kinematics;
+  return impl_->shares(arm.impl().kinematics.get());
 }
 
 void PinocchioStructuredBasis::pinocchio_passes(const Eigen::Ref<const Eigen::VectorXd>& x,

@@ -120,17 +120,16 @@ def longer_run_advice(
             "tolerance (an estimate with a margin of 1.5)"
         )
     if not math.isfinite(estimate["T"]):
-        settled = (
+        advice = (
             f"a longer run will not help: {progress} (under {100 * SETTLED_FALL:g} % progress "
             "over the second half of the run)"
         )
-        windows = reset_window_advice(result, estimate["t_mid"])
-        return settled + ("; " + windows if windows else "")
-    slow = (
-        f"learning is slow: {progress}; at that rate the tolerance needs about "
-        f"{estimate['needed']:.3g} s more (sim.T = {estimate['T']:g} s, over "
-        f"{LONGER_RUN_LIMIT:g} times this run's); likely some direction of the weights is "
-        "barely informed by the samples (the cost R, the extrapolation box or the basis)"
-    )
+    else:
+        advice = (
+            f"learning is slow: {progress}; at that rate the tolerance needs about "
+            f"{estimate['needed']:.3g} s more (sim.T = {estimate['T']:g} s, over "
+            f"{LONGER_RUN_LIMIT:g} times this run's); likely some direction of the weights is "
+            "barely informed by the samples (the cost R, the extrapolation box or the basis)"
+        )
     windows = reset_window_advice(result, estimate["t_mid"])
-    return slow + ("; " + windows if windows else "")
+    return advice + ("; " + windows if windows else "")

@@ -155,25 +155,16 @@ class PinocchioStructuredBasis {
   template <class Desired>
   void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,
                 Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
-    phi.resize(size_);
-    jacobian.resize(size_, 2 * joints_);
-    desired_rate.resize(size_);
-    evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate, workspace);
+    evaluate_sized(x, desired, phi, jacobian, desired_rate, workspace, nullptr);
   }
   // With the model's terms at the same q (the loop's second form): a URDF arm's (a member
   // `pinocchio`, PinocchioArm::Terms) lend their kinematics; other terms are not used.
   template <class Desired, class Terms>
   void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms& terms,
                 Vector& phi, Jacobian& jacobian, Vector& desired_rate, Workspace& workspace) const {
-    if constexpr (HasPinocchioTerms<Terms>::value) {
-      phi.resize(size_);
-      jacobian.resize(size_, 2 * joints_);
-      desired_rate.resize(size_);
-      evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate, workspace,
-                  &terms.pinocchio);
-    } else {
-      evaluate(x, desired, phi, jacobian, desired_rate, workspace);
-    }
+    const PinocchioArm::Terms* arm_terms = nullptr;
+    if constexpr (HasPinocchioTerms<Terms>::value) arm_terms = &terms.pinocchio;
+    evaluate_sized(x, desired, phi, jacobian, desired_rate, workspace, arm_terms);
   }
 
   // The check positions of the positive_e2 projection (n x S, S >= 0) with `arm` the arm whose
@@ -191,6 +182,15 @@ class PinocchioStructuredBasis {
   struct Impl;  // opaque: Pinocchio's model and the basis' tables
 
  private:
+  template <class Desired>
+  void evaluate_sized(const ErrorVector<Dynamic>& x, const Desired& desired, Vector& phi,
+                      Jacobian& jacobian, Vector& desired_rate, Workspace& workspace,
+                      const PinocchioArm::Terms* arm_terms) const {
+    phi.resize(size_);
+    jacobian.resize(size_, 2 * joints_);
+    desired_rate.resize(size_);
+    evaluate_at(x, desired.q, desired.dq, phi, jacobian, desired_rate, workspace, arm_terms);
+  }
   template <class Terms, class = void>
   struct HasPinocchioTerms : std::false_type {};
   template <class Terms>
