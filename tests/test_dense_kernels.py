@@ -7,7 +7,9 @@ portable, avx2, avx512), read when a loop is built, forces a choice.
   bits, of the loop before the kernels), an independent implementation of the same products: the
   same covariance resets at the same steps and the same recordings to round-off, on the planar
   3-link arm with both bases and extrapolation points (also with an input bound) and on the UR5
-  example (110 points: two gathered blocks; and without points: the low-rank RK4 step). The
+  example (110 points: two gathered blocks; and without points: the low-rank RK4 step); a basis
+  of pairs (the quadratic family, terms c x_a x_b), whose points' products never form B_i, on the
+  UR5 and the 3-link arm, and the 3-link arm's pairs with one other term (the general path). The
   kernels sum in another order and with fused multiply-adds, so single products differ in the
   last bits, which the learning laws amplify (as between the fixed and dynamic paths,
   test_dynamic_sizes.py).
@@ -56,12 +58,56 @@ def _planar(basis: str) -> adparm.Config:
     )
 
 
+def _ur5_quadratic(points: int) -> adparm.Config:
+    return adparm.load_config("examples/ur5.toml").updated(
+        {
+            "controller": {"basis": "quadratic"},
+            "extrapolation": {"points": points},
+            "sim": {"T": 0.2},
+            "actor": {"eta_a1": 0.05},  # the points' share in the actor's law too (derived: 0)
+        }
+    )
+
+
+#: Pairs c x_a x_b of the planar 3-link arm's error state (x1 ... x6; e2 = x4 ... x6): squares,
+#: coefficients, pairs within e1, across e1 and e2 and within e2.
+PAIRS = [
+    "x1^2",
+    "x2^2",
+    "x1*x2",
+    "x3^2",
+    "2*x1*x4",
+    "0.5*x2*x5",
+    "-x3*x6",
+    "0.5*x4^2",
+    "x4*x5",
+    "x5^2",
+    "x5*x6",
+    "x6^2",
+    "x4*x6",
+    "x3*x4",
+]
+
+
 CONFIGS = {
     "planar_quadratic": lambda: _planar("quadratic"),
     "planar_structured": lambda: _planar("structured"),
     # an input bound: the points' bounded policy and its slopes in the actor's gradient
     "planar_bounded": lambda: _planar("quadratic").updated({"cost": {"input_bound": [4.0] * 3}}),
     "ur5": lambda: adparm.load_config("examples/ur5.toml").updated({"sim": {"T": 0.2}}),
+    # a basis of pairs (the quadratic family) at fixed points: the points' shares without their
+    # B_i (ClosedLoop::learn_from_pairs), the 50 points' omega_i written straight into the
+    # critic's block, the 110 points' through a copy (more samples than one block holds)
+    "ur5_quadratic": lambda: _ur5_quadratic(50),
+    "ur5_quadratic_two_blocks": lambda: _ur5_quadratic(110),
+    # pairs with coefficients and squares; and the same with one term that is not a pair (the
+    # points' B_i then: learn_from_points_batched)
+    "planar_pairs": lambda: _planar("quadratic").updated(
+        {"controller": {"basis": PAIRS}, "actor": {"eta_a1": 0.05}}
+    ),
+    "planar_not_pairs": lambda: _planar("quadratic").updated(
+        {"controller": {"basis": [*PAIRS, "x4*x5*cos(q2)"]}, "actor": {"eta_a1": 0.05}}
+    ),
     # no points, 55 functions: one sample per evaluation, the low-rank RK4 step (its end in the
     # kernels) and the trajectory's products with B
     "ur5_no_points": lambda: adparm.load_config("examples/ur5.toml").updated(

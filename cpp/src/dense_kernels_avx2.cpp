@@ -26,6 +26,8 @@ struct Isa {
   static V subtract(V a, V b) { return _mm256_sub_pd(a, b); }
   static V add(V a, V b) { return _mm256_add_pd(a, b); }
   static V multiply(V a, V b) { return _mm256_mul_pd(a, b); }
+  static V divide(V a, V b) { return _mm256_div_pd(a, b); }
+  static V sqrt(V a) { return _mm256_sqrt_pd(a); }
   // The first `count` lanes (0 <= count < 4).
   static Mask mask(long count) {
     return _mm256_cmpgt_epi64(_mm256_set1_epi64x(count), _mm256_setr_epi64x(0, 1, 2, 3));

@@ -27,6 +27,8 @@ struct Isa {
   static V subtract(V a, V b) { return _mm512_sub_pd(a, b); }
   static V add(V a, V b) { return _mm512_add_pd(a, b); }
   static V multiply(V a, V b) { return _mm512_mul_pd(a, b); }
+  static V divide(V a, V b) { return _mm512_div_pd(a, b); }
+  static V sqrt(V a) { return _mm512_sqrt_pd(a); }
   // The first `count` lanes (0 <= count < 8).
   static Mask mask(long count) { return static_cast<Mask>((1u << count) - 1u); }
   static double sum(V v) { return _mm512_reduce_add_pd(v); }

@@ -4,8 +4,8 @@
 //   kName, V, Mask, kWidth (doubles per V), kRowVectors and kColumns (a register block of C: rows
 //   in vectors, columns), kRowPanels (the order of the blocks: blocked_product), zero(), load(p),
 //   load(p, mask) (zero-filled), store(p, v), store(p, v, mask), broadcast(p), fma(a, b, c) = a b +
-//   c, subtract(a, b) = a - b, add(a, b), multiply(a, b), mask(count), sum(v), transpose(rows)
-//   (kWidth vectors, in place).
+//   c, subtract(a, b) = a - b, add(a, b), multiply(a, b), divide(a, b), sqrt(a), mask(count),
+//   sum(v), transpose(rows) (kWidth vectors, in place).
 // Nothing here has external linkage and no standard header is included: every function compiled
 // with the wider instruction set stays in its unit, so the linker can never hand it to a caller
 // built for the portable one.
@@ -461,7 +461,173 @@ void rk4_sum(long n, const double* x, const double* r1, const double* r2, const 
   }
 }
 
+// out(j, sum_c a(j, c) in(c)) for j < rows, c < depth, lane by lane: four rows at a time (four
+// independent chains of multiply-adds, each entry summed in the order of c), then one by one.
+template <class A, class In, class Out>
+inline void lane_products(long rows, long depth, const A& a, const In& in, const Out& out) {
+  long j = 0;
+  for (; j + 4 <= rows; j += 4) {
+    Isa::V s0 = Isa::zero(), s1 = Isa::zero(), s2 = Isa::zero(), s3 = Isa::zero();
+    for (long c = 0; c < depth; ++c) {
+      const Isa::V v = in(c);
+      s0 = Isa::fma(a(j, c), v, s0);
+      s1 = Isa::fma(a(j + 1, c), v, s1);
+      s2 = Isa::fma(a(j + 2, c), v, s2);
+      s3 = Isa::fma(a(j + 3, c), v, s3);
+    }
+    out(j, s0);
+    out(j + 1, s1);
+    out(j + 2, s2);
+    out(j + 3, s3);
+  }
+  for (; j < rows; ++j) {
+    Isa::V sum = Isa::zero();
+    for (long c = 0; c < depth; ++c) sum = Isa::fma(a(j, c), in(c), sum);
+    out(j, sum);
+  }
+}
+
+// The points of a basis of pairs (dense_kernels.hpp, PairPoints), kWidth points at a time, each
+// lane a point: S x_i, M_i^-T of it (B_i^T Wa, B_i^T (Wa - Wc)), R^-1 of both, then
+// z_i = M_i^-1 (-u_hat_i) and omega_i = F_i - J_e2(x_i) z_i, kWidth rows at a time, with
+// Wc . omega_i and ||omega_i||^2 (each in two partial sums: even and odd rows). The per-point
+// vectors live in `scratch` (kWidth lanes each; unaligned loads and stores).
+void pair_points(const adparm::PairPoints& p) {
+  constexpr long w = Isa::kWidth;
+  const long n = p.joints, k = p.functions, stride = p.stride, nx = 2 * n, points = p.points;
+  double* t = p.scratch;        // 2n: [S(Wa) x; S(Wa - Wc) x]
+  double* y = t + nx * w;       // 2n: M^-T of each half: B^T Wa, B^T (Wa - Wc)
+  double* inputs = y + nx * w;  // n: -u_hat = 0.5 R^-1 B^T Wa
+  double* z = inputs + n * w;   // n + 1: M^-1 (-u_hat), then a zero vector (a row's absent term)
+  const int *term_x = p.term_x, *term_z = p.term_z;
+  const long omega_stride = p.omega_stride;
+  const double *coefficient = p.coefficient, *critic_weights = p.critic_weights;
+  const double half_value = 0.5, one_value = 1.0;
+  const Isa::V half = Isa::broadcast(&half_value), one = Isa::broadcast(&one_value);
+  const Isa::V gain = Isa::broadcast(&p.actor_gain);
+  Isa::store(z + n * w, Isa::zero());
+  for (long o = 0; o < stride; o += w) {
+    const double* x = p.x + o;
+    const double* mass_inverse = p.mass_inverse + o;
+    const double* drift_rates = p.drift_rates + o;
+    lane_products(
+        nx, nx, [&](long j, long v) { return Isa::broadcast(p.weight_forms + j + v * nx); },
+        [&](long v) { return Isa::load(x + v * stride); },
+        [&](long j, Isa::V value) { Isa::store(t + j * w, value); });
+    for (long part = 0; part < 2; ++part)  // (M^-T t)_j = sum_c M^-1 (c, j) t_c
+      lane_products(
+          n, n, [&](long j, long c) { return Isa::load(mass_inverse + (c + j * n) * stride); },
+          [&](long c) { return Isa::load(t + (part * n + c) * w); },
+          [&](long j, Isa::V value) { Isa::store(y + (part * n + j) * w, value); });
+    lane_products(
+        n, n, [&](long j, long c) { return Isa::broadcast(p.r_inverse + j + c * n); },
+        [&](long c) { return Isa::load(y + c * w); },
+        [&](long j, Isa::V value) { Isa::store(inputs + j * w, Isa::multiply(half, value)); });
+    lane_products(
+        n, n, [&](long j, long c) { return Isa::broadcast(p.r_inverse + j + c * n); },
+        [&](long c) { return Isa::load(y + (n + c) * w); },
+        [&](long j, Isa::V value) { Isa::store(p.projected_difference + j * stride + o, value); });
+    Isa::V input_cost = Isa::zero();
+    for (long j = 0; j < n; ++j)
+      input_cost = Isa::fma(Isa::load(inputs + j * w), Isa::load(y + j * w), input_cost);
+    input_cost = Isa::multiply(half, input_cost);  // u^T R u = 0.5 (-u)^T B^T Wa
+    lane_products(
+        n, n, [&](long j, long c) { return Isa::load(mass_inverse + (j + c * n) * stride); },
+        [&](long c) { return Isa::load(inputs + c * w); },
+        [&](long j, Isa::V value) { Isa::store(z + j * w, value); });
+    // omega's rows r0 ... r0 + w - 1 over the lanes, F_r - c_r (x_a z_b' + x_b z_a') with the
+    // row's two terms in J_e2 (an absent one reads z's zero vector: no branch), then transposed in
+    // registers: each lane's (point's) w entries stored into its own column of omega (the lanes
+    // after the last point not stored)
+    Isa::V value0 = Isa::zero(), value1 = Isa::zero(), norm0 = Isa::zero(), norm1 = Isa::zero();
+    const long lanes = points - o < w ? points - o : w;
+    const auto row = [&](long r) {
+      const int *xs = term_x + 2 * r, *zs = term_z + 2 * r;
+      const long z0 = zs[0] < 0 ? n : zs[0], z1 = zs[1] < 0 ? n : zs[1];
+      const Isa::V along =
+          Isa::fma(Isa::load(x + xs[1] * stride), Isa::load(z + z1 * w),
+                   Isa::multiply(Isa::load(x + xs[0] * stride), Isa::load(z + z0 * w)));
+      return Isa::subtract(Isa::load(drift_rates + r * stride),
+                           Isa::multiply(Isa::broadcast(coefficient + r), along));
+    };
+    for (long r0 = 0; r0 < k; r0 += w) {
+      const long rows = k - r0 < w ? k - r0 : w;
+      Isa::V tile[w];
+      if (rows == w) {
+#pragma GCC unroll 8
+        for (long t = 0; t < w; t += 2) {
+          tile[t] = row(r0 + t);
+          tile[t + 1] = row(r0 + t + 1);
+          value0 = Isa::fma(Isa::broadcast(critic_weights + r0 + t), tile[t], value0);
+          value1 = Isa::fma(Isa::broadcast(critic_weights + r0 + t + 1), tile[t + 1], value1);
+          norm0 = Isa::fma(tile[t], tile[t], norm0);
+          norm1 = Isa::fma(tile[t + 1], tile[t + 1], norm1);
+        }
+      } else {
+        for (long t = 0; t < w; ++t) {
+          if (t >= rows) {
+            tile[t] = Isa::zero();
+            continue;
+          }
+          tile[t] = row(r0 + t);
+          value0 = Isa::fma(Isa::broadcast(critic_weights + r0 + t), tile[t], value0);
+          norm0 = Isa::fma(tile[t], tile[t], norm0);
+        }
+      }
+      Isa::transpose(tile);  // tile[t]: point o + t's rows r0 ... r0 + w - 1
+      double* out = p.omega + o * omega_stride + r0;
+      if (rows == w && lanes == w) {
+#pragma GCC unroll 8
+        for (long t = 0; t < w; ++t) Isa::store(out + t * omega_stride, tile[t]);
+      } else {
+        const Isa::Mask mask = rows == w ? Isa::mask(0) : Isa::mask(rows);
+        for (long t = 0; t < lanes; ++t) {
+          if (rows == w)
+            Isa::store(out + t * omega_stride, tile[t]);
+          else
+            Isa::store(out + t * omega_stride, tile[t], mask);
+        }
+      }
+    }
+    Isa::store(p.error + o, Isa::add(Isa::add(Isa::load(p.state_costs + o), input_cost),
+                                     Isa::add(value0, value1)));
+    Isa::store(p.norm + o, Isa::add(norm0, norm1));
+    // the actor's scale of eq. (26), Actor::gradient_scale's operations: gain eps / sqrt(1 + norm)
+    const Isa::V root = Isa::sqrt(Isa::add(one, Isa::add(norm0, norm1)));
+    Isa::store(p.scale + o, Isa::divide(Isa::multiply(gain, Isa::load(p.error + o)), root));
+  }
+}
+
+// sum_i x_i (M_i^-1 c_i)^T with c_i = scale_i projected_difference_i (PairPoints): M_i^-1 c_i
+// over the lanes into projected_difference (overwritten), then each entry's sum over the points.
+void pair_gradient(const adparm::PairPoints& p, double* out) {
+  constexpr long w = Isa::kWidth;
+  const long n = p.joints, stride = p.stride, nx = 2 * n;
+  double* c = p.scratch;  // n: c_i
+  for (long o = 0; o < stride; o += w) {
+    const Isa::V s = Isa::load(p.scale + o);
+    for (long j = 0; j < n; ++j)
+      Isa::store(c + j * w, Isa::multiply(s, Isa::load(p.projected_difference + j * stride + o)));
+    lane_products(
+        n, n, [&](long j, long q) { return Isa::load(p.mass_inverse + (j + q * n) * stride + o); },
+        [&](long q) { return Isa::load(c + q * w); },
+        [&](long j, Isa::V value) { Isa::store(p.projected_difference + j * stride + o, value); });
+  }
+  for (long j = 0; j < n; ++j)
+    for (long v = 0; v < nx; ++v) {
+      const double *xv = p.x + v * stride, *mj = p.projected_difference + j * stride;
+      Isa::V sum0 = Isa::zero(), sum1 = Isa::zero();
+      long o = 0;
+      for (; o + 2 * w <= stride; o += 2 * w) {
+        sum0 = Isa::fma(Isa::load(xv + o), Isa::load(mj + o), sum0);
+        sum1 = Isa::fma(Isa::load(xv + o + w), Isa::load(mj + o + w), sum1);
+      }
+      if (o < stride) sum0 = Isa::fma(Isa::load(xv + o), Isa::load(mj + o), sum0);
+      out[v + j * nx] = Isa::sum(Isa::add(sum0, sum1));
+    }
+}
+
 // The set's table (dense_kernels.hpp), in the order of DenseKernels' members.
 const adparm::DenseKernels kKernels{Isa::kName, product,         rank_update,  transposed_products,
                                     gains,      low_rank_update, mirror_lower, point_regressor,
-                                    stage_sum,  rk4_sum};
+                                    stage_sum,  rk4_sum,         pair_points,  pair_gradient};

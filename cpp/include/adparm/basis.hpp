@@ -26,6 +26,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include "adparm/types.hpp"
 
@@ -166,6 +167,16 @@ void evaluate_basis(const Basis& basis, const X& x, const Desired& desired, cons
   else
     basis.evaluate(x, desired, terms, phi, jacobian, desired_rate, workspace);
 }
+
+// A basis of pairs (every function c_k x_a x_b of the error state: the quadratic family of the
+// expression basis) may say so by a member pairs() (ExpressionBasis::Pairs: each function's row of
+// d phi / d e2 as at most two terms); the loop's stacked extrapolation points then never form
+// B_i = J_e2 M_i^-1 (ClosedLoop::learn_from_pairs). pairs() empty: not a basis of pairs.
+template <class Basis, class = void>
+struct HasPairs : std::false_type {};
+template <class Basis>
+struct HasPairs<Basis, std::void_t<decltype(std::declval<const Basis&>().pairs())>>
+    : std::true_type {};
 
 enum class BasisKind { paper, augmented, structured, expression };
 

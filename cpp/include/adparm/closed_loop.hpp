@@ -135,6 +135,12 @@ class ClosedLoop {
     // The kernels' batched points (learn_from_points_batched): [Wa, Wa - Wc] (K x 2), R^-1 times
     // point_products (n x 2N) and -u_hat_i (n x N).
     Eigen::MatrixXd point_weights, point_projected, point_inputs;
+    // A basis of pairs (learn_from_pairs): [S(Wa); S(Wa - Wc)] (2n x 2n), the kernels' scratch,
+    // their outputs over the points (omega K x N when the critic's block lacks room, eps,
+    // ||omega||^2, the actor's scale and
+    // R^-1 B_i^T (Wa - Wc) n x stride) and sum_i x_i (M_i^-1 c_i)^T (2n x n).
+    Eigen::MatrixXd pair_forms, pair_omega, pair_projected, pair_products;
+    Eigen::VectorXd pair_scratch, pair_error, pair_norm, pair_scale;
     // With identification: beta_hat and the history stack, and the error system of the arm of
     // beta_hat (the believed model during the current step).
     typename IdentifierType::Data identifier;
@@ -250,6 +256,19 @@ class ClosedLoop {
       data.point_weights.setZero(basis_size(), 2);
       data.point_projected.setZero(dof(), 2 * extrapolation_.size());
       data.point_inputs.setZero(dof(), extrapolation_.size());
+      if constexpr (HasPairs<Basis>::value) {
+        if (!basis_.pairs().empty()) {
+          const Eigen::Index n = dof(), stride = (extrapolation_.size() + 7) / 8 * 8;
+          data.pair_forms.setZero(2 * n, 2 * n);
+          data.pair_omega.setZero(basis_size(), stride);
+          data.pair_projected.setZero(stride, n);
+          data.pair_products.setZero(2 * n, n);
+          data.pair_scratch.setZero((2 * n * n + 6 * n) * 8);
+          data.pair_error.setZero(stride);
+          data.pair_norm.setZero(stride);
+          data.pair_scale.setZero(stride);
+        }
+      }
     }
     if constexpr (kIdentifies) {
       if (identifies_) {
@@ -704,6 +723,13 @@ class ClosedLoop {
     Evaluation e;
     if (kernels != nullptr) {
       if (!cost_.bounded()) {
+        if constexpr (HasPairs<Basis>::value) {
+          if (extrapolation_.pairs_stacked()) {
+            learn_from_pairs(critic_weights, actor_weights, difference, gamma, critic_rate,
+                             gamma_rate, actor_gradient, data);
+            return;
+          }
+        }
         learn_from_points_batched(critic_weights, actor_weights, difference, gamma, critic_rate,
                                   gamma_rate, actor_gradient, data);
         return;
@@ -792,6 +818,78 @@ class ClosedLoop {
       block.coefficients[block.gathered] = error;
       block.weights[block.gathered] = weight;
       critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
+    }
+  }
+
+  // learn_from_points_batched for a basis of pairs (basis.hpp, HasPairs; dense_kernels.hpp,
+  // PairPoints): the points' B_i = J_e2(x_i) M_i^-1 are not read. J_e2(x)^T w = S(w) x, with
+  // S's rows gathering c_k w_k by the basis' terms, so B_i^T w = M_i^-T S(w) x_i; B_i y =
+  // J_e2(x_i) (M_i^-1 y), two terms a row; and sum_i B_i c_i = the same terms of
+  // sum_i x_i (M_i^-1 c_i)^T. For the UR5's 78 quadratic functions about a third of the multiply-
+  // adds of the stacked B's products, over the points' x_i, M_i^-1 and F_i (57 KB at 50 points)
+  // instead of the stacked B and its transpose (374 KB). Equal to learn_from_points_batched up to
+  // round-off (other sums).
+  template <class Gamma, class GammaRate>
+  void learn_from_pairs(const Weights& critic_weights, const Weights& actor_weights,
+                        const Weights& difference, const Gamma& gamma, Weights& critic_rate,
+                        GammaRate& gamma_rate, Weights& actor_gradient, Data& data) const {
+    typename Critic<Basis>::Workspace& block = data.critic;
+    const auto& pairs = basis_.pairs();
+    const long points = extrapolation_.size();
+    const Eigen::Index n = dof(), k = basis_size(), stride = extrapolation_.pair_stride();
+    Eigen::MatrixXd& forms = data.pair_forms;
+    forms.setZero();
+    for (Eigen::Index r = 0; r < k; ++r)
+      for (int t = 0; t < 2; ++t) {
+        const int z = pairs.term_z[2 * r + t];
+        if (z < 0) continue;
+        const int x = pairs.term_x[2 * r + t];
+        forms(z, x) += pairs.coefficient[r] * actor_weights[r];
+        forms(n + z, x) += pairs.coefficient[r] * difference[r];
+      }
+    const double weight = 1.0 / static_cast<double>(points);
+    // the points' omega_i straight into the critic's block when it has room for all of them
+    const bool room = block.gathered + points <= Critic<Basis>::kBlock;
+    double* omega = room ? block.omegas.col(block.gathered).data() : data.pair_omega.data();
+    const PairPoints problem{n,
+                             k,
+                             points,
+                             stride,
+                             extrapolation_.pair_states().data(),
+                             extrapolation_.pair_mass_inverses().data(),
+                             extrapolation_.pair_drift_rates().data(),
+                             extrapolation_.pair_state_costs().data(),
+                             forms.data(),
+                             cost_.R_inverse().data(),
+                             critic_weights.data(),
+                             pairs.term_x.data(),
+                             pairs.term_z.data(),
+                             pairs.coefficient.data(),
+                             data.pair_scratch.data(),
+                             omega,
+                             room ? block.omegas.outerStride() : data.pair_omega.outerStride(),
+                             data.pair_error.data(),
+                             data.pair_norm.data(),
+                             data.pair_projected.data(),
+                             weight * actor_.settings().eta_a1,
+                             data.pair_scale.data()};
+    const DenseKernels& kernels = *critic_.kernels();
+    kernels.pair_points(problem);  // eqs. (20)-(21) at every point
+    for (long i = 0; i < points; ++i) {
+      const double error = data.pair_error[i];
+      if (!room) block.omegas.col(block.gathered) = data.pair_omega.col(i);
+      block.coefficients[block.gathered] = error;
+      block.weights[block.gathered] = weight;
+      critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
+    }
+    kernels.pair_gradient(problem, data.pair_products.data());
+    for (Eigen::Index r = 0; r < k; ++r) {  // (26), all points: gradient -= sum_i B_i c_i
+      double along = 0.0;
+      for (int t = 0; t < 2; ++t) {
+        const int z = pairs.term_z[2 * r + t];
+        if (z >= 0) along += data.pair_products(pairs.term_x[2 * r + t], z);
+      }
+      actor_gradient[r] -= pairs.coefficient[r] * along;
     }
   }
 

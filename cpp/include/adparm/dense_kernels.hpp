@@ -10,6 +10,8 @@
 //   - mirror_lower: the lower triangle copied onto the upper one               the rank-s dGamma
 //   - point_regressor: omega = f - B x, c . omega and ||omega||^2               eqs. 21-22, a point
 //   - stage_sum, rk4_sum: RK4's sums on the state, as Eigen's, bit for bit        lower_step
+//   - pair_points, pair_gradient: the points' shares for a basis of pairs          eqs. 20-26
+//     (PairPoints below), B_i = J_e2(x_i) M_i^-1 never formed
 // All column-major on raw pointers: no Eigen or Pinocchio type crosses into the code built for
 // another instruction set (its inline functions would be merged with the portable build's at
 // link time). The portable path is no table at all (nullptr): the callers keep Eigen's products,
@@ -28,6 +30,35 @@
 #pragma once
 
 namespace adparm {
+
+// The extrapolation points of a basis of pairs (every function phi_k = c_k x_a x_b of the error
+// state, a = b allowed: the quadratic family; Extrapolation::pairs), arrays over the points side
+// by side: entry v of point i at [v * stride + i], stride a multiple of 8 (the lanes after the
+// last point zero). Each function's row of d phi / d e2 has at most two terms, term t (0, 1):
+// d phi_k / d e2 z = coefficient[k] * sum_t x[term_x[2k + t]] z[term_z[2k + t]] (term_z < 0:
+// none), so that B_i y = J_e2(x_i) M_i^-1 y and B_i^T w = M_i^-T S(w) x_i, where the rows of S
+// (n x 2n) gather c_k w_k by those terms (ClosedLoop::learn_from_pairs).
+struct PairPoints {
+  long joints, functions, points, stride;  // n, K, N, the points' stride
+  const double* x;                         // 2n x stride: the points x_i
+  const double* mass_inverse;              // n^2 x stride: M_i^-1 (r, c) as entry r + c n
+  const double* drift_rates;               // K x stride: F_i = (d phi / dx) f + (d phi / d qd) dqd
+  const double* state_costs;               // stride: x_i^T Q x_i
+  const double* weight_forms;              // 2n x 2n, column-major: rows [S(Wa); S(Wa - Wc)]
+  const double* r_inverse;                 // n x n, column-major
+  const double* critic_weights;            // K: Wc
+  const int* term_x;                       // 2K
+  const int* term_z;                       // 2K (< 0: no term)
+  const double* coefficient;               // K
+  double* scratch;                         // (2 n^2 + 6 n) x 8 doubles (8: AVX-512's width)
+  double* omega;                 // out: omega_i = F_i + B_i u_hat_i (K) at omega + i omega_stride
+  long omega_stride;             // >= K
+  double* error;                 // out, stride: eq. 21's eps_i
+  double* norm;                  // out, stride: ||omega_i||^2
+  double* projected_difference;  // out, n x stride: R^-1 B_i^T (Wa - Wc) (pair_gradient's)
+  double actor_gain;             // w eta_a1 (Actor::gradient_scale)
+  double* scale;                 // out, stride: eq. 26's w eta_a1 eps_i / sqrt(1 + ||omega_i||^2)
+};
 
 struct DenseKernels {
   const char* name;  // "avx2" or "avx512"
@@ -71,6 +102,14 @@ struct DenseKernels {
   void (*stage_sum)(long n, const double* x, const double* r, double c, double* out);
   void (*rk4_sum)(long n, const double* x, const double* r1, const double* r2, const double* r3,
                   const double* r4, double h6, double* out);
+  // The points of a basis of pairs (PairPoints): u_hat_i = -0.5 R^-1 B_i^T Wa (eq. 20), omega_i,
+  // eps_i = x_i^T Q x_i + u_hat_i^T R u_hat_i + Wc^T omega_i (eq. 21), ||omega_i||^2, the actor's
+  // scale and R^-1 B_i^T (Wa - Wc) (eq. 26).
+  void (*pair_points)(const PairPoints& points);
+  // The actor's share of the points of a basis of pairs (eq. 26), after pair_points: with c_i =
+  // scale_i R^-1 B_i^T (Wa - Wc), sum_i B_i c_i is J_e2's terms of P = sum_i x_i (M_i^-1 c_i)^T:
+  // out (2n x n, column-major) = P. Overwrites projected_difference (with M_i^-1 c_i).
+  void (*pair_gradient)(const PairPoints& points, double* out);
 };
 
 // The kernels of ADPARM_KERNELS on this CPU for a loop that gathers blocks of samples or not

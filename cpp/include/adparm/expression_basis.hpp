@@ -113,7 +113,20 @@ class ExpressionBasis {
       throw std::invalid_argument("joints: must be >= 1, got " + std::to_string(joints));
     compile(program);
     workspace_ = workspace();
+    find_pairs();
   }
+
+  // A basis of pairs: every function phi_k = c_k x_a x_b (a = b allowed: x_a^2) of the error state
+  // alone, as the quadratic family. Its row of d phi / d e2 (e2 = x[n:]) has at most two terms:
+  //   d phi_k / d e2 z = coefficient[k] sum_t x[term_x[2k + t]] z[term_z[2k + t]]  (t = 0, 1),
+  // term_z an e2 index 0 ... n - 1, or -1: no term (phi_k = c x_a x_b: terms (x_b, a - n) and
+  // (x_a, b - n); x_a^2: (x_a, a - n) twice). Empty for any other basis.
+  struct Pairs {
+    std::vector<int> term_x, term_z;
+    std::vector<double> coefficient;
+    bool empty() const { return coefficient.empty(); }
+  };
+  const Pairs& pairs() const { return pairs_; }
 
   int size() const { return static_cast<int>(functions_.size()); }
   int joints() const { return joints_; }
@@ -618,6 +631,32 @@ class ExpressionBasis {
           workspace.gradients.cols());
   }
 
+  // Fills pairs_ when every function is a monomial of degree 2 in x alone (pairs()).
+  void find_pairs() {
+    Pairs found;
+    const int n = joints_, n_x = state_dim();
+    for (const Function& function : functions_) {
+      if (!function.monomial) return;
+      const int* locals = local_variables_.data() + function.locals_begin;
+      const int* order = monomial_order_.data() + function.factors_begin;
+      const int* exponents = monomial_exponents_.data() + function.factors_begin;
+      int a = -1, b = -1;
+      if (function.local_count == 2 && exponents[0] == 1 && exponents[1] == 1) {
+        a = locals[order[0]];
+        b = locals[order[1]];
+      } else if (function.local_count == 1 && exponents[0] == 2) {
+        a = b = locals[order[0]];
+      }
+      if (a < 0 || a >= n_x || b >= n_x) return;  // not a pair of x's entries
+      found.term_x.push_back(b);
+      found.term_z.push_back(a >= n ? a - n : -1);
+      found.term_x.push_back(a);
+      found.term_z.push_back(b >= n ? b - n : -1);
+      found.coefficient.push_back(function.coefficient);
+    }
+    pairs_ = std::move(found);
+  }
+
   static void check(bool ok, const char* name, Eigen::Index rows, Eigen::Index cols,
                     Eigen::Index got_rows, Eigen::Index got_cols) {
     if (ok) return;
@@ -637,6 +676,7 @@ class ExpressionBasis {
   std::vector<int> local_variables_;
   std::vector<Function> functions_;
   Workspace workspace_;
+  Pairs pairs_;
 };
 
 // The expression basis behind the loop's basis seam (basis.hpp) with dynamic sizes, for
@@ -662,6 +702,8 @@ class ExpressionLoopBasis {
   int size() const { return basis_->size(); }
   int joints() const { return basis_->joints(); }
   const ExpressionBasis& expression() const { return *basis_; }
+  // The basis-of-pairs seam (ClosedLoop's stacked points): ExpressionBasis::pairs().
+  const ExpressionBasis::Pairs& pairs() const { return basis_->pairs(); }
 
   template <class Desired, class Terms>
   void evaluate(const ErrorVector<Dynamic>& x, const Desired& desired, const Terms&, Vector& phi,

@@ -165,8 +165,18 @@ class Extrapolation {
       ++generation_;
     }
     if (constant_desired_ && !prepared_valid_) {
-      for (long i = 0; i < size(); ++i)
+      [[maybe_unused]] bool pairs = false;
+      if constexpr (kDof == Dynamic && HasPairs<Basis>::value) {
+        const Eigen::Index n = desired.q.size(), k = basis.size();
+        pairs = settings_.mode != ExtrapolationMode::local && k * n * size() <= kMaxStacked &&
+                !basis.pairs().empty();
+        if (pairs) size_pairs(n, k);
+      }
+      for (long i = 0; i < size(); ++i) {
         prepare_hjb_point(basis, system, cost, points_[i], desired, terms, prepared_[i], workspace);
+        if constexpr (kDof == Dynamic)
+          if (pairs) keep_pair_point(i, prepared_[i], terms.mass_inverse);
+      }
       prepared_valid_ = true;
       if constexpr (kDof == Dynamic) {  // [B_1 ... B_N], once (allocates: first preparation only)
         const Eigen::Index n = desired.q.size(), k = basis.size();
@@ -219,6 +229,16 @@ class Extrapolation {
   Eigen::Index stacked_row_count() const { return stacked_row_count_; }
   const Eigen::VectorXd& stacked_state_costs() const { return stacked_state_costs_; }
   const Point& prepared(long i) const { return prepared_[i]; }
+  // A basis of pairs (basis.hpp, HasPairs) with stacked points: their x_i (2n), M_i^-1 (n^2, entry
+  // r + c n), F_i (K) and x_i^T Q x_i, each entry's values over the points side by side (entry v
+  // of point i at [v * pair_stride() + i]; the stride a multiple of 8, zeros after the last point)
+  // for the dense kernels' pair_points (dense_kernels.hpp: PairPoints).
+  bool pairs_stacked() const { return stacked() && pair_stride_ > 0; }
+  Eigen::Index pair_stride() const { return pair_stride_; }
+  const Eigen::MatrixXd& pair_states() const { return pair_states_; }
+  const Eigen::MatrixXd& pair_mass_inverses() const { return pair_mass_inverses_; }
+  const Eigen::MatrixXd& pair_drift_rates() const { return pair_drift_rates_; }
+  const Eigen::VectorXd& pair_state_costs() const { return pair_state_costs_; }
   static constexpr Eigen::Index kMaxStacked = Eigen::Index(1) << 22;  // 32 MB
 
   // Calls f(point, evaluation, 1/N) for each point, with the weights Wc, Wa and desired state
@@ -312,6 +332,29 @@ class Extrapolation {
         stacked_transposed_data() + r * stacked_transposed_stride_,
         stacked_input_gradients_.cols());
   }
+  // pairs_stacked()'s arrays: stride x 2n, stride x n^2, stride x K, stride (column-major, so
+  // that entry v over the points is column v); sized once (no allocation after).
+  void size_pairs(Eigen::Index n, Eigen::Index k) {
+    pair_stride_ = (size() + 7) / 8 * 8;
+    if (pair_states_.rows() != pair_stride_) {
+      pair_states_.setZero(pair_stride_, 2 * n);
+      pair_mass_inverses_.setZero(pair_stride_, n * n);
+      pair_drift_rates_.setZero(pair_stride_, k);
+      pair_state_costs_.setZero(pair_stride_);
+    }
+  }
+  template <class MassInverse>
+  void keep_pair_point(long i, const Point& point, const MassInverse& mass_inverse) {
+    const Eigen::Index n = mass_inverse.rows();
+    pair_states_.row(i) = points_[i].transpose();
+    for (Eigen::Index c = 0; c < n; ++c)
+      for (Eigen::Index r = 0; r < n; ++r) pair_mass_inverses_(i, r + c * n) = mass_inverse(r, c);
+    pair_drift_rates_.row(i) = point.drift_rate.transpose();
+    pair_state_costs_[i] = point.state_cost;
+  }
+  Eigen::Index pair_stride_ = 0;
+  Eigen::MatrixXd pair_states_, pair_mass_inverses_, pair_drift_rates_;
+  Eigen::VectorXd pair_state_costs_;
   Eigen::MatrixXd stacked_drift_rates_;                         // K x N, [F_1 ... F_N]
   Eigen::VectorXd stacked_state_costs_;                         // N, x_i^T Q x_i
   Eigen::Index stacked_first_row_ = 0, stacked_row_count_ = 0;  // the rows with nonzero entries
