@@ -154,8 +154,13 @@ inline long check_set(const adparm::DenseKernels& k, std::mt19937& generator, lo
           }
           expect(transposed_close, "transposed_products", m, n, 0);
           // gains on n columns of omega and G = Gamma omega
+          // G = Gamma omega with omega^T G >= 0 (Gamma is positive definite): each entry of G
+          // with its omega's sign, so that 1 + nu omega^T G >= 1 (a random sign could bring it
+          // near 0, where the gain's relative round-off has no bound)
           const Buffer omegas = random_buffer(generator, ldb * n);
-          const Buffer gamma_omegas = random_buffer(generator, ldb * n);
+          Buffer gamma_omegas = random_buffer(generator, ldb * n);
+          for (std::size_t e = 0; e < gamma_omegas.size(); ++e)
+            gamma_omegas[e] = std::copysign(gamma_omegas[e], omegas[e]);
           Buffer weights = random_buffer(generator, n), coefficients = random_buffer(generator, n);
           for (double& weight : weights) weight = std::abs(weight);
           Buffer scaled(static_cast<std::size_t>(ldb * n));
