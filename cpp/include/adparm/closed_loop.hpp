@@ -137,8 +137,8 @@ class ClosedLoop {
     Eigen::MatrixXd point_weights, point_projected, point_inputs;
     // A basis of pairs (learn_from_pairs): [S(Wa); S(Wa - Wc)] (2n x 2n), the kernels' scratch,
     // their outputs over the points (omega K x N when the critic's block lacks room, eps,
-    // ||omega||^2, the actor's scale and
-    // R^-1 B_i^T (Wa - Wc) n x stride) and sum_i x_i (M_i^-1 c_i)^T (2n x n).
+    // ||omega||^2, the actor's scale and R^-1 B_i^T (Wa - Wc) n x stride) and
+    // sum_i x_i (M_i^-1 c_i)^T (2n x n).
     Eigen::MatrixXd pair_forms, pair_omega, pair_projected, pair_products;
     Eigen::VectorXd pair_scratch, pair_error, pair_norm, pair_scale;
     // With identification: beta_hat and the history stack, and the error system of the arm of
@@ -258,7 +258,9 @@ class ClosedLoop {
       data.point_inputs.setZero(dof(), extrapolation_.size());
       if constexpr (HasPairs<Basis>::value) {
         if (!basis_.pairs().empty()) {
-          const Eigen::Index n = dof(), stride = (extrapolation_.size() + 7) / 8 * 8;
+          const Eigen::Index n = dof();
+          const Eigen::Index stride =
+              Extrapolation<Arm, Basis>::pair_stride_for(extrapolation_.size());
           data.pair_forms.setZero(2 * n, 2 * n);
           data.pair_omega.setZero(basis_size(), stride);
           data.pair_projected.setZero(stride, n);

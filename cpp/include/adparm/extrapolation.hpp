@@ -165,12 +165,13 @@ class Extrapolation {
       ++generation_;
     }
     if (constant_desired_ && !prepared_valid_) {
+      // dynamic sizes: the points also side by side (fixed or grid points, up to kMaxStacked)
+      [[maybe_unused]] const bool stacks = settings_.mode != ExtrapolationMode::local &&
+                                           basis.size() * desired.q.size() * size() <= kMaxStacked;
       [[maybe_unused]] bool pairs = false;
       if constexpr (kDof == Dynamic && HasPairs<Basis>::value) {
-        const Eigen::Index n = desired.q.size(), k = basis.size();
-        pairs = settings_.mode != ExtrapolationMode::local && k * n * size() <= kMaxStacked &&
-                !basis.pairs().empty();
-        if (pairs) size_pairs(n, k);
+        pairs = stacks && !basis.pairs().empty();
+        if (pairs) size_pairs(desired.q.size(), basis.size());
       }
       for (long i = 0; i < size(); ++i) {
         prepare_hjb_point(basis, system, cost, points_[i], desired, terms, prepared_[i], workspace);
@@ -180,7 +181,7 @@ class Extrapolation {
       prepared_valid_ = true;
       if constexpr (kDof == Dynamic) {  // [B_1 ... B_N], once (allocates: first preparation only)
         const Eigen::Index n = desired.q.size(), k = basis.size();
-        if (settings_.mode != ExtrapolationMode::local && k * n * size() <= kMaxStacked) {
+        if (stacks) {
           stacked_input_gradients_.resize(k, n * size());
           stacked_drift_rates_.resize(k, size());
           stacked_state_costs_.resize(size());
@@ -234,6 +235,8 @@ class Extrapolation {
   // of point i at [v * pair_stride() + i]; the stride a multiple of 8, zeros after the last point)
   // for the dense kernels' pair_points (dense_kernels.hpp: PairPoints).
   bool pairs_stacked() const { return stacked() && pair_stride_ > 0; }
+  // The stride of N points: N rounded up to a multiple of 8 (AVX-512's width).
+  static Eigen::Index pair_stride_for(long points) { return (points + 7) / 8 * 8; }
   Eigen::Index pair_stride() const { return pair_stride_; }
   const Eigen::MatrixXd& pair_states() const { return pair_states_; }
   const Eigen::MatrixXd& pair_mass_inverses() const { return pair_mass_inverses_; }
@@ -335,7 +338,7 @@ class Extrapolation {
   // pairs_stacked()'s arrays: stride x 2n, stride x n^2, stride x K, stride (column-major, so
   // that entry v over the points is column v); sized once (no allocation after).
   void size_pairs(Eigen::Index n, Eigen::Index k) {
-    pair_stride_ = (size() + 7) / 8 * 8;
+    pair_stride_ = pair_stride_for(size());
     if (pair_states_.rows() != pair_stride_) {
       pair_states_.setZero(pair_stride_, 2 * n);
       pair_mass_inverses_.setZero(pair_stride_, n * n);
