@@ -265,7 +265,8 @@ inline long check_pairs(const adparm::DenseKernels& k, std::mt19937& generator, 
       Buffer omega(static_cast<std::size_t>(omega_stride * (points + 1)), 7.0);
       Buffer error(static_cast<std::size_t>(stride)), norm(static_cast<std::size_t>(stride));
       Buffer scale(static_cast<std::size_t>(stride)),
-          projected(static_cast<std::size_t>(n * stride));
+          projected(static_cast<std::size_t>(n * stride)),
+          inputs_out(static_cast<std::size_t>(n * stride));
       Buffer scratch(static_cast<std::size_t>((2 * n * n + 6 * n) * 8)),
           out(static_cast<std::size_t>(nx * n));
       const double gain = 0.3;
@@ -290,7 +291,8 @@ inline long check_pairs(const adparm::DenseKernels& k, std::mt19937& generator, 
                                        norm.data(),
                                        projected.data(),
                                        gain,
-                                       scale.data()};
+                                       scale.data(),
+                                       inputs_out.data()};
       k.pair_points(problem);
       const Buffer projected_difference = projected;
       k.pair_gradient(problem, out.data());
@@ -333,6 +335,9 @@ inline long check_pairs(const adparm::DenseKernels& k, std::mt19937& generator, 
           ok = ok && close(projected_difference[static_cast<std::size_t>(j * stride + i)],
                            difference[static_cast<std::size_t>(j)]);
         }
+        for (long j = 0; j < n; ++j)  // -u_hat_i, kept for the trajectory's sample (ClosedLoop)
+          ok = ok && close(inputs_out[static_cast<std::size_t>(j * stride + i)],
+                           inputs[static_cast<std::size_t>(j)]);
         for (long j = 0; j < n; ++j)
           input_cost += 0.5 * inputs[static_cast<std::size_t>(j)] * ya[static_cast<std::size_t>(j)];
         double value = 0.0, squared = 0.0;

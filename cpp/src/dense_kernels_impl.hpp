@@ -523,6 +523,8 @@ void pair_points(const adparm::PairPoints& p) {
         n, n, [&](long j, long c) { return Isa::broadcast(p.r_inverse + j + c * n); },
         [&](long c) { return Isa::load(y + c * w); },
         [&](long j, Isa::V value) { Isa::store(inputs + j * w, Isa::multiply(half, value)); });
+    if (p.inputs != nullptr)
+      for (long j = 0; j < n; ++j) Isa::store(p.inputs + j * stride + o, Isa::load(inputs + j * w));
     lane_products(
         n, n, [&](long j, long c) { return Isa::broadcast(p.r_inverse + j + c * n); },
         [&](long c) { return Isa::load(y + (n + c) * w); },

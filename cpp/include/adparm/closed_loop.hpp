@@ -141,6 +141,11 @@ class ClosedLoop {
     // sum_i x_i (M_i^-1 c_i)^T (2n x n).
     Eigen::MatrixXd pair_forms, pair_omega, pair_projected, pair_products;
     Eigen::VectorXd pair_scratch, pair_error, pair_norm, pair_scale;
+    // The trajectory's sample there too (learns_through_pairs): its x, M^-1, F and x^T Q x in the
+    // first lane of the kernels' layout (8 lanes, the others zero), its -u_hat (8 x n).
+    Eigen::MatrixXd pair_sample_x, pair_sample_mass_inverse, pair_sample_drift_rate,
+        pair_sample_inputs;
+    Eigen::VectorXd pair_sample_state_cost;
     // With identification: beta_hat and the history stack, and the error system of the arm of
     // beta_hat (the believed model during the current step).
     typename IdentifierType::Data identifier;
@@ -269,6 +274,12 @@ class ClosedLoop {
           data.pair_error.setZero(stride);
           data.pair_norm.setZero(stride);
           data.pair_scale.setZero(stride);
+          const Eigen::Index lanes = Extrapolation<Arm, Basis>::pair_stride_for(1);
+          data.pair_sample_x.setZero(lanes, 2 * n);
+          data.pair_sample_mass_inverse.setZero(lanes, n * n);
+          data.pair_sample_drift_rate.setZero(lanes, basis_size());
+          data.pair_sample_inputs.setZero(lanes, n);
+          data.pair_sample_state_cost.setZero(lanes);
         }
       }
     }
@@ -399,19 +410,27 @@ class ClosedLoop {
     const Terms& model_terms = own_model ? believed_terms : plant_terms;
 
     Point point;
-    prepare_hjb_point<Basis, kDof>(basis_, x, desired, system.drift(x, model_terms), model_terms,
-                                   cost_, point, data.basis, critic_.kernels());
     Evaluation hjb;
     // With the dispatched kernels (dynamic sizes): B^T [Wa, Wa - Wc] in one pass over B, then
     // eqs. (20)-(21) from B^T Wa and the actor's share (26) from B^T (Wa - Wc), as for the points.
     const DenseKernels* kernels = kBasisSize == Dynamic ? critic_.kernels() : nullptr;
     const Weights difference = actor_weights - critic_weights;
     Joint times_difference;
-    if (kernels != nullptr)
-      evaluate_in_kernels(point, point.input_gradient.data(), critic_weights, actor_weights,
-                          difference, hjb, times_difference);
-    else
-      evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
+    // a basis of pairs at stacked points: this sample with the points (learn_from_pairs), its
+    // basis not evaluated
+    const bool through_pairs = learns_through_pairs();
+    const Error drift = system.drift(x, model_terms);
+    if (through_pairs) {
+      point.state_cost = cost_.state_cost(x);
+    } else {
+      prepare_hjb_point<Basis, kDof>(basis_, x, desired, drift, model_terms, cost_, point,
+                                     data.basis, critic_.kernels());
+      if (kernels != nullptr)
+        evaluate_in_kernels(point, point.input_gradient.data(), critic_weights, actor_weights,
+                            difference, hjb, times_difference);
+      else
+        evaluate_hjb(point, cost_, critic_weights, actor_weights, hjb);
+    }
 
     Weights critic_rate = Weights::Zero(k);
     CovarianceMap gamma_rate(rate.data() + gamma_offset(), k, k);
@@ -445,13 +464,26 @@ class ClosedLoop {
                               e.error, difference, weight, actor_gradient);  // (26)
         }
       };
-      learn(point, hjb, 1.0, kernels != nullptr ? &times_difference : nullptr);
       bool stacked = false;
       if constexpr (kBasisSize == Dynamic) {
         stacked = gathers_ && extrapolation_.stacked();
-        if (stacked)  // the same shares, with the points' products stacked
-          learn_from_stacked_points(critic_weights, actor_weights, difference, gamma, critic_rate,
-                                    gamma_rate, actor_gradient, data);
+        bool paired = false;
+        if constexpr (HasPairs<Basis>::value) {
+          if (through_pairs) {  // this sample first, then the points
+            learn_from_pairs(x, drift, model_terms.mass_inverse, point.state_cost, critic_weights,
+                             actor_weights, difference, gamma, critic_rate, gamma_rate,
+                             actor_gradient, hjb, data);
+            paired = true;
+          }
+        }
+        if (!paired) {
+          learn(point, hjb, 1.0, kernels != nullptr ? &times_difference : nullptr);
+          if (stacked)  // the same shares, with the points' products stacked
+            learn_from_stacked_points(critic_weights, actor_weights, difference, gamma, critic_rate,
+                                      gamma_rate, actor_gradient, data);
+        }
+      } else {
+        learn(point, hjb, 1.0, nullptr);
       }
       if (!stacked)
         extrapolation_.for_each(basis_, system, cost_, desired, critic_weights, actor_weights,
@@ -725,13 +757,6 @@ class ClosedLoop {
     Evaluation e;
     if (kernels != nullptr) {
       if (!cost_.bounded()) {
-        if constexpr (HasPairs<Basis>::value) {
-          if (extrapolation_.pairs_stacked()) {
-            learn_from_pairs(critic_weights, actor_weights, difference, gamma, critic_rate,
-                             gamma_rate, actor_gradient, data);
-            return;
-          }
-        }
         learn_from_points_batched(critic_weights, actor_weights, difference, gamma, critic_rate,
                                   gamma_rate, actor_gradient, data);
         return;
@@ -823,18 +848,33 @@ class ClosedLoop {
     }
   }
 
+  // Whether derivative() learns from the trajectory's sample and the stacked points through a
+  // basis of pairs (learn_from_pairs): dynamic sizes, the dispatched kernels, no input bound, the
+  // critic gathering and the points of a constant desired state side by side.
+  bool learns_through_pairs() const {
+    if constexpr (kBasisSize == Dynamic && HasPairs<Basis>::value)
+      return critic_.kernels() != nullptr && !cost_.bounded() && gathers_ && controller_.learns() &&
+             extrapolation_.pairs_stacked();
+    return false;
+  }
+
   // learn_from_points_batched for a basis of pairs (basis.hpp, HasPairs; dense_kernels.hpp,
-  // PairPoints): the points' B_i = J_e2(x_i) M_i^-1 are not read. J_e2(x)^T w = S(w) x, with
-  // S's rows gathering c_k w_k by the basis' terms, so B_i^T w = M_i^-T S(w) x_i; B_i y =
-  // J_e2(x_i) (M_i^-1 y), two terms a row; and sum_i B_i c_i = the same terms of
+  // PairPoints), with the trajectory's sample: no B = J_e2 M^-1 is read or formed. J_e2(x)^T w =
+  // S(w) x, with S's rows gathering c_k w_k by the basis' terms, so B_i^T w = M_i^-T S(w) x_i;
+  // B_i y = J_e2(x_i) (M_i^-1 y), two terms a row; and sum_i B_i c_i = the same terms of
   // sum_i x_i (M_i^-1 c_i)^T. For the UR5's 78 quadratic functions about a third of the multiply-
   // adds of the stacked B's products, over the points' x_i, M_i^-1 and F_i (57 KB at 50 points)
-  // instead of the stacked B and its transpose (374 KB). Equal to learn_from_points_batched up to
-  // round-off (other sums).
-  template <class Gamma, class GammaRate>
-  void learn_from_pairs(const Weights& critic_weights, const Weights& actor_weights,
-                        const Weights& difference, const Gamma& gamma, Weights& critic_rate,
-                        GammaRate& gamma_rate, Weights& actor_gradient, Data& data) const {
+  // instead of the stacked B and its transpose (374 KB). The trajectory's sample (x, its drift f,
+  // M^-1 and x^T Q x; weight 1) goes first through the same kernel, alone in its first lane, with
+  // F = J f from the terms (phi_k = c_k x_a x_b: F_k = c_k (f_a x_b + x_a f_b)): its basis is not
+  // evaluated; `hjb` gets its u_hat, input cost and eps. Equal to learn_from_points_batched and the
+  // sample's own evaluation up to round-off (other sums).
+  template <class MassInverse, class Gamma, class GammaRate>
+  void learn_from_pairs(const Error& x, const Error& drift, const MassInverse& mass_inverse,
+                        double state_cost, const Weights& critic_weights,
+                        const Weights& actor_weights, const Weights& difference, const Gamma& gamma,
+                        Weights& critic_rate, GammaRate& gamma_rate, Weights& actor_gradient,
+                        Evaluation& hjb, Data& data) const {
     typename Critic<Basis>::Workspace& block = data.critic;
     const auto& pairs = basis_.pairs();
     const long points = extrapolation_.size();
@@ -845,37 +885,77 @@ class ClosedLoop {
       for (int t = 0; t < 2; ++t) {
         const int z = pairs.term_z[2 * r + t];
         if (z < 0) continue;
-        const int x = pairs.term_x[2 * r + t];
-        forms(z, x) += pairs.coefficient[r] * actor_weights[r];
-        forms(n + z, x) += pairs.coefficient[r] * difference[r];
+        const int v = pairs.term_x[2 * r + t];
+        forms(z, v) += pairs.coefficient[r] * actor_weights[r];
+        forms(n + z, v) += pairs.coefficient[r] * difference[r];
       }
+    const DenseKernels& kernels = *critic_.kernels();
+    const double eta_a1 = actor_.settings().eta_a1;
+    // the trajectory's sample: lane 0 (term_x[2k] = b, term_x[2k + 1] = a)
+    data.pair_sample_x.row(0) = x.transpose();
+    for (Eigen::Index c = 0; c < n; ++c)
+      for (Eigen::Index r = 0; r < n; ++r)
+        data.pair_sample_mass_inverse(0, r + c * n) = mass_inverse(r, c);
+    for (Eigen::Index r = 0; r < k; ++r) {
+      const int b = pairs.term_x[2 * r], a = pairs.term_x[2 * r + 1];
+      data.pair_sample_drift_rate(0, r) =
+          pairs.coefficient[r] * (drift[a] * x[b] + x[a] * drift[b]);
+    }
+    data.pair_sample_state_cost[0] = state_cost;
+    const Eigen::Index lanes = Extrapolation<Arm, Basis>::pair_stride_for(1);  // one vector
+    const PairPoints sample{n,
+                            k,
+                            1,
+                            lanes,
+                            data.pair_sample_x.data(),
+                            data.pair_sample_mass_inverse.data(),
+                            data.pair_sample_drift_rate.data(),
+                            data.pair_sample_state_cost.data(),
+                            forms.data(),
+                            cost_.R_inverse().data(),
+                            critic_weights.data(),
+                            pairs.term_x.data(),
+                            pairs.term_z.data(),
+                            pairs.coefficient.data(),
+                            data.pair_scratch.data(),
+                            block.omegas.col(block.gathered).data(),
+                            block.omegas.outerStride(),
+                            data.pair_error.data(),
+                            data.pair_norm.data(),
+                            data.pair_projected.data(),
+                            eta_a1,
+                            data.pair_scale.data(),
+                            data.pair_sample_inputs.data()};
+    kernels.pair_points(sample);  // eqs. (20)-(21) at the trajectory's x
+    hjb.u_hat = -data.pair_sample_inputs.row(0).transpose();
+    hjb.input_cost = cost_.input_cost(hjb.u_hat);
+    hjb.error = data.pair_error[0];
+    // its share of eq. (26), x (M^-1 c)^T with c = scale R^-1 B^T (Wa - Wc), joins the points'
+    Joint sample_product(n);
+    for (Eigen::Index r = 0; r < n; ++r) {
+      double sum = 0.0;
+      for (Eigen::Index c = 0; c < n; ++c)
+        sum += mass_inverse(r, c) * (data.pair_scale[0] * data.pair_projected.data()[c * lanes]);
+      sample_product[r] = sum;
+    }
+    block.coefficients[block.gathered] = hjb.error;
+    block.weights[block.gathered] = 1.0;
+    critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
+
     const double weight = 1.0 / static_cast<double>(points);
     // the points' omega_i straight into the critic's block when it has room for all of them
     const bool room = block.gathered + points <= Critic<Basis>::kBlock;
-    double* omega = room ? block.omegas.col(block.gathered).data() : data.pair_omega.data();
-    const PairPoints problem{n,
-                             k,
-                             points,
-                             stride,
-                             extrapolation_.pair_states().data(),
-                             extrapolation_.pair_mass_inverses().data(),
-                             extrapolation_.pair_drift_rates().data(),
-                             extrapolation_.pair_state_costs().data(),
-                             forms.data(),
-                             cost_.R_inverse().data(),
-                             critic_weights.data(),
-                             pairs.term_x.data(),
-                             pairs.term_z.data(),
-                             pairs.coefficient.data(),
-                             data.pair_scratch.data(),
-                             omega,
-                             room ? block.omegas.outerStride() : data.pair_omega.outerStride(),
-                             data.pair_error.data(),
-                             data.pair_norm.data(),
-                             data.pair_projected.data(),
-                             weight * actor_.settings().eta_a1,
-                             data.pair_scale.data()};
-    const DenseKernels& kernels = *critic_.kernels();
+    PairPoints problem = sample;  // the same weights, terms, scratch and outputs
+    problem.points = points;
+    problem.stride = stride;
+    problem.x = extrapolation_.pair_states().data();
+    problem.mass_inverse = extrapolation_.pair_mass_inverses().data();
+    problem.drift_rates = extrapolation_.pair_drift_rates().data();
+    problem.state_costs = extrapolation_.pair_state_costs().data();
+    problem.omega = room ? block.omegas.col(block.gathered).data() : data.pair_omega.data();
+    problem.omega_stride = room ? block.omegas.outerStride() : data.pair_omega.outerStride();
+    problem.actor_gain = weight * eta_a1;
+    problem.inputs = nullptr;
     kernels.pair_points(problem);  // eqs. (20)-(21) at every point
     for (long i = 0; i < points; ++i) {
       const double error = data.pair_error[i];
@@ -885,7 +965,9 @@ class ClosedLoop {
       critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
     }
     kernels.pair_gradient(problem, data.pair_products.data());
-    for (Eigen::Index r = 0; r < k; ++r) {  // (26), all points: gradient -= sum_i B_i c_i
+    for (Eigen::Index c = 0; c < n; ++c)  // with the trajectory's x (M^-1 c)^T
+      for (Eigen::Index v = 0; v < 2 * n; ++v) data.pair_products(v, c) += x[v] * sample_product[c];
+    for (Eigen::Index r = 0; r < k; ++r) {  // (26), all samples: gradient -= sum_i B_i c_i
       double along = 0.0;
       for (int t = 0; t < 2; ++t) {
         const int z = pairs.term_z[2 * r + t];

@@ -58,6 +58,7 @@ struct PairPoints {
   double* projected_difference;  // out, n x stride: R^-1 B_i^T (Wa - Wc) (pair_gradient's)
   double actor_gain;             // w eta_a1 (Actor::gradient_scale)
   double* scale;                 // out, stride: eq. 26's w eta_a1 eps_i / sqrt(1 + ||omega_i||^2)
+  double* inputs = nullptr;  // out, n x stride: -u_hat_i = 0.5 R^-1 B_i^T Wa (nullptr: not kept)
 };
 
 struct DenseKernels {
