@@ -487,6 +487,24 @@ inline void lane_products(long rows, long depth, const A& a, const In& in, const
   }
 }
 
+// The inputs of the lanes from o on (PairPoints): the points' arrays (stride p.stride), or for
+// the tail's lanes the tail block (stride kTailLanes).
+struct Lanes {
+  const double *x, *mass_inverse, *drift_rates, *state_costs;
+  long stride;
+};
+inline Lanes lanes_at(const adparm::PairPoints& p, long o) {
+  if (p.tail != nullptr && o >= p.tail_offset &&
+      o < p.tail_offset + adparm::PairPoints::kTailLanes) {
+    constexpr long lanes = adparm::PairPoints::kTailLanes;
+    const long n = p.joints;
+    const double* x = p.tail + (o - p.tail_offset);
+    return {x, x + 2 * n * lanes, x + (2 * n + n * n) * lanes,
+            x + (2 * n + n * n + p.functions) * lanes, lanes};
+  }
+  return {p.x + o, p.mass_inverse + o, p.drift_rates + o, p.state_costs + o, p.stride};
+}
+
 // The points of a basis of pairs (dense_kernels.hpp, PairPoints), kWidth points at a time, each
 // lane a point: S x_i, M_i^-T of it (B_i^T Wa, B_i^T (Wa - Wc)), R^-1 of both, then
 // z_i = M_i^-1 (-u_hat_i) and omega_i = F_i - J_e2(x_i) z_i, kWidth rows at a time, with
@@ -504,19 +522,18 @@ void pair_points(const adparm::PairPoints& p) {
   const double *coefficient = p.coefficient, *critic_weights = p.critic_weights;
   const double half_value = 0.5, one_value = 1.0;
   const Isa::V half = Isa::broadcast(&half_value), one = Isa::broadcast(&one_value);
-  const Isa::V gain = Isa::broadcast(&p.actor_gain);
   Isa::store(z + n * w, Isa::zero());
   for (long o = 0; o < stride; o += w) {
-    const double* x = p.x + o;
-    const double* mass_inverse = p.mass_inverse + o;
-    const double* drift_rates = p.drift_rates + o;
+    const Lanes in = lanes_at(p, o);
+    const double *x = in.x, *mass_inverse = in.mass_inverse, *drift_rates = in.drift_rates;
+    const long s = in.stride;
     lane_products(
         nx, nx, [&](long j, long v) { return Isa::broadcast(p.weight_forms + j + v * nx); },
-        [&](long v) { return Isa::load(x + v * stride); },
+        [&](long v) { return Isa::load(x + v * s); },
         [&](long j, Isa::V value) { Isa::store(t + j * w, value); });
     for (long part = 0; part < 2; ++part)  // (M^-T t)_j = sum_c M^-1 (c, j) t_c
       lane_products(
-          n, n, [&](long j, long c) { return Isa::load(mass_inverse + (c + j * n) * stride); },
+          n, n, [&](long j, long c) { return Isa::load(mass_inverse + (c + j * n) * s); },
           [&](long c) { return Isa::load(t + (part * n + c) * w); },
           [&](long j, Isa::V value) { Isa::store(y + (part * n + j) * w, value); });
     lane_products(
@@ -534,7 +551,7 @@ void pair_points(const adparm::PairPoints& p) {
       input_cost = Isa::fma(Isa::load(inputs + j * w), Isa::load(y + j * w), input_cost);
     input_cost = Isa::multiply(half, input_cost);  // u^T R u = 0.5 (-u)^T B^T Wa
     lane_products(
-        n, n, [&](long j, long c) { return Isa::load(mass_inverse + (j + c * n) * stride); },
+        n, n, [&](long j, long c) { return Isa::load(mass_inverse + (j + c * n) * s); },
         [&](long c) { return Isa::load(inputs + c * w); },
         [&](long j, Isa::V value) { Isa::store(z + j * w, value); });
     // omega's rows r0 ... r0 + w - 1 over the lanes, F_r - c_r (x_a z_b' + x_b z_a') with the
@@ -546,10 +563,9 @@ void pair_points(const adparm::PairPoints& p) {
     const auto row = [&](long r) {
       const int *xs = term_x + 2 * r, *zs = term_z + 2 * r;
       const long z0 = zs[0] < 0 ? n : zs[0], z1 = zs[1] < 0 ? n : zs[1];
-      const Isa::V along =
-          Isa::fma(Isa::load(x + xs[1] * stride), Isa::load(z + z1 * w),
-                   Isa::multiply(Isa::load(x + xs[0] * stride), Isa::load(z + z0 * w)));
-      return Isa::subtract(Isa::load(drift_rates + r * stride),
+      const Isa::V along = Isa::fma(Isa::load(x + xs[1] * s), Isa::load(z + z1 * w),
+                                    Isa::multiply(Isa::load(x + xs[0] * s), Isa::load(z + z0 * w)));
+      return Isa::subtract(Isa::load(drift_rates + r * s),
                            Isa::multiply(Isa::broadcast(coefficient + r), along));
     };
     for (long r0 = 0; r0 < k; r0 += w) {
@@ -591,12 +607,14 @@ void pair_points(const adparm::PairPoints& p) {
         }
       }
     }
-    Isa::store(p.error + o, Isa::add(Isa::add(Isa::load(p.state_costs + o), input_cost),
-                                     Isa::add(value0, value1)));
+    Isa::store(p.error + o,
+               Isa::add(Isa::add(Isa::load(in.state_costs), input_cost), Isa::add(value0, value1)));
     Isa::store(p.norm + o, Isa::add(norm0, norm1));
     // the actor's scale of eq. (26), Actor::gradient_scale's operations: gain eps / sqrt(1 + norm)
     const Isa::V root = Isa::sqrt(Isa::add(one, Isa::add(norm0, norm1)));
-    Isa::store(p.scale + o, Isa::divide(Isa::multiply(gain, Isa::load(p.error + o)), root));
+    Isa::store(
+        p.scale + o,
+        Isa::divide(Isa::multiply(Isa::load(p.actor_gains + o), Isa::load(p.error + o)), root));
   }
 }
 
@@ -610,21 +628,26 @@ void pair_gradient(const adparm::PairPoints& p, double* out) {
     const Isa::V s = Isa::load(p.scale + o);
     for (long j = 0; j < n; ++j)
       Isa::store(c + j * w, Isa::multiply(s, Isa::load(p.projected_difference + j * stride + o)));
+    const Lanes in = lanes_at(p, o);
     lane_products(
-        n, n, [&](long j, long q) { return Isa::load(p.mass_inverse + (j + q * n) * stride + o); },
+        n, n, [&](long j, long q) { return Isa::load(in.mass_inverse + (j + q * n) * in.stride); },
         [&](long q) { return Isa::load(c + q * w); },
         [&](long j, Isa::V value) { Isa::store(p.projected_difference + j * stride + o, value); });
   }
+  const long points_end = p.tail != nullptr ? p.tail_offset : stride;  // then the tail's lanes
   for (long j = 0; j < n; ++j)
     for (long v = 0; v < nx; ++v) {
       const double *xv = p.x + v * stride, *mj = p.projected_difference + j * stride;
       Isa::V sum0 = Isa::zero(), sum1 = Isa::zero();
       long o = 0;
-      for (; o + 2 * w <= stride; o += 2 * w) {
+      for (; o + 2 * w <= points_end; o += 2 * w) {
         sum0 = Isa::fma(Isa::load(xv + o), Isa::load(mj + o), sum0);
         sum1 = Isa::fma(Isa::load(xv + o + w), Isa::load(mj + o + w), sum1);
       }
-      if (o < stride) sum0 = Isa::fma(Isa::load(xv + o), Isa::load(mj + o), sum0);
+      for (; o < stride; o += w) {
+        const Lanes in = lanes_at(p, o);
+        sum0 = Isa::fma(Isa::load(in.x + v * in.stride), Isa::load(mj + o), sum0);
+      }
       out[v + j * nx] = Isa::sum(Isa::add(sum0, sum1));
     }
 }

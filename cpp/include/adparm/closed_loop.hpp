@@ -141,11 +141,12 @@ class ClosedLoop {
     // sum_i x_i (M_i^-1 c_i)^T (2n x n).
     Eigen::MatrixXd pair_forms, pair_omega, pair_projected, pair_products;
     Eigen::VectorXd pair_scratch, pair_error, pair_norm, pair_scale;
-    // The trajectory's sample there too (learns_through_pairs): its x, M^-1, F and x^T Q x in the
-    // first lane of the kernels' layout (8 lanes, the others zero), its -u_hat (8 x n).
-    Eigen::MatrixXd pair_sample_x, pair_sample_mass_inverse, pair_sample_drift_rate,
-        pair_sample_inputs;
-    Eigen::VectorXd pair_sample_state_cost;
+    // The trajectory's sample with them (learns_through_pairs), in lane N: the kernels' tail
+    // block (PairPoints::tail: the last points' lanes and the trajectory's x, M^-1, F, x^T Q x),
+    // the samples' w_i eta_a1 (1/N for a point, 1 for the trajectory) and -u_hat (n x stride).
+    Eigen::VectorXd pair_tail, pair_gains;
+    Eigen::MatrixXd pair_inputs;
+    std::int64_t pair_tail_generation = -1;  // the points' lanes copied at that generation
     // With identification: beta_hat and the history stack, and the error system of the arm of
     // beta_hat (the believed model during the current step).
     typename IdentifierType::Data identifier;
@@ -274,12 +275,12 @@ class ClosedLoop {
           data.pair_error.setZero(stride);
           data.pair_norm.setZero(stride);
           data.pair_scale.setZero(stride);
-          const Eigen::Index lanes = Extrapolation<Arm, Basis>::pair_stride_for(1);
-          data.pair_sample_x.setZero(lanes, 2 * n);
-          data.pair_sample_mass_inverse.setZero(lanes, n * n);
-          data.pair_sample_drift_rate.setZero(lanes, basis_size());
-          data.pair_sample_inputs.setZero(lanes, n);
-          data.pair_sample_state_cost.setZero(lanes);
+          const long points = extrapolation_.size();
+          data.pair_tail.setZero(PairPoints::kTailLanes * (2 * n + n * n + basis_size() + 1));
+          data.pair_gains.setZero(stride);
+          data.pair_gains.head(points).setConstant((1.0 / points) * actor_.settings().eta_a1);
+          data.pair_gains[points] = actor_.settings().eta_a1;
+          data.pair_inputs.setZero(stride, n);
         }
       }
     }
@@ -865,10 +866,12 @@ class ClosedLoop {
   // sum_i x_i (M_i^-1 c_i)^T. For the UR5's 78 quadratic functions about a third of the multiply-
   // adds of the stacked B's products, over the points' x_i, M_i^-1 and F_i (57 KB at 50 points)
   // instead of the stacked B and its transpose (374 KB). The trajectory's sample (x, its drift f,
-  // M^-1 and x^T Q x; weight 1) goes first through the same kernel, alone in its first lane, with
+  // M^-1 and x^T Q x; weight 1) goes with them, in lane N (the stride leaves one free:
+  // Extrapolation::pair_stride_for), its inputs and the last points' in the kernels' tail block,
   // F = J f from the terms (phi_k = c_k x_a x_b: F_k = c_k (f_a x_b + x_a f_b)): its basis is not
-  // evaluated; `hjb` gets its u_hat, input cost and eps. Equal to learn_from_points_batched and the
-  // sample's own evaluation up to round-off (other sums).
+  // evaluated, its share of eq. (26) is in the points' sum; `hjb` gets its u_hat, input cost and
+  // eps. Equal to learn_from_points_batched and the sample's own evaluation up to round-off (other
+  // sums; the trajectory's sample now after the points in the critic's block).
   template <class MassInverse, class Gamma, class GammaRate>
   void learn_from_pairs(const Error& x, const Error& drift, const MassInverse& mass_inverse,
                         double state_cost, const Weights& critic_weights,
@@ -889,84 +892,74 @@ class ClosedLoop {
         forms(z, v) += pairs.coefficient[r] * actor_weights[r];
         forms(n + z, v) += pairs.coefficient[r] * difference[r];
       }
-    const DenseKernels& kernels = *critic_.kernels();
-    const double eta_a1 = actor_.settings().eta_a1;
-    // the trajectory's sample: lane 0 (term_x[2k] = b, term_x[2k + 1] = a)
-    data.pair_sample_x.row(0) = x.transpose();
+    // the tail block: lanes tail_offset ... N - 1 of the points' arrays (copied once per
+    // preparation of the points), the trajectory's in lane N (the lanes after it stay zero); F from
+    // the terms (term_x[2k] = b, term_x[2k + 1] = a)
+    constexpr long lanes = PairPoints::kTailLanes;
+    const long tail_offset = points / lanes * lanes;
+    const long used =
+        data.pair_tail_generation == extrapolation_.generation() ? 0 : points - tail_offset;
+    data.pair_tail_generation = extrapolation_.generation();
+    const long lane = points - tail_offset;
+    double* tail = data.pair_tail.data();
+    const auto fill = [&](long entry, const double* points_entry, double trajectory) {
+      for (long l = 0; l < used; ++l) tail[entry * lanes + l] = points_entry[tail_offset + l];
+      tail[entry * lanes + lane] = trajectory;
+    };
+    const Eigen::Index nx = 2 * n, nm = n * n;
+    for (Eigen::Index v = 0; v < nx; ++v) fill(v, extrapolation_.pair_states().col(v).data(), x[v]);
     for (Eigen::Index c = 0; c < n; ++c)
       for (Eigen::Index r = 0; r < n; ++r)
-        data.pair_sample_mass_inverse(0, r + c * n) = mass_inverse(r, c);
+        fill(nx + r + c * n, extrapolation_.pair_mass_inverses().col(r + c * n).data(),
+             mass_inverse(r, c));
     for (Eigen::Index r = 0; r < k; ++r) {
       const int b = pairs.term_x[2 * r], a = pairs.term_x[2 * r + 1];
-      data.pair_sample_drift_rate(0, r) =
-          pairs.coefficient[r] * (drift[a] * x[b] + x[a] * drift[b]);
+      fill(nx + nm + r, extrapolation_.pair_drift_rates().col(r).data(),
+           pairs.coefficient[r] * (drift[a] * x[b] + x[a] * drift[b]));
     }
-    data.pair_sample_state_cost[0] = state_cost;
-    const Eigen::Index lanes = Extrapolation<Arm, Basis>::pair_stride_for(1);  // one vector
-    const PairPoints sample{n,
-                            k,
-                            1,
-                            lanes,
-                            data.pair_sample_x.data(),
-                            data.pair_sample_mass_inverse.data(),
-                            data.pair_sample_drift_rate.data(),
-                            data.pair_sample_state_cost.data(),
-                            forms.data(),
-                            cost_.R_inverse().data(),
-                            critic_weights.data(),
-                            pairs.term_x.data(),
-                            pairs.term_z.data(),
-                            pairs.coefficient.data(),
-                            data.pair_scratch.data(),
-                            block.omegas.col(block.gathered).data(),
-                            block.omegas.outerStride(),
-                            data.pair_error.data(),
-                            data.pair_norm.data(),
-                            data.pair_projected.data(),
-                            eta_a1,
-                            data.pair_scale.data(),
-                            data.pair_sample_inputs.data()};
-    kernels.pair_points(sample);  // eqs. (20)-(21) at the trajectory's x
-    hjb.u_hat = -data.pair_sample_inputs.row(0).transpose();
-    hjb.input_cost = cost_.input_cost(hjb.u_hat);
-    hjb.error = data.pair_error[0];
-    // its share of eq. (26), x (M^-1 c)^T with c = scale R^-1 B^T (Wa - Wc), joins the points'
-    Joint sample_product(n);
-    for (Eigen::Index r = 0; r < n; ++r) {
-      double sum = 0.0;
-      for (Eigen::Index c = 0; c < n; ++c)
-        sum += mass_inverse(r, c) * (data.pair_scale[0] * data.pair_projected.data()[c * lanes]);
-      sample_product[r] = sum;
-    }
-    block.coefficients[block.gathered] = hjb.error;
-    block.weights[block.gathered] = 1.0;
-    critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
+    fill(nx + nm + k, extrapolation_.pair_state_costs().data(), state_cost);
 
     const double weight = 1.0 / static_cast<double>(points);
-    // the points' omega_i straight into the critic's block when it has room for all of them
-    const bool room = block.gathered + points <= Critic<Basis>::kBlock;
-    PairPoints problem = sample;  // the same weights, terms, scratch and outputs
-    problem.points = points;
-    problem.stride = stride;
-    problem.x = extrapolation_.pair_states().data();
-    problem.mass_inverse = extrapolation_.pair_mass_inverses().data();
-    problem.drift_rates = extrapolation_.pair_drift_rates().data();
-    problem.state_costs = extrapolation_.pair_state_costs().data();
-    problem.omega = room ? block.omegas.col(block.gathered).data() : data.pair_omega.data();
-    problem.omega_stride = room ? block.omegas.outerStride() : data.pair_omega.outerStride();
-    problem.actor_gain = weight * eta_a1;
-    problem.inputs = nullptr;
-    kernels.pair_points(problem);  // eqs. (20)-(21) at every point
-    for (long i = 0; i < points; ++i) {
-      const double error = data.pair_error[i];
+    const long samples = points + 1;
+    // the samples' omega_i straight into the critic's block when it has room for all of them
+    const bool room = block.gathered + samples <= Critic<Basis>::kBlock;
+    PairPoints problem{n,
+                       k,
+                       samples,
+                       stride,
+                       extrapolation_.pair_states().data(),
+                       extrapolation_.pair_mass_inverses().data(),
+                       extrapolation_.pair_drift_rates().data(),
+                       extrapolation_.pair_state_costs().data(),
+                       forms.data(),
+                       cost_.R_inverse().data(),
+                       critic_weights.data(),
+                       pairs.term_x.data(),
+                       pairs.term_z.data(),
+                       pairs.coefficient.data(),
+                       data.pair_scratch.data(),
+                       room ? block.omegas.col(block.gathered).data() : data.pair_omega.data(),
+                       room ? block.omegas.outerStride() : data.pair_omega.outerStride(),
+                       data.pair_error.data(),
+                       data.pair_norm.data(),
+                       data.pair_projected.data(),
+                       data.pair_gains.data(),
+                       data.pair_scale.data(),
+                       data.pair_inputs.data()};
+    problem.tail = tail;
+    problem.tail_offset = tail_offset;
+    const DenseKernels& kernels = *critic_.kernels();
+    kernels.pair_points(problem);  // eqs. (20)-(21) at every point and the trajectory's x
+    hjb.u_hat = -data.pair_inputs.row(points).transpose();
+    hjb.input_cost = cost_.input_cost(hjb.u_hat);
+    hjb.error = data.pair_error[points];
+    for (long i = 0; i < samples; ++i) {
       if (!room) block.omegas.col(block.gathered) = data.pair_omega.col(i);
-      block.coefficients[block.gathered] = error;
-      block.weights[block.gathered] = weight;
+      block.coefficients[block.gathered] = data.pair_error[i];
+      block.weights[block.gathered] = i < points ? weight : 1.0;
       critic_.gathered(gamma, critic_rate, gamma_rate, block);  // (23)-(24)
     }
     kernels.pair_gradient(problem, data.pair_products.data());
-    for (Eigen::Index c = 0; c < n; ++c)  // with the trajectory's x (M^-1 c)^T
-      for (Eigen::Index v = 0; v < 2 * n; ++v) data.pair_products(v, c) += x[v] * sample_product[c];
     for (Eigen::Index r = 0; r < k; ++r) {  // (26), all samples: gradient -= sum_i B_i c_i
       double along = 0.0;
       for (int t = 0; t < 2; ++t) {

@@ -56,9 +56,16 @@ struct PairPoints {
   double* error;                 // out, stride: eq. 21's eps_i
   double* norm;                  // out, stride: ||omega_i||^2
   double* projected_difference;  // out, n x stride: R^-1 B_i^T (Wa - Wc) (pair_gradient's)
-  double actor_gain;             // w eta_a1 (Actor::gradient_scale)
-  double* scale;                 // out, stride: eq. 26's w eta_a1 eps_i / sqrt(1 + ||omega_i||^2)
+  const double* actor_gains;     // stride: w_i eta_a1 (Actor::gradient_scale)
+  double* scale;                 // out, stride: eq. 26's w_i eta_a1 eps_i / sqrt(1 + ||omega_i||^2)
   double* inputs = nullptr;  // out, n x stride: -u_hat_i = 0.5 R^-1 B_i^T Wa (nullptr: not kept)
+  // nullptr, or the inputs of lanes tail_offset ... tail_offset + kTailLanes - 1 (tail_offset a
+  // multiple of 8, the lanes within stride) in a block of their own instead of x, mass_inverse,
+  // drift_rates and state_costs: entry v of lane l at [v * kTailLanes + l], x (2n), M^-1 (n^2),
+  // F (K) and x^T Q x (1) one after the other (ClosedLoop: the last points and the trajectory)
+  const double* tail = nullptr;
+  long tail_offset = 0;
+  static constexpr long kTailLanes = 8;
 };
 
 struct DenseKernels {

@@ -235,8 +235,9 @@ class Extrapolation {
   // of point i at [v * pair_stride() + i]; the stride a multiple of 8, zeros after the last point)
   // for the dense kernels' pair_points (dense_kernels.hpp: PairPoints).
   bool pairs_stacked() const { return stacked() && pair_stride_ > 0; }
-  // The stride of N points: N rounded up to a multiple of 8 (AVX-512's width).
-  static Eigen::Index pair_stride_for(long points) { return (points + 7) / 8 * 8; }
+  // The stride of N points: N + 1 rounded up to a multiple of 8 (AVX-512's width), a lane left
+  // for the trajectory's sample (ClosedLoop::learn_from_pairs).
+  static Eigen::Index pair_stride_for(long points) { return (points + 8) / 8 * 8; }
   Eigen::Index pair_stride() const { return pair_stride_; }
   const Eigen::MatrixXd& pair_states() const { return pair_states_; }
   const Eigen::MatrixXd& pair_mass_inverses() const { return pair_mass_inverses_; }
