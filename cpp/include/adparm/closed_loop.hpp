@@ -470,7 +470,7 @@ class ClosedLoop {
         stacked = gathers_ && extrapolation_.stacked();
         bool paired = false;
         if constexpr (HasPairs<Basis>::value) {
-          if (through_pairs) {  // this sample first, then the points
+          if (through_pairs) {  // the points, then this sample (lane N)
             learn_from_pairs(x, drift, model_terms.mass_inverse, point.state_cost, critic_weights,
                              actor_weights, difference, gamma, critic_rate, gamma_rate,
                              actor_gradient, hjb, data);
