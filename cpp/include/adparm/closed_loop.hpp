@@ -57,6 +57,24 @@
 #include "adparm/settings.hpp"
 #include "adparm/trajectory.hpp"
 
+// GCC's and Clang's flatten (ClosedLoop::flattened_derivative) in optimised builds, but not under
+// AddressSanitizer: instrumenting the flattened bodies took GCC over 15 minutes and 8 GB for the
+// bench (bench/sanitize.sh), which then checks the same code with its calls not inlined.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ADPARM_ADDRESS_SANITIZER 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define ADPARM_ADDRESS_SANITIZER 1
+#endif
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__OPTIMIZE__) && \
+    !defined(ADPARM_ADDRESS_SANITIZER)
+#define ADPARM_FLATTEN [[gnu::flatten]]
+#else
+#define ADPARM_FLATTEN
+#endif
+
 namespace adparm {
 
 // de1 = -alpha1 e1 + e2 is stable only if every eigenvalue of alpha1 has a positive real part.
@@ -413,8 +431,8 @@ class ClosedLoop {
   // schedules an evaluation as one body (measured on the paper loop: 1001 -> 925 ns per RK4 step,
   // the same bits). Fixed sizes only: the dynamic sizes' calls (the dense kernels, Pinocchio, the
   // expression basis) are large and stay calls.
-  [[gnu::flatten]] void flattened_derivative(const TimeSignals& signals, const State& state,
-                                             State& rate, Outputs* outputs, Data& data) const {
+  ADPARM_FLATTEN void flattened_derivative(const TimeSignals& signals, const State& state,
+                                           State& rate, Outputs* outputs, Data& data) const {
     evaluate_derivative(signals, state, rate, outputs, data);
   }
 
