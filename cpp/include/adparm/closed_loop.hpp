@@ -58,8 +58,9 @@
 #include "adparm/trajectory.hpp"
 
 // GCC's and Clang's flatten (ClosedLoop::flattened_derivative) in optimised builds, but not under
-// AddressSanitizer: instrumenting the flattened bodies took GCC over 15 minutes and 8 GB for the
-// bench (bench/sanitize.sh), which then checks the same code with its calls not inlined.
+// AddressSanitizer: instrumenting the flattened bodies had taken GCC 14 minutes and 7.8 GB for the
+// bench (bench/sanitize.sh) when it was stopped; the sanitizer checks the same code, its calls not
+// inlined.
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer)
 #define ADPARM_ADDRESS_SANITIZER 1
