@@ -405,8 +405,9 @@ class ClosedLoop {
     rk4_step(*this, t_begin, t_end, x, x_next, w, outputs, data);
   }
 
-  // The closed loop's right-hand side at one RK4 stage. Fixed sizes (the two-link paper loop):
-  // every call inside it inlined (flattened, below); dynamic sizes as the compiler chooses.
+  // The closed loop's right-hand side at one RK4 stage (evaluate_derivative). Fixed sizes (the
+  // two-link paper loop): every call inside it inlined (flattened, below); dynamic sizes: the
+  // same body, its calls left to the compiler.
   void derivative(const TimeSignals& signals, const State& state, State& rate, Outputs* outputs,
                   Data& data) const {
     if constexpr (kFixed)
