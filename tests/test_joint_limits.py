@@ -155,6 +155,19 @@ def test_a_transient_past_the_limits_is_told_and_its_fix_works() -> None:
     assert _limits_text(plant, task={"qd": qd}) is None
 
 
+def test_joints_past_the_limits_under_clipped_torques_are_not_told_to_move_qd() -> None:
+    # the SO-101 with 0.05 N m on every joint cannot hold its arm: it falls past the position
+    # limits wherever qd lies (here its rest position, and 0); the note said "choose a task.qd
+    # farther from those limits", which does not help: the clipped torque is named instead
+    plant = {**_plant("so101"), "torque_limits": [0.05] * 6}
+    for task in ({}, {"qd": [0.0] * 6}):
+        config = adparm.Config.from_dict({"plant": plant, "task": task, "sim": {"T": 0.5}})
+        text = adparm.simulate(config).diagnostics["position_limits"]
+        assert text is not None and "joint 2 ('shoulder_lift') reached" in text
+        assert "the applied torque was clipped at plant.torque_limits before they went" in text
+        assert "choose a task.qd" not in text
+
+
 def config_low(config: adparm.Config) -> np.ndarray:
     return np.asarray(adparm.urdf.config_arm(config).limits["lower"])
 
@@ -193,7 +206,15 @@ def test_a_probe_on_while_the_joints_went_past_is_named_as_their_cause() -> None
     high = np.asarray(adparm.urdf.config_arm(config).limits["upper"])
     q = np.array(result.q)
     q[-3:, 0] = high[0] + 0.1  # joint 1 past its upper limit over the last rows
-    probed = SimpleNamespace(config=config, t=result.t, q=q, qd=result.qd, probe=result.probe)
+    probed = SimpleNamespace(
+        config=config,
+        t=result.t,
+        q=q,
+        qd=result.qd,
+        probe=result.probe,
+        tau=result.tau,
+        tau_commanded=result.tau_commanded,
+    )
     assert np.any(np.asarray(result.probe)[-3:] != 0.0)
     text = adparm.saturation.position_limits_text(probed)
     assert "joint 1 ('shoulder_pan') reached" in text

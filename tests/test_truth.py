@@ -399,6 +399,48 @@ def test_learning_still_improving_without_w_star_names_no_horizon_it_cannot_back
     assert fixed["verdict"] == "ok", fixed["verdict"]
 
 
+def test_the_best_fit_s_jacobian_is_omega() -> None:
+    """The truth's best fit (hjb_residual_best) takes d eps / d W at Wc = Wa = W as omega, the
+    core's hjb_evaluation (u_hat minimises U(u) + W^T B u, so the actor's share vanishes): checked
+    against central differences of eps(W, W) for the paper's cost, a bounded input (logcosh e2
+    cost, u_hat = -lambda tanh D) and a URDF arm under a moving qd at t = 0.7 s, with weights off
+    W*; eps itself is hjb_residual's, and omega is d eps / d Wc (eps is affine in Wc)."""
+    from adparm import _core
+    from adparm.residual import residual_settings
+
+    rng = np.random.default_rng(5)
+    paper = adparm.paper_config()
+    K = -np.array(paper.cost.Q)[:2, 2:]
+    bounded = paper.updated(
+        {"cost": adparm.saturated_cost(K, paper.control.alpha1, paper.cost.R, 5.0)}
+    )
+    n3 = {"urdf": "examples/arms/planar_3link.urdf"}
+    tracking = _identity_cost(n3).updated(
+        {"task": {"qd": {"kind": "sinusoid", "amplitude": [0.3, 0.2, 0.1], "frequency": [1.0] * 3}}}
+    )
+    for config, t in ((paper, 0.0), (bounded, 0.0), (tracking, 0.7)):
+        settings = residual_settings(config)
+        n = config.dof
+        X = rng.normal(scale=0.5, size=(6, 2 * n))
+        W = adparm.optimal_weights(config) if config is not tracking else None
+        W = (rng.normal(size=config.basis_size) if W is None else W) * rng.uniform(0.5, 1.5)
+        eps, omega = _core.hjb_evaluation(settings, X, W, W, t)
+        assert np.array_equal(eps, _core.hjb_residual(settings, X, W, W, t))
+        assert omega.shape == (len(X), W.size)
+        step = 1e-6 * max(1.0, np.abs(W).max())
+        for k in range(W.size):
+            d = np.zeros(W.size)
+            d[k] = step
+            central = (
+                _core.hjb_residual(settings, X, W + d, W + d, t)
+                - _core.hjb_residual(settings, X, W - d, W - d, t)
+            ) / (2 * step)
+            critic = (_core.hjb_residual(settings, X, W + d, W, t) - eps) / step
+            scale = np.abs(omega).max()
+            assert central == pytest.approx(omega[:, k], abs=1e-6 * scale), (config.cost, k)
+            assert critic == pytest.approx(omega[:, k], abs=1e-7 * scale), (config.cost, k)
+
+
 @pytest.mark.filterwarnings("ignore::adparm.ApproximationWarning")
 def test_a_basis_that_cannot_represent_v_star_on_a_urdf_arm_names_a_change_that_works() -> None:
     """Q = I, R = I on the planar 3-link arm: no weights of the structured basis do better than

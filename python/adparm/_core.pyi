@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'IdentifierSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'two_link_regressors', 'simulate_open_loop', 'urdf_parse_count', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
+__all__: list = ['ArmParameters', 'RiseGains', 'CriticSettings', 'ActorSettings', 'ProbeSettings', 'TrajectoryKind', 'TrajectorySettings', 'TaskSettings', 'ControlSettings', 'ControllerKind', 'ControllerSettings', 'E2Cost', 'BasisKind', 'ExpressionProgram', 'ExtrapolationMode', 'ExtrapolationSettings', 'IdentifierSettings', 'SimSettings', 'UrdfArmSettings', 'Settings', 'paper_settings', 'arm_terms', 'two_link_regressors', 'simulate_open_loop', 'urdf_parse_count', 'UrdfArm', 'UrdfStructuredBasis', 'desired_state', 'basis', 'ExpressionOp', 'ExpressionBasis', 'hjb_residual', 'hjb_evaluation', 'STATE_SIZE', 'closed_loop_derivative', 'initial_state', 'extrapolation_points', 'RECORDED_SERIES', 'Simulation', 'Batch']
 class ArmParameters:
     """
     Two-link arm constants p1 p2 p3 g1 g2 coulomb viscous.
@@ -1092,6 +1092,10 @@ def desired_state(trajectory: TrajectorySettings, t: typing.Annotated[numpy.typi
 def extrapolation_points(settings: Settings) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
     """
     The fixed or grid extrapolation points (N, 2 n) in x (zeros for mode local, whose points are drawn around the state at each step).
+    """
+def hjb_evaluation(settings: Settings, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], critic_weights: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], actor_weights: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> tuple[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"], typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]]:
+    """
+    hjb_residual's HJB error (m,) and each row's omega = (dphi/dx) (f + g u_hat) + (dphi/dqd) dqd (m, K), the regressor of eqs. (21)-(26): d eps / d Wc, and d eps / d W at Wc = Wa = W (u_hat minimises U(u) + W^T B u).
     """
 def hjb_residual(settings: Settings, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], critic_weights: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], actor_weights: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
     """

@@ -177,6 +177,16 @@ def position_limits_text(result: SimulationResult) -> str | None:
             "the task lies within them and the probe was on while they went past: it drove them "
             "(a probe the real arm can take is smaller on those joints, and excites less)"
         )
+    clipped = np.any(np.asarray(result.tau) != np.asarray(result.tau_commanded), axis=1)
+    last_outside = int(np.flatnonzero(outside_rows)[-1])
+    if not causes and np.any(clipped[: last_outside + 1]):
+        # an arm its torque limits cannot hold falls or swings past them wherever qd lies (the
+        # SO-101 with 0.05 N m on every joint, Talos' arm with 0.5 N m)
+        causes.append(
+            "the task lies within them and the applied torque was clipped at "
+            "plant.torque_limits before they went past: the limits let the arm go (a task.qd "
+            "farther from the position limits does not help)"
+        )
     cause = (
         "; ".join(causes)
         if causes

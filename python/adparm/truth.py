@@ -19,8 +19,6 @@ from typing import Any
 
 import numpy as np
 
-import adparm._core as _core
-
 from .basis_family import PaperBasis, UrdfStructuredBasis, basis_for
 from .config import Config
 from .desired import desired_state
@@ -41,7 +39,7 @@ from .identification import (
 )
 from .optimal import basis, lqr_value, optimal_weights, policy
 from .progress import SETTLED_FALL, half_time_index, longer_run_advice, longer_run_estimate
-from .residual import hjb_residual, residual_settings
+from .residual import best_residual, hjb_residual
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
 from .saturation import limits_below_task, position_limits_text, saturation_text
 from .simulation import SimulationDiverged, simulate
@@ -154,28 +152,6 @@ def _relative_residual(
     )
     cost = np.einsum("ni,ij,nj->n", X, Q, X)
     return float(np.sqrt(np.mean(eps**2)) / max(np.sqrt(np.mean(cost**2)), 1e-300))
-
-
-def _best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: float) -> float:
-    """min over W of the relative HJB residual with Wc = Wa = W over the states X (least squares
-    from ``start``): how well the basis can represent V* there."""
-    from scipy.optimize import least_squares
-
-    Q = np.array(config.cost.Q)
-    scale = max(np.sqrt(np.mean(np.einsum("ni,ij,nj->n", X, Q, X) ** 2)), 1e-300)
-    settings = residual_settings(config)  # converted once
-    times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
-    groups = [np.ascontiguousarray(g) for g in np.array_split(X, len(times))]
-
-    def residuals(W: np.ndarray) -> np.ndarray:
-        parts = [
-            _core.hjb_residual(settings, g, W, W, float(t))
-            for g, t in zip(groups, times, strict=True)
-        ]
-        return np.concatenate(parts) / scale
-
-    best = least_squares(residuals, start, method="lm", max_nfev=200)
-    return float(np.sqrt(np.mean(best.fun**2)))
 
 
 def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
@@ -431,7 +407,7 @@ def _diagnose_learning(
         if target is not None:  # the basis represents V* exactly: W* reaches round-off
             best = _relative_residual(config, X_fit, target, target, t_end)
         else:
-            best = _best_residual(config, X_fit, Wc, t_end)
+            best = best_residual(config, X_fit, Wc, t_end)
         out["hjb_residual_best"] = best
         if best > RESIDUAL_TOLERANCE:
             out["approximation"] = "basis"

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <type_traits>
+#include <utility>
 #include <variant>
 
 #include "adparm/any_simulation.hpp"
@@ -670,37 +671,64 @@ void bind_expression_basis(py::module_& m) {
           "(d phi / d qd) dqd (m, N).");
 }
 
+// eqs. (20)-(21) at each row of `states` (m, 2n) with the desired state at time t; each row's
+// eps_hjb into residual[i] and, given `omega` (m x K), its omega into omega.row(i).
+void evaluate_hjb_rows(const Settings& settings, const RowsXX& states,
+                       const Eigen::VectorXd& critic_weights, const Eigen::VectorXd& actor_weights,
+                       double t, Eigen::VectorXd& residual, RowsXX* omega) {
+  check_finite(critic_weights, "critic_weights");
+  check_finite(actor_weights, "actor_weights");
+  check_finite(states, "x");
+  check_finite(t, "t");
+  visit_loop(settings, [&](auto loop_type) {
+    using Loop = typename decltype(loop_type)::type;
+    const Loop loop = make_loop<Loop>(settings, *module_urdfs());
+    check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
+    check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
+    check_size(states, states.rows(), 2 * loop.dof(), "x");
+    const typename Loop::Weights wc = critic_weights, wa = actor_weights;
+    const typename Loop::Desired desired = loop.trajectory()(t);
+    residual.resize(states.rows());
+    if (omega != nullptr) omega->resize(states.rows(), loop.basis_size());
+    py::gil_scoped_release release;
+    for (Eigen::Index i = 0; i < states.rows(); ++i) {
+      const auto evaluation =
+          hjb_evaluation(loop.basis(), loop.error_system(), loop.cost(),
+                         typename Loop::Error(states.row(i).transpose()), desired, wc, wa);
+      residual[i] = evaluation.error;
+      if (omega != nullptr) omega->row(i) = evaluation.omega.transpose();
+    }
+  });
+}
+
 void bind_hjb(py::module_& m) {
   m.def(
       "hjb_residual",
       [](const Settings& settings, const RowsXX& states, const Eigen::VectorXd& critic_weights,
          const Eigen::VectorXd& actor_weights, double t) {
-        check_finite(critic_weights, "critic_weights");
-        check_finite(actor_weights, "actor_weights");
-        check_finite(states, "x");
-        check_finite(t, "t");
-        return visit_loop(settings, [&](auto loop_type) {
-          using Loop = typename decltype(loop_type)::type;
-          const Loop loop = make_loop<Loop>(settings, *module_urdfs());
-          check_size(critic_weights, loop.basis_size(), 1, "critic_weights");
-          check_size(actor_weights, loop.basis_size(), 1, "actor_weights");
-          check_size(states, states.rows(), 2 * loop.dof(), "x");
-          const typename Loop::Weights wc = critic_weights, wa = actor_weights;
-          const typename Loop::Desired desired = loop.trajectory()(t);
-          Eigen::VectorXd residual(states.rows());
-          py::gil_scoped_release release;
-          for (Eigen::Index i = 0; i < states.rows(); ++i)
-            residual[i] =
-                hjb_error(loop.basis(), loop.error_system(), loop.cost(),
-                          typename Loop::Error(states.row(i).transpose()), desired, wc, wa);
-          return residual;
-        });
+        Eigen::VectorXd residual;
+        evaluate_hjb_rows(settings, states, critic_weights, actor_weights, t, residual, nullptr);
+        return residual;
       },
       py::arg("settings"), py::arg("x"), py::arg("critic_weights"), py::arg("actor_weights"),
       py::arg("t"),
       "HJB error of eq. (21) at each row of x (m, 2 n) for weights (K,) of settings.basis, with "
       "the "
       "desired state at time t; returns (n,).");
+  m.def(
+      "hjb_evaluation",
+      [](const Settings& settings, const RowsXX& states, const Eigen::VectorXd& critic_weights,
+         const Eigen::VectorXd& actor_weights, double t) {
+        Eigen::VectorXd residual;
+        RowsXX omega;
+        evaluate_hjb_rows(settings, states, critic_weights, actor_weights, t, residual, &omega);
+        return std::make_pair(std::move(residual), std::move(omega));
+      },
+      py::arg("settings"), py::arg("x"), py::arg("critic_weights"), py::arg("actor_weights"),
+      py::arg("t"),
+      "hjb_residual's HJB error (m,) and each row's omega = (dphi/dx) (f + g u_hat) + (dphi/dqd) "
+      "dqd (m, K), the regressor of eqs. (21)-(26): d eps / d Wc, and d eps / d W at Wc = Wa = W "
+      "(u_hat minimises U(u) + W^T B u).");
 }
 
 void bind_closed_loop(py::module_& m) {

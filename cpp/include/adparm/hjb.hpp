@@ -131,13 +131,14 @@ void prepare_hjb_point(const Basis& basis, const ErrorSystem<Arm>& system,
                                       workspace);
 }
 
-// eq. (21) at an error state x with the desired state `desired`.
+// eqs. (20)-(21) at an error state x with the desired state `desired`: u_hat, omega and eps_hjb.
 template <class Basis, class Arm>
-double hjb_error(const Basis& basis, const ErrorSystem<Arm>& system,
-                 const QuadraticCostT<Arm::kDof>& cost, const ErrorVector<Arm::kDof>& x,
-                 const DesiredStateT<Arm::kDof>& desired,
-                 const typename Basis::Vector& critic_weights,
-                 const typename Basis::Vector& actor_weights) {
+HjbEvaluation<Basis, Arm::kDof> hjb_evaluation(const Basis& basis, const ErrorSystem<Arm>& system,
+                                               const QuadraticCostT<Arm::kDof>& cost,
+                                               const ErrorVector<Arm::kDof>& x,
+                                               const DesiredStateT<Arm::kDof>& desired,
+                                               const typename Basis::Vector& critic_weights,
+                                               const typename Basis::Vector& actor_weights) {
   typename Arm::Terms terms;
   system.model().init_terms(terms);
   BasisWorkspace<Basis> workspace = basis_workspace(basis);
@@ -145,7 +146,17 @@ double hjb_error(const Basis& basis, const ErrorSystem<Arm>& system,
   prepare_hjb_point(basis, system, cost, x, desired, terms, point, workspace);
   HjbEvaluation<Basis, Arm::kDof> evaluation;
   evaluate_hjb(point, cost, critic_weights, actor_weights, evaluation);
-  return evaluation.error;
+  return evaluation;
+}
+
+// eq. (21) at an error state x with the desired state `desired`.
+template <class Basis, class Arm>
+double hjb_error(const Basis& basis, const ErrorSystem<Arm>& system,
+                 const QuadraticCostT<Arm::kDof>& cost, const ErrorVector<Arm::kDof>& x,
+                 const DesiredStateT<Arm::kDof>& desired,
+                 const typename Basis::Vector& critic_weights,
+                 const typename Basis::Vector& actor_weights) {
+  return hjb_evaluation(basis, system, cost, x, desired, critic_weights, actor_weights).error;
 }
 
 }  // namespace adparm
