@@ -46,6 +46,7 @@ LAYERS = {
     "result": 3,
     "divergence": 3,
     "simulation": 3,
+    "transient": 3,
     "table": 3,
     "sweep": 3,
     # 4 analysis: what a run means

@@ -21,6 +21,7 @@ from .rates import (
     rates_text,
 )
 from .result import SimulationResult
+from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, limits_text
 from .translate import extrapolation_points
 from .urdf import config_arm
 
@@ -30,8 +31,15 @@ __all__ = [
     "estimate_jump",
     "extrapolation_shortfall",
     "initial_actor_e2_block",
+    "limits_advice",
     "slow_actor_change",
+    "torque_clipping",
 ]
+
+#: The share of a run's recorded rows with a joint's torque clipped at plant.torque_limits from
+#: which the clipping is named as a diverged run's cause (the SO-101 with 0.05 N m on its wrist
+#: roll and gripper: 93-99 % on every joint before it diverged).
+CLIPPED_SHARE = 0.1
 
 
 def extrapolation_shortfall(config: Config) -> str | None:
@@ -196,11 +204,41 @@ def actor_followed_critic(config: Config, result: SimulationResult) -> str | Non
     )
 
 
+def torque_clipping(result: SimulationResult) -> tuple[str, list[float] | None] | None:
+    """When the applied torque was clipped at plant.torque_limits on some joint over at least
+    CLIPPED_SHARE of the recorded rows: what to say (those joints and shares) and the limits that
+    let the arm through (transient.advised_torque_limits; None where they are the given ones);
+    else None. The theory assumes the commanded torque is applied: no change of the learning
+    helps then."""
+    tau = np.asarray(result.tau, dtype=float)
+    if tau.size == 0:
+        return None
+    share = np.mean(tau != np.asarray(result.tau_commanded, dtype=float), axis=0)
+    joints = np.flatnonzero(share >= CLIPPED_SHARE)
+    if joints.size == 0:
+        return None
+    text = (
+        "the applied torque was clipped at plant.torque_limits on "
+        + ", ".join(f"joint {i + 1} in {100.0 * share[i]:.3g} %" for i in joints)
+        + " of the recorded rows: the limits let the arm go, and no change of the learning helps"
+    )
+    config = result.config
+    advised = advised_torque_limits(config)
+    given = [float(v) for v in config.plant.limit_vector(config.dof)]
+    return text, (advised if advised != given else None)
+
+
+def limits_advice(advised: list[float]) -> str:
+    """The advice of torque_clipping's limits."""
+    return f"raise plant.torque_limits to {limits_text(advised)} ({ADVISED_LIMITS_RULE})"
+
+
 def divergence_causes(config: Config, result: SimulationResult | None = None) -> list[str]:
     """Likely causes of a divergence that the config shows before any run, each with a change
     that is not already in effect: the measured fast rates of the closed loop against RK4's limit
     at sim.dt (rates.closed_loop_rates; a smaller sim.dt that keeps them inside it), given the
-    partial result an actor that followed an unsettled critic (actor_followed_critic), initial
+    partial result torques clipped at plant.torque_limits over much of it (torque_clipping) or
+    else an actor that followed an unsettled critic (actor_followed_critic), initial
     actor weights of the structured basis of a URDF arm whose e2 block is not positive definite
     (only when init.actor_weights is set), fewer extrapolation points than basis functions, and
     first an expression basis term that is not finite at a fixed extrapolation point or (given
@@ -212,6 +250,10 @@ def divergence_causes(config: Config, result: SimulationResult | None = None) ->
     ):
         if problem is not None:  # the first thing to fix: no step size helps
             causes.append(problem)
+    clipping = None if result is None else torque_clipping(result)
+    if clipping is not None:  # the learning ran on torques it did not command
+        text, advised = clipping
+        causes.append(text + ("" if advised is None else f" ({limits_advice(advised)})"))
     jump = None if result is None else estimate_jump(result)
     if jump is not None:
         causes.append(jump)
@@ -225,7 +267,11 @@ def divergence_causes(config: Config, result: SimulationResult | None = None) ->
             f"limit {RK4_STABILITY_LIMIT}/sim.dt = {RK4_STABILITY_LIMIT / dt:.4g}/s (use "
             f'sim.dt = {auto_step(rates, config.sim.T):g}, which sim.dt = "auto" picks)'
         )
-    chase = None if result is None or jump is not None else actor_followed_critic(config, result)
+    chase = (
+        None
+        if result is None or jump is not None or clipping is not None
+        else actor_followed_critic(config, result)
+    )
     if chase is not None:
         causes.append(chase)
     block = initial_actor_e2_block(config)

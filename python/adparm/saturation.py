@@ -5,13 +5,12 @@ all (limits_below_task): the torque the arm needs along the desired trajectory a
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .config import Config
 from .dynamics import task_torque
 from .result import SimulationResult
+from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, limits_text
 from .urdf import config_arm
 
 __all__ = ["limits_below_task", "position_limits_text", "saturation_text"]
@@ -53,19 +52,17 @@ def saturation_text(result: SimulationResult) -> str | None:
     )
 
 
-def _ceil3(value: float) -> float:
-    """value rounded up to three significant digits."""
-    step = 10.0 ** (math.floor(math.log10(value)) - 2)
-    return float(f"{math.ceil(value / step - 1e-9) * step:.3g}")
-
-
 def limits_below_task(config: Config) -> tuple[str, str] | None:
     """(what the verdict adds, the advice) when some joint's limit (plant.torque_limits) is below
     the torque the plant needs on the task: max over the desired trajectory of |M ddqd + C dqd +
     G + F| (dynamics.task_torque) plus the disturbance's amplitude; None otherwise. No change of
-    the learning helps such a run: the UR5 with 5 N m on every joint needs 59.2 N m on its
-    shoulder to hold qd = 0 against gravity; with the limits the advice names (twice the task's
-    torque on the joints short of it, the others as given) the same run ends "ok"."""
+    the learning helps such a run. The advice names limits twice what the arm needs
+    (transient.advised_torque_limits: the task's torque, and the commanded torque of the same run
+    without limits over its first second): the UR5 with 5 N m on every joint needs 59.2 N m on
+    its shoulder to hold qd = 0 against gravity, the SO-101 with 0.05 N m on every joint 0.54 N m
+    on its shoulder, and 0.1-0.13 N m on its base, wrist roll and gripper through the transient
+    (limits raised on the task's joints alone let those spin): with the limits the advice names
+    each run ends "ok"."""
     n = config.dof
     limits = config.plant.limit_vector(n)
     if limits.size == 0:
@@ -79,14 +76,12 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
         f"joint {i + 1} needs {need[i]:.3g} {units[i]} (limit {limits[i]:.3g} {units[i]})"
         for i in short
     )
-    raised = [_ceil3(2.0 * need[i]) if i in short else limits[i] for i in range(n)]
-    text = ", ".join("inf" if math.isinf(v) else f"{v:g}" for v in raised)
     return (
         "the torque limits cannot hold the task (max |M ddqd + C dqd + G + F| over the desired "
         f"trajectory, with the disturbance): {joints}; no controller can follow this task within "
         "them, and no change of the learning helps",
-        f"raise plant.torque_limits to [{text}] (twice the task's torque on the joints short of "
-        "it), or choose a task.qd that needs less torque",
+        f"raise plant.torque_limits to {limits_text(advised_torque_limits(config))} "
+        f"({ADVISED_LIMITS_RULE}), or choose a task.qd that needs less torque",
     )
 
 

@@ -27,8 +27,10 @@ from .divergence import (
     e2_block_min_eigenvalues,
     extrapolation_shortfall,
     initial_actor_e2_block,
+    limits_advice,
     slow_actor_change,
     structured_e2_block_min_eigenvalue,
+    torque_clipping,
 )
 from .identification import (
     estimate_advice,
@@ -213,6 +215,7 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
     (:func:`position_limits_text`: where a URDF arm's joints went past their position limits, None
     when none did), which it adds last."""
     out = _diagnose_learning(result, tolerance=tolerance)
+    learned = out["verdict"] in ("ok", "not a learning run")
     identifier = identifier_diagnosis(result)
     out["identifier"] = identifier
     informative = identifier is not None and identifier["ever_informative"]
@@ -233,6 +236,10 @@ def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dic
         if below is not None:  # no change of learning helps: the limits or the task must change
             out["verdict"] = below[0] + "; " + out["verdict"]  # the cause first
             out["advice"] = [below[1]]
+        elif not learned:  # limits that hold the task, clipped through the transient
+            clipping = torque_clipping(result)
+            if clipping is not None and clipping[1] is not None:
+                out["advice"] = [limits_advice(clipping[1]) + ": " + clipping[0]]
     out["position_limits"] = position_limits_text(result)
     if out["position_limits"] is not None:
         out["verdict"] += "; " + out["position_limits"]
