@@ -171,6 +171,9 @@ class ClosedLoop {
     typename IdentifierType::Data identifier;
     // (optional: a URDF arm has no default)
     std::conditional_t<kIdentifies, std::optional<ErrorSystem<Arm>>, NoTerms> believed;
+    // beta_hat changed at the last end_step (the points are prepared again at the next
+    // begin_step); it is held until the stack is informative (without the gradient term)
+    bool model_changed = false;
     Joint no_probe;  // zero: the probe once the identifier stopped it (identifier.stop_probe)
     // The low-rank RK4 step (step(), low_rank_steps()): each stage's u_s = Gamma_s omega_s
     // (K x 4) and gain g_s, the stage being evaluated (-1: an ordinary evaluation), the previous
@@ -330,8 +333,11 @@ class ClosedLoop {
       const auto& alpha1 = error_system_.alpha1();
       const Joint dq_r = desired.dq + alpha1 * outputs.errors.e1;    // dqd + alpha1 e1
       const Joint ddq_r = desired.ddq + alpha1 * (desired.dq - dq);  // ddqd + alpha1 de1
-      identifier_.update(t, q, dq, outputs.tau, dq_r, ddq_r, outputs.errors.e2, h, data.identifier);
-      data.believed = ErrorSystem<Arm>(identifier_.arm(data.identifier), alpha1);
+      if (identifier_.update(t, q, dq, outputs.tau, dq_r, ddq_r, outputs.errors.e2, h,
+                             data.identifier)) {
+        data.believed = ErrorSystem<Arm>(identifier_.arm(data.identifier), alpha1);
+        data.model_changed = true;
+      }
     }
   }
   const Arm& plant() const { return plant_; }
@@ -359,10 +365,16 @@ class ClosedLoop {
 
   // Called at the start of each step (and before the first evaluation): draws local
   // extrapolation points around the current error state, or prepares fixed ones once (with
-  // identification, again at each step: the believed model, beta_hat's, is held over the step and
-  // changes after it, end_step).
+  // identification, again after each step that changed beta_hat: the believed model is held over
+  // the step and changes after it, end_step; a beta_hat held, as until the stack is informative,
+  // keeps the points prepared, the same numbers).
   void begin_step(double t, const State& state, Data& data) {
-    if (identifies_) extrapolation_.model_changed();
+    if constexpr (kIdentifies) {
+      if (identifies_ && data.model_changed) {
+        extrapolation_.model_changed();
+        data.model_changed = false;
+      }
+    }
     if (!extrapolation_.needs_begin_step()) return;
     const ErrorSystem<Arm>& system = believed_system(data);
     const Eigen::Index n = dof();

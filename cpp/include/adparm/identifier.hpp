@@ -332,7 +332,8 @@ class Identifier {
 
   // After a step: the sample at its start t (q, dq, the applied tau), the reference dq_r, ddq_r
   // and e2 there; h the step's length. Closes a window when due, then updates beta_hat (I2).
-  void update(double t, const Joint& q, const Joint& dq, const Joint& tau, const Joint& dq_r,
+  // Returns whether beta_hat changed.
+  bool update(double t, const Joint& q, const Joint& dq, const Joint& tau, const Joint& dq_r,
               const Joint& ddq_r, const Joint& e2, double h, Data& data) const {
     sample(t, q, dq, tau, data);
     const Eigen::Index p = parameters();
@@ -365,9 +366,11 @@ class Identifier {
       for (Eigen::Index i = 0; i < p; ++i)
         if (selected_[i]) next[i] += h * gain * gradient[i];
     } else {
-      return;  // beta_hat held until the stack is informative
+      return false;  // beta_hat held until the stack is informative
     }
-    if (regressor_.accept(next, q, data.workspace)) data.estimate = next;
+    if (!regressor_.accept(next, q, data.workspace) || next == data.estimate) return false;
+    data.estimate = next;
+    return true;
   }
 
  private:
