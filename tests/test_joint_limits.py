@@ -188,6 +188,11 @@ def test_a_rest_position_the_arm_cannot_hold_gives_way_to_one_it_can() -> None:
     margin = np.minimum(HOME_MARGIN, (high - low) / 4.0)
     qd = np.array(config.task.qd)
     assert np.all(qd >= low + margin - 1e-9) and np.all(qd <= high - margin + 1e-9)
+    # believed 20 % light, the model holds 0 (45 N m) and the plant does not (55.3 N m): the
+    # pose is chosen for both (it was 0, and the run was told "the torque limits cannot hold")
+    light = adparm.Config.from_dict({"plant": plant, "model": {**plant, "scale": 0.8}})
+    assert np.abs(np.array(light.task.qd) - qd).max() < 0.01
+    assert limits_below_task(light) is None
     # an arm that holds its rest position keeps it
     assert adparm.Config.from_dict({"plant": _plant("ur5")}).task.qd == (0.0,) * 6
 

@@ -70,10 +70,12 @@ def default_set_point(config: Any) -> tuple[np.ndarray, str]:
     """task.qd's default on a URDF arm, with its reason: :func:`rest_position` of the plant's
     joint limits; where the arm cannot hold that pose against gravity within its torque limits
     (|G_j| + the disturbance's amplitude above plant.torque_limits, or the URDF's effort, on some
-    joint; G of the believed model), the pose within the same margins that least loads the
-    actuators: min sum_j (G_j(q) / limit_j)^2 by L-BFGS-B from the rest position, if it holds.
-    Baxter's left arm: at 0 its shoulder needs 56.4 N m against its 50; the pose found needs 28 %
-    of every limit, and the run from it ends "ok"."""
+    joint; G of the plant and of the believed model, the larger), the pose within the same
+    margins that least loads the actuators: min sum_j (G_j(q) / limit_j)^2 (summed over both
+    arms) by L-BFGS-B from the rest position, if it holds. Baxter's left arm: at 0 its shoulder
+    needs 56.4 N m against its 50; the pose found needs 28 % of every limit, and the run from it
+    ends "ok". With the believed model's G alone, Baxter believed 20 % light (model.scale = 0.8)
+    held 0 by the model's 45 N m, and its plant could not (55.3 N m)."""
     from scipy.optimize import Bounds, minimize
 
     from .urdf import config_arm
@@ -99,10 +101,14 @@ def default_set_point(config: Any) -> tuple[np.ndarray, str]:
         else np.full(n, DISTURBANCE)
     )
     model = config_arm(config, model=True)
+    arms = (plant,) if model is plant else (plant, model)
     zero, finite = np.zeros(n), np.isfinite(limits)
 
+    def gravities(q: np.ndarray) -> list[np.ndarray]:
+        return [np.asarray(arm.terms(q, zero)["G"], dtype=float) for arm in arms]
+
     def load(q: np.ndarray) -> np.ndarray:
-        return np.abs(np.asarray(model.terms(q, zero)["G"], dtype=float)) + disturbance
+        return np.max(np.abs(gravities(q)), axis=0) + disturbance
 
     if np.all(load(rest)[finite] <= limits[finite]):
         return rest, reason
@@ -113,8 +119,7 @@ def default_set_point(config: Any) -> tuple[np.ndarray, str]:
     )
 
     def objective(q: np.ndarray) -> float:
-        gravity = np.asarray(model.terms(q, zero)["G"], dtype=float)
-        return float(np.sum((gravity[finite] / limits[finite]) ** 2))
+        return float(sum(np.sum((g[finite] / limits[finite]) ** 2) for g in gravities(q)))
 
     found = minimize(objective, rest, method="L-BFGS-B", bounds=box).x
     found = np.clip(np.round(found, 4), box.lb, box.ub) + 0.0  # 0.1 mrad, within the margins

@@ -16,7 +16,13 @@ from .config import Config
 from .dynamics import task_torque
 from .translate import core_settings
 
-__all__ = ["ADVISED_LIMITS_RULE", "TRANSIENT_HORIZON", "advised_torque_limits", "transient_torque"]
+__all__ = [
+    "ADVISED_LIMITS_RULE",
+    "TRANSIENT_HORIZON",
+    "advised_torque_limits",
+    "limits_text",
+    "transient_torque",
+]
 
 #: The first seconds of a run whose commanded torque advised torque limits let through (the
 #: transient from q0 and the probe's start): the SO-101's peaks all fall within its first 0.2 s.
