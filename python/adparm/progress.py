@@ -69,19 +69,26 @@ def reset_window_advice(result: SimulationResult, t_mid: float) -> str | None:
     """For learning that settled away from W*, or crawls towards it, while Gamma was still being
     reset (eq. 24's rule, lambda_min(Gamma) < critic.epsilon_T) over the second half of the run:
     a 10 times lower epsilon_T, which lengthens each least-squares window between resets so that
-    it informs the weakly excited weights (measured with random exact costs from the default
-    weights, bench/every_arm.py: the Kinova of seed 42 levels off 1.15 % from W* with
-    epsilon_T = 1e-5 and ends within 1e-10 with 1e-6; the xArm7 of seed 58, reset every 29 ms,
-    crawls 1.05 -> 1.02 and ends within 1e-5 with 1e-6; docs: truth). None when Gamma was not
-    reset then or epsilon_T is at its floor."""
-    epsilon_t = float(result.config.resolved_epsilon_T)
+    it informs the weakly excited weights, and, with extrapolation points, twice as many (more
+    samples of those weights per evaluation). Measured with random exact costs from the default
+    weights (bench/every_arm.py): the Kinova of seed 42 levels off 1.15 % from W* with
+    epsilon_T = 1e-5, the one of seed 95 1.6 %, and the xArm7 of seed 58, reset every 29 ms,
+    crawls 1.05 -> 1.02. A lower epsilon_T alone ends seeds 42 and 58 "ok" but leaves seed 95 at
+    1.68 % (with 1e-6 and 1e-7); twice the points alone end seeds 42 and 95 "ok" but seed 58 at a
+    non-stabilising solution; both together end all three "ok" (and the Kinova of seed 53; docs:
+    truth). None when Gamma was not reset then or epsilon_T is at its floor."""
+    config = result.config
+    epsilon_t = float(config.resolved_epsilon_T)
     resets = int(np.count_nonzero(np.asarray(result.covariance_reset_times) > t_mid))
     if resets == 0 or not epsilon_t / 10.0 >= EPSILON_T_FLOOR:
         return None
+    points = int(config.extrapolation.points)
+    more = f" and extrapolation.points to {2 * points}" if points > 0 else ""
     return (
-        f"lower critic.epsilon_T to {epsilon_t / 10.0:.3g}: Gamma was reset {resets} times over "
-        "the second half, and longer least-squares windows between resets inform the weights "
-        "the samples excite weakly"
+        f"lower critic.epsilon_T to {epsilon_t / 10.0:.3g}{more}: Gamma was reset {resets} times "
+        "over the second half, and longer least-squares windows between resets"
+        + (", with twice the samples," if points > 0 else "")
+        + " inform the weights the samples excite weakly"
     )
 
 
