@@ -21,7 +21,7 @@ from .rates import (
     rates_text,
 )
 from .result import SimulationResult
-from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, limits_text
+from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, clipped, limits_text
 from .translate import extrapolation_points
 from .urdf import config_arm
 
@@ -210,10 +210,9 @@ def torque_clipping(result: SimulationResult) -> tuple[str, list[float] | None] 
     let the arm through (transient.advised_torque_limits; None where they are the given ones);
     else None. The theory assumes the commanded torque is applied: no change of the learning
     helps then."""
-    tau = np.asarray(result.tau, dtype=float)
-    if tau.size == 0:
+    if np.asarray(result.tau).size == 0:
         return None
-    share = np.mean(tau != np.asarray(result.tau_commanded, dtype=float), axis=0)
+    share = np.mean(clipped(result), axis=0)
     joints = np.flatnonzero(share >= CLIPPED_SHARE)
     if joints.size == 0:
         return None

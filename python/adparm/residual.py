@@ -14,7 +14,7 @@ from .dynamics import check_config, error_states, weight_vector
 from .optimal import basis_names
 from .translate import core_settings
 
-__all__ = ["best_residual", "hjb_residual", "residual_settings"]
+__all__ = ["best_residual", "hjb_residual", "relative_residual", "residual_settings"]
 
 
 def residual_settings(config: Config) -> _core.Settings:
@@ -64,6 +64,33 @@ def hjb_residual(
     return residual.reshape(states.shape[:-1])
 
 
+def _time_groups(config: Config, X: np.ndarray, t_end: float) -> list[tuple[float, np.ndarray]]:
+    """X split over the times its HJB error is taken at: all at 0 for a set-point, else over 8
+    times in [0, t_end] (the desired state enters the HJB error), in order."""
+    times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
+    groups = np.array_split(X, len(times))
+    return [(float(t), np.ascontiguousarray(g)) for t, g in zip(times, groups, strict=True)]
+
+
+def _cost_scale(config: Config, X: np.ndarray) -> float:
+    """rms(x^T Q x) over X: the scale of the relative residuals."""
+    cost = np.einsum("ni,ij,nj->n", X, np.array(config.cost.Q), X)
+    return max(float(np.sqrt(np.mean(cost**2))), 1e-300)
+
+
+def relative_residual(
+    config: Config, X: np.ndarray, Wc: np.ndarray, Wa: np.ndarray, t_end: float = 0.0
+) -> float:
+    """rms(eps) / rms(x^T Q x) over the states X (split over times as in best_residual)."""
+    eps = np.concatenate(
+        [
+            np.atleast_1d(hjb_residual(config, g, Wc, Wa, t=t))
+            for t, g in _time_groups(config, X, t_end)
+        ]
+    )
+    return float(np.sqrt(np.mean(eps**2))) / _cost_scale(config, X)
+
+
 def best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: float) -> float:
     """min over W of the relative HJB residual, rms(eps) / rms(x^T Q x), with Wc = Wa = W over
     the states X (least squares from ``start``; a moving qd: X split over 8 times in [0, t_end]):
@@ -74,20 +101,15 @@ def best_residual(config: Config, X: np.ndarray, start: np.ndarray, t_end: float
     20 s -> 0.5 s)."""
     from scipy.optimize import least_squares
 
-    Q = np.array(config.cost.Q)
-    scale = max(np.sqrt(np.mean(np.einsum("ni,ij,nj->n", X, Q, X) ** 2)), 1e-300)
+    scale = _cost_scale(config, X)
     settings = residual_settings(config)  # converted once
-    times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
-    groups = [np.ascontiguousarray(g) for g in np.array_split(X, len(times))]
+    groups = _time_groups(config, X, t_end)
     last: dict[str, Any] = {}
 
     def evaluate(W: np.ndarray) -> dict[str, Any]:  # residuals and Jacobian, once per W
         key = W.tobytes()
         if last.get("key") != key:
-            parts = [
-                _core.hjb_evaluation(settings, g, W, W, float(t))
-                for g, t in zip(groups, times, strict=True)
-            ]
+            parts = [_core.hjb_evaluation(settings, g, W, W, t) for t, g in groups]
             last["key"] = key
             last["fun"] = np.concatenate([eps for eps, _ in parts]) / scale
             last["jac"] = np.vstack([omega for _, omega in parts]) / scale

@@ -10,7 +10,7 @@ import numpy as np
 from .config import Config
 from .dynamics import task_torque
 from .result import SimulationResult
-from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, limits_text
+from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, clipped, limits_text
 from .urdf import config_arm
 
 __all__ = ["limits_below_task", "position_limits_text", "saturation_text"]
@@ -40,8 +40,7 @@ def saturation_text(result: SimulationResult) -> str | None:
             "commanded torque is applied) was broken, not the learning"
         )
     # a constrained-input controller: was its input inside its bound while clipped?
-    clipped = result.tau != result.tau_commanded
-    inside = np.any(clipped & (np.abs(result.u) <= limit), axis=1)
+    inside = np.any(clipped(result) & (np.abs(result.u) <= limit), axis=1)
     if not np.any(inside):
         return text
     rows = result.t[1] - result.t[0] if result.t.size > 1 else config.sim.dt
@@ -172,9 +171,8 @@ def position_limits_text(result: SimulationResult) -> str | None:
             "the task lies within them and the probe was on while they went past: it drove them "
             "(a probe the real arm can take is smaller on those joints, and excites less)"
         )
-    clipped = np.any(np.asarray(result.tau) != np.asarray(result.tau_commanded), axis=1)
     last_outside = int(np.flatnonzero(outside_rows)[-1])
-    if not causes and np.any(clipped[: last_outside + 1]):
+    if not causes and np.any(clipped(result)[: last_outside + 1]):
         # an arm its torque limits cannot hold falls or swings past them wherever qd lies (the
         # SO-101 with 0.05 N m on every joint, Talos' arm with 0.5 N m)
         causes.append(

@@ -14,12 +14,14 @@ import adparm._core as _core
 
 from .config import Config
 from .dynamics import task_torque
+from .result import SimulationResult
 from .translate import core_settings
 
 __all__ = [
     "ADVISED_LIMITS_RULE",
     "TRANSIENT_HORIZON",
     "advised_torque_limits",
+    "clipped",
     "limits_text",
     "transient_torque",
 ]
@@ -33,6 +35,12 @@ ADVISED_LIMITS_RULE = (
     "twice what the arm needs: the task's torque and the commanded torque over the first "
     f"{TRANSIENT_HORIZON:g} s of the same run without limits; the others as given"
 )
+
+
+def clipped(result: SimulationResult) -> np.ndarray:
+    """Where a run's applied torque was clipped at plant.torque_limits: tau != tau_commanded per
+    recorded row and joint (a SimulationResult's arrays; all False without limits)."""
+    return np.asarray(result.tau, dtype=float) != np.asarray(result.tau_commanded, dtype=float)
 
 
 def transient_torque(config: Config) -> np.ndarray | None:

@@ -41,7 +41,7 @@ from .identification import (
 )
 from .optimal import basis, lqr_value, optimal_weights, policy
 from .progress import SETTLED_FALL, half_time_index, longer_run_advice, longer_run_estimate
-from .residual import best_residual, hjb_residual
+from .residual import best_residual, relative_residual
 from .result import ApproximationWarning, SimulationResult, register, warn_if_approximate
 from .saturation import limits_below_task, position_limits_text, saturation_text
 from .simulation import SimulationDiverged, simulate
@@ -138,24 +138,6 @@ def _explored_states(result: SimulationResult, rng: np.random.Generator) -> np.n
     return rng.uniform(low, high, size=(_SAMPLES, x.shape[1]))
 
 
-def _relative_residual(
-    config: Config, X: np.ndarray, Wc: np.ndarray, Wa: np.ndarray, t_end: float = 0.0
-) -> float:
-    """rms(eps) / rms(x^T Q x) over X; for a moving qd the states are split over 8 times in
-    [0, t_end] (the desired state enters the HJB error)."""
-    Q = np.array(config.cost.Q)
-    times = [0.0] if config.task.is_set_point else np.linspace(0.0, t_end, 8)
-    groups = np.array_split(np.arange(len(X)), len(times))
-    eps = np.concatenate(
-        [
-            np.atleast_1d(hjb_residual(config, X[g], Wc, Wa, t=float(t)))
-            for g, t in zip(groups, times, strict=True)
-        ]
-    )
-    cost = np.einsum("ni,ij,nj->n", X, Q, X)
-    return float(np.sqrt(np.mean(eps**2)) / max(np.sqrt(np.mean(cost**2)), 1e-300))
-
-
 def _policy_error(result: SimulationResult, target: np.ndarray) -> float:
     """rms |u_hat - u*| / rms |u*| over the last 10 % of the recorded rows (at most 200): u_hat
     as recorded (eq. 20 with the g the controller believed: beta_hat's while identifying), u* of
@@ -205,7 +187,7 @@ def _half_time_residual(
         return None
     middle = half_time_index(result.t)
     Wc, Wa = result.critic_weights[middle], result.actor_weights[middle]
-    return _relative_residual(config, X, Wc, Wa, t_end)
+    return relative_residual(config, X, Wc, Wa, t_end)
 
 
 def diagnose(result: SimulationResult, *, tolerance: float | None = None) -> dict[str, Any]:
@@ -326,11 +308,11 @@ def _diagnose_learning(
     rng = np.random.default_rng(_SEED)
     X = _explored_states(result, rng)
     t_end = float(result.t[-1])
-    out["hjb_residual_explored"] = _relative_residual(config, X, Wc, Wa, t_end)
+    out["hjb_residual_explored"] = relative_residual(config, X, Wc, Wa, t_end)
     out["hjb_residual_box"] = None
     if config.extrapolation.points > 0:
         low, high = config.extrapolation.bounds(config.dof)
-        out["hjb_residual_box"] = _relative_residual(
+        out["hjb_residual_box"] = relative_residual(
             config, rng.uniform(low, high, size=(_SAMPLES, low.size)), Wc, Wa, t_end
         )
     tail = result.t >= result.t[0] + 0.9 * (result.t[-1] - result.t[0])
@@ -403,7 +385,7 @@ def _diagnose_learning(
         low, high = config.extrapolation.bounds(config.dof)
         X_fit = np.random.default_rng(_SEED + 1).uniform(low, high, size=(_SAMPLES, low.size))
     residual = (
-        _relative_residual(config, X_fit, Wc, Wa, t_end)
+        relative_residual(config, X_fit, Wc, Wa, t_end)
         if fitted
         else (out["hjb_residual_explored"])
     )
@@ -412,7 +394,7 @@ def _diagnose_learning(
     out["hjb_residual_best"] = None
     if residual > RESIDUAL_TOLERANCE:
         if target is not None:  # the basis represents V* exactly: W* reaches round-off
-            best = _relative_residual(config, X_fit, target, target, t_end)
+            best = relative_residual(config, X_fit, target, target, t_end)
         else:
             best = best_residual(config, X_fit, Wc, t_end)
         out["hjb_residual_best"] = best
