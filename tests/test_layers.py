@@ -41,6 +41,7 @@ LAYERS = {
     "extrapolation_region": 2,
     "rates": 2,
     "config": 2,
+    "units": 2,
     # 3 running: the Config -> core translation, simulate, batch and sweep
     "translate": 3,
     "result": 3,

@@ -512,11 +512,37 @@ def test_a_prismatic_joint_needs_newtons(tmp_path) -> None:
     # the summary names each limit with its unit (a summary without units: N m, as before)
     assert adparm.saturation.effort_units(config) == ["N", "N m"]
     with pytest.warns(adparm.ApproximationWarning, match="cannot hold the task"):
-        short = adparm.simulate(config.updated({"sim": {"T": 0.05}})).summary()
+        run = adparm.simulate(config.updated({"sim": {"T": 0.05}}))
+        short = run.summary()
     assert short["torque_limit_units"] == ["N", "N m"]
     from adparm.summary import summary_markdown
 
     assert "- torque limits 5 N, 5 N m: saturated joint 1" in summary_markdown(short)
+    # positions in m on the slide: the summary, its text and the figures' axes say so
+    assert adparm.units.position_units(config) == short["position_units"] == ["m", "rad"]
+    assert "- final |e1| = " in summary_markdown(short)
+    assert "(rad; m on joint 1) (e1 = " in summary_markdown(short)
+    errors = adparm.plotting.plot_errors(run)
+    assert [a.get_ylabel() for a in errors.axes[:3]] == [
+        "q (rad; m on joint 1)",
+        "$e_1$ (rad; m on joint 1)",
+        "$e_2$ (rad/s; m/s on joint 1)",
+    ]
+    torques = adparm.plotting.plot_torques(run)
+    assert torques.axes[0].get_ylabel() == "torque $\\tau$ (N m; N on joint 1)"
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
     short.pop("torque_limit_units")
     assert "- torque limits 5, 5 N m: saturated" in summary_markdown(short)
     assert adparm.saturation.torque_limits_text([None, 2.0], ["N", "N m"]) == "none, 2 N m"
+
+
+def test_unit_label_names_the_joints_of_another_unit():
+    from adparm.units import norm_unit, unit_label
+
+    assert unit_label(["rad"] * 3) == "rad" and unit_label(["m", "m"], "/s") == "m/s"
+    assert unit_label(["m", "rad", "rad"]) == "rad; m on joint 1"
+    assert unit_label(["rad", "m", "m"], "/s") == "rad/s; m/s on joints 2, 3"
+    assert unit_label(["N", "N m"]) == "N m; N on joint 1"
+    assert norm_unit(["rad", "rad"]) == "rad" and norm_unit(["m", "rad"]) == "(rad; m on joint 1)"

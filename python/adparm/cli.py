@@ -39,6 +39,7 @@ from .simulation import (
     check_memory,
     simulate,
 )
+from .units import norm_unit
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_DIVERGED", "EXIT_WRITE_FAILED", "main"]
 
@@ -349,9 +350,10 @@ def _run_checked(
             f"{claim:.3g} at t = {summary['paper_claim_time']:g} s, " if claim is not None else ""
         )
         before = " (the last finite row, before the divergence)" if diverged else ""
+        unit = norm_unit(summary.get("position_units", ["rad"]))  # "(rad; m on joint 1)"
         print(
             f"critic ||Wc - W*|| / ||W*||: {at_claim}{error_value:.3g} at t = "
-            f"{summary['t_end']:g} s{before}; final |e1| = {summary['final_e1_norm']:.3g} rad"
+            f"{summary['t_end']:g} s{before}; final |e1| = {summary['final_e1_norm']:.3g} {unit}"
         )
     check = summary.get("step_size_check")
     if check is not None:

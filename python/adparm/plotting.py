@@ -52,6 +52,7 @@ from ._figure_style import (
     mark_stop,
 )
 from .identifier_figure import plot_model_parameters
+from .units import effort_units, position_units, unit_label
 from .weight_figures import WEIGHT_UNIT, plot_actor_weights, plot_critic_weights
 
 __all__ = [
@@ -155,9 +156,11 @@ def torque_note(result: SimulationResult) -> str | None:
         "clipped on joint " + ", ".join(clipped) if clipped else "never clipped"
     )
     far = [j for j, v in enumerate(limits) if np.isfinite(v) and v > LIMIT_SCALE * largest]
+    units = effort_units(config)
     for limit in dict.fromkeys(float(limits[j]) for j in far):
         same = [j for j in far if limits[j] == limit]
-        text += f"; off the scale: {_joint_list(same)} at $\\pm${limit:.3g} N m"
+        unit = unit_label([units[j] for j in same])
+        text += f"; off the scale: {_joint_list(same)} at $\\pm${limit:.3g} {unit}"
     return text
 
 
@@ -182,11 +185,13 @@ def plot_errors(
     -------
     matplotlib.figure.Figure
     """
+    units = position_units(result.config)  # "m" on a prismatic joint
+    position, rate = unit_label(units), unit_label(units, "/s")
     panels = [
-        _joint_panel(result, result.q, "q (rad)", "$q_{j}$", annotate_probe=True),
-        _joint_panel(result, result.e1, "$e_1$ (rad)", "$e_{{1,{j}}}$"),
-        _joint_panel(result, result.e2, "$e_2$ (rad/s)", "$e_{{2,{j}}}$"),
-        _joint_panel(result, result.e1, "$|e_1|$ (rad)", "$|e_{{1,{j}}}|$", log=True),
+        _joint_panel(result, result.q, f"q ({position})", "$q_{j}$", annotate_probe=True),
+        _joint_panel(result, result.e1, f"$e_1$ ({position})", "$e_{{1,{j}}}$"),
+        _joint_panel(result, result.e2, f"$e_2$ ({rate})", "$e_{{2,{j}}}$"),
+        _joint_panel(result, result.e1, f"$|e_1|$ ({position})", "$|e_{{1,{j}}}|$", log=True),
     ]
     title = figure_title("Joint angles and tracking errors (Figure 4)", result)
     return draw(panels, ax=ax, fig=fig, height=6.4, title=title)
@@ -224,18 +229,23 @@ def plot_torques(
     """
     config = result.config
     limits = config.plant.limit_vector(config.dof)
+    effort = unit_label(effort_units(config))  # "N" on a prismatic joint
     panels = [
         _joint_panel(
             result,
             result.tau,
-            "torque $\\tau$ (N m)",
+            f"torque $\\tau$ ({effort})",
             "$\\tau_{j}$",
             annotate_probe=True,
             note=torque_note(result),
             limits=limits if limits.size else None,
         ),
         _joint_panel(
-            result, result.probe, "probing signal (N m)", "probe$_{j}$", note=probe_note(result)
+            result,
+            result.probe,
+            f"probing signal ({effort})",
+            "probe$_{j}$",
+            note=probe_note(result),
         ),
     ]
     title = figure_title("Applied torques and probing signal", result)
@@ -265,16 +275,18 @@ def probe_note(result: SimulationResult) -> str | None:
     long_enough = float(result.t[on][-1] - result.t[on][0]) >= slowest
     rms = np.sqrt(np.mean(probe**2, axis=0))[joints]
     tau_rms = np.sqrt(np.mean(tau**2, axis=0))[joints]
+    units = [u for u, on in zip(effort_units(result.config), joints, strict=True) if on]
     if rms.size <= 3:
-        sizes = (
-            "probe "
-            + ", ".join(f"{v:.3g}" for v in rms)
-            + " N m, $\\tau$ "
-            + ", ".join(f"{v:.3g}" for v in tau_rms)
-            + " N m"
-        )
+
+        def listed(values: np.ndarray) -> str:  # "100, 32.5 N m"; "100 N, 32.5 N m" when mixed
+            if len(set(units)) == 1:
+                return ", ".join(f"{v:.3g}" for v in values) + f" {units[0]}"
+            return ", ".join(f"{v:.3g} {u}" for v, u in zip(values, units, strict=True))
+
+        sizes = f"probe {listed(rms)}, $\\tau$ {listed(tau_rms)}"
     else:
-        sizes = f"probe up to {rms.max():.3g} N m, $\\tau$ up to {tau_rms.max():.3g} N m"
+        unit = unit_label(units)
+        sizes = f"probe up to {rms.max():.3g} {unit}, $\\tau$ up to {tau_rms.max():.3g} {unit}"
     head = (
         "The probe is part of u, and $\\tau = \\hat h + \\mu - u$: the feedforward $\\hat h$ "
         "and RISE's $\\mu$ follow the motion it causes\n"
@@ -310,10 +322,11 @@ LEARNING_STYLES = {
 }
 
 
-def _compare_panels(joints: int) -> list[tuple[str, int, str]]:
-    """(result attribute, joint, y label) of each row: e1 of every joint, then tau."""
-    return [("e1", j, f"$e_{{1,{j + 1}}}$ (rad)") for j in range(joints)] + [
-        ("tau", j, f"$\\tau_{j + 1}$ (N m)") for j in range(joints)
+def _compare_panels(positions: list[str], efforts: list[str]) -> list[tuple[str, int, str]]:
+    """(result attribute, joint, y label) of each row: e1 of every joint, then tau (units per
+    joint: rad and N m, m and N on a prismatic joint)."""
+    return [("e1", j, f"$e_{{1,{j + 1}}}$ ({u})") for j, u in enumerate(positions)] + [
+        ("tau", j, f"$\\tau_{j + 1}$ ({u})") for j, u in enumerate(efforts)
     ]
 
 
@@ -329,7 +342,8 @@ def _draw_compare_limit(axes: Axes, group: dict[str, SimulationResult], joint: i
     limit = float(limits[joint])
     largest = max((float(np.abs(r.tau[:, joint]).max()) for r in results if r.t.size), default=0)
     if limit > LIMIT_SCALE * largest:
-        axes.set_title(f"limit $\\pm${limit:.3g} N m (off scale)", fontsize=7, loc="right")
+        unit = effort_units(config)[joint]
+        axes.set_title(f"limit $\\pm${limit:.3g} {unit} (off scale)", fontsize=7, loc="right")
         return
     for sign in (1.0, -1.0):
         line = axes.axhline(sign * limit, color="0.4", ls=(0, (5, 2)), lw=0.9, alpha=0.8)
@@ -384,8 +398,12 @@ def plot_comparison(
     learning = {label: r for label, r in results.items() if label in LEARNING_STYLES}
     others = {label: r for label, r in results.items() if label not in LEARNING_STYLES}
     groups = [g for g in (learning, others) if g]
-    joints = next(iter(results.values())).q.shape[1] if results else 2
-    panels = _compare_panels(joints)
+    config = next(iter(results.values())).config if results else None
+    panels = (
+        _compare_panels(position_units(config), effort_units(config))
+        if config is not None
+        else _compare_panels(["rad"] * 2, ["N m"] * 2)
+    )
     rows = len(panels)
     with matplotlib.rc_context(RC):
         if ax is not None:

@@ -89,13 +89,14 @@ class SimulationResult:
     t : ndarray, shape (n,)
         Time (s).
     q, dq : ndarray, shape (n, 2)
-        Joint angles (rad) and velocities (rad/s).
+        Joint angles (rad; m on a prismatic joint) and velocities (rad/s; m/s).
     qd : ndarray, shape (n, 2)
-        Desired joint angles (rad).
+        Desired joint angles (rad; m on a prismatic joint).
     e1, e2 : ndarray, shape (n, 2)
         Tracking error e1 = qd - q (rad) and filtered error e2 = de1 + alpha1 e1 (rad/s).
     tau : ndarray, shape (n, 2)
-        Applied torque (N m): the commanded torque clipped to ``plant.torque_limits``.
+        Applied torque (N m; a force in N on a prismatic joint): the commanded torque clipped
+        to ``plant.torque_limits``.
     tau_commanded : ndarray, shape (n, 2)
         The controller's torque h_hat + mu - u before the clip (N m; equal to ``tau`` without
         limits).

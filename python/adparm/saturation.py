@@ -11,6 +11,7 @@ from .config import Config
 from .dynamics import task_torque
 from .result import SimulationResult
 from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, clipped, limits_text
+from .units import effort_units
 from .urdf import config_arm
 
 __all__ = ["limits_below_task", "position_limits_text", "saturation_text"]
@@ -82,13 +83,6 @@ def limits_below_task(config: Config) -> tuple[str, str] | None:
         f"raise plant.torque_limits to {limits_text(advised_torque_limits(config))} "
         f"({ADVISED_LIMITS_RULE}), or choose a task.qd that needs less torque",
     )
-
-
-def effort_units(config: Config) -> list[str]:
-    """Per joint, the unit of its torque: "N m", or "N" (a force) on a prismatic joint."""
-    if config.plant.urdf is None:
-        return ["N m"] * config.dof
-    return ["N" if kind == "prismatic" else "N m" for kind in config_arm(config).joint_types]
 
 
 def torque_limit_values(config: Config) -> list[float | None] | None:

@@ -16,8 +16,9 @@ from .config import Config, paper_config
 from .identification import judged_config
 from .optimal import basis_names, optimal_weights
 from .result import SimulationResult, post_run_failure, register, stop_time
-from .saturation import effort_units, torque_limit_values, torque_limits_text
+from .saturation import torque_limit_values, torque_limits_text
 from .truth import diagnose
+from .units import effort_units, norm_unit, position_units
 
 __all__ = [
     "PAPER_CLAIM_TIME",
@@ -333,6 +334,7 @@ def summarize(
         "optimal_weights": None if target is None else target.tolist(),
         "final_e1": result.e1[-1].tolist() if t.size else None,
         "final_e1_norm": _number(np.linalg.norm(result.e1[-1])) if t.size else None,
+        "position_units": position_units(result.config),
         "accumulated_cost": accumulated_cost(result),
         "accumulated_cost_without_probe": accumulated_cost(result, include_probe=False),
         "covariance_resets": result.covariance_resets,
@@ -464,8 +466,9 @@ def stop_line(summary: dict[str, Any]) -> str | None:
                 else ""
             )
         )
+    unit = norm_unit(summary.get("position_units", ["rad"]))  # "(rad; m on joint 1)"
     e1 = (
-        f"final |e1| = {_fmt(summary['final_e1_norm'])} rad at the last finite row "
+        f"final |e1| = {_fmt(summary['final_e1_norm'])} {unit} at the last finite row "
         f"(t = {_fmt(last)} s)"
     )
     if status == "diverged":
@@ -490,10 +493,12 @@ def summary_markdown(summary: dict[str, Any]) -> str:
     stopped = stop_line(summary)
     if stopped is not None:
         lines += [stopped, ""]
+    unit = norm_unit(summary.get("position_units", ["rad"]))
     lines += [
         f"- status: {summary['status']}, simulated to t = {_fmt(summary['t_end'])} s, "
         f"wall time {_fmt(summary['wall_time'])} s",
-        f"- final |e1| = {_fmt(summary['final_e1_norm'])} rad (e1 = {_fmt(summary['final_e1'])})",
+        f"- final |e1| = {_fmt(summary['final_e1_norm'])} {unit} "
+        f"(e1 = {_fmt(summary['final_e1'])})",
         f"- accumulated cost of eq. (10): {_fmt(summary['accumulated_cost'])} with u = u_hat + "
         f"probe, {_fmt(summary['accumulated_cost_without_probe'])} with the actor's u_hat alone",
         f"- covariance resets: {summary['covariance_resets']}",
