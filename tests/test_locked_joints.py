@@ -219,6 +219,31 @@ def test_physically_impossible_urdfs_are_refused(tmp_path, old, new, message) ->
         adparm.Config.from_dict({"plant": {"urdf": str(PLANAR)}, "model": {"urdf": str(path)}})
 
 
+def test_a_link_that_never_moves_is_not_checked(tmp_path) -> None:
+    """A link fixed to the base (TIAGo's antennas), or beyond joints all locked, never moves and
+    its inertia never enters the dynamics: a physically impossible one is not refused there,
+    and is refused where a joint moves it."""
+    antenna = (
+        '<link name="antenna"><inertial><mass value="0.01"/><inertia ixx="-1e-8" ixy="0" '
+        'ixz="0" iyy="3.5e-8" iyz="0" izz="9e-8"/></inertial></link>'
+    )
+
+    def mounted_on(parent: str) -> Path:
+        mount = (
+            f'<joint name="antenna_mount" type="fixed"><parent link="{parent}"/>'
+            '<child link="antenna"/></joint>'
+        )
+        return broken_planar(
+            tmp_path, '<link name="base_link"/>', f'<link name="base_link"/>{antenna}{mount}'
+        )
+
+    assert adparm.UrdfArm(mounted_on("base_link")).dof == 3
+    message = "link 'antenna' has an inertia that is not positive semi-definite"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        adparm.UrdfArm(mounted_on("link1"))
+    assert adparm.UrdfArm(mounted_on("link1"), locked_joints={"shoulder": 0.5}).dof == 2
+
+
 def test_the_shipped_arms_pass_the_physical_checks() -> None:
     for path in sorted(ARMS.glob("*.urdf")):
         assert adparm.UrdfArm(path).dof >= 2

@@ -105,12 +105,31 @@ std::string moments_text(const Eigen::Vector3d& moments) {
   return text.str();
 }
 
-// Each link's <inertial> as the URDF declares it: mass >= 0, an inertia (about the centre of
-// mass) positive semi-definite and meeting the triangle inequality of its principal moments.
-// A link without mass and inertia (a frame) passes.
-void check_links(const ::urdf::ModelInterface& tree, const std::string& source) {
+// Whether a joint of the path from `link` to the root moves it: a revolute, continuous or
+// prismatic joint not locked. A link fixed (or locked) to the root never moves, and its inertia
+// never enters the dynamics (TIAGo's antennas, fixed to its base).
+bool moves(const ::urdf::ModelInterface& tree, const ::urdf::Link& link,
+           const LockedJoints& locked) {
+  const ::urdf::Link* current = &link;
+  while (current != nullptr && current->parent_joint) {
+    const ::urdf::Joint& joint = *current->parent_joint;
+    const bool is_locked = std::any_of(
+        locked.begin(), locked.end(), [&](const auto& entry) { return entry.first == joint.name; });
+    if (movable(joint.type) && !is_locked) return true;
+    const auto parent = tree.links_.find(joint.parent_link_name);
+    current = parent == tree.links_.end() ? nullptr : parent->second.get();
+  }
+  return false;
+}
+
+// Each moving link's <inertial> as the URDF declares it (`locked`: the joints locked): mass >= 0,
+// an inertia (about the centre of mass) positive semi-definite and meeting the triangle
+// inequality of its principal moments. A link without mass and inertia (a frame) passes, and so
+// does a link that never moves (moves()).
+void check_links(const ::urdf::ModelInterface& tree, const LockedJoints& locked,
+                 const std::string& source) {
   for (const auto& [name, link] : tree.links_) {
-    if (!link || !link->inertial) continue;
+    if (!link || !link->inertial || !moves(tree, *link, locked)) continue;
     const ::urdf::Inertial& inertial = *link->inertial;
     const double mass = inertial.mass;
     if (!std::isfinite(mass) || mass < 0.0)
@@ -318,7 +337,6 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
                            "supported");
     }
   }
-  check_links(*tree, source);
   auto impl = std::make_unique<PinocchioArm::Impl>();
   impl->source = source;
   impl->kinematics = std::make_shared<const char>('\0');
@@ -329,6 +347,7 @@ std::unique_ptr<PinocchioArm::Impl> build(const std::string& xml, const std::str
     refuse(source, std::string("Pinocchio could not build a model: ") + error.what());
   }
   impl->locked = resolve_locked(*tree, full, locked, source);
+  check_links(*tree, impl->locked, source);
   if (impl->locked.empty()) {
     impl->model = full;
   } else {

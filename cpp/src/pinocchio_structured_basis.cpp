@@ -160,7 +160,8 @@ PinocchioStructuredBasis::PinocchioStructuredBasis(const PinocchioArm& arm)
   if (n > kMaxDof)
     throw std::invalid_argument("controller.basis: the structured basis of " + arm.source() +
                                 " has " + std::to_string(n) + " joints; the core supports 1 to " +
-                                std::to_string(kMaxDof));
+                                std::to_string(kMaxDof) +
+                                ": lock joints (plant.locked_joints) to learn on the others");
   Impl& s = *impl_;
   const pinocchio::Model& model = s.arm->model;
   for (pinocchio::JointIndex i = 1; i < static_cast<pinocchio::JointIndex>(model.njoints); ++i)

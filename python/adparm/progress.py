@@ -92,9 +92,14 @@ def reset_window_advice(result: SimulationResult, t_mid: float) -> str | None:
     )
 
 
-#: A longer run is suggested only up to this many times the run's horizon (beyond, learning is
-#: too slow for a longer run to be the remedy).
+#: A longer run is suggested only up to this many times the run's horizon, or up to
+#: LONGER_RUN_FLOOR seconds (beyond both, learning is too slow for a longer run to be the remedy).
 LONGER_RUN_LIMIT = 20.0
+
+#: The horizon a longer run may always reach: a short run's 20 times is no sign of slow learning
+#: (TIAGo's arm from its defaults, run for 1 s, needs 50 s, as its 4 s and 10 s runs say; it was
+#: told to change critic.epsilon_T and extrapolation.points).
+LONGER_RUN_FLOOR = 120.0
 
 
 def longer_run_advice(
@@ -121,7 +126,8 @@ def longer_run_advice(
             f"last 10 % of the run (from {window:.3g} s), while they were still settling: sim.T = "
             f"{nice_ceil(2.0 * estimate['t_end']):g} s takes it after they settled"
         )
-    if math.isfinite(estimate["T"]) and estimate["T"] <= LONGER_RUN_LIMIT * result.config.sim.T:
+    longest = max(LONGER_RUN_LIMIT * result.config.sim.T, LONGER_RUN_FLOOR)
+    if math.isfinite(estimate["T"]) and estimate["T"] <= longest:
         return (
             f"run longer: {progress}; at that rate sim.T = {estimate['T']:g} s reaches the "
             "tolerance (an estimate with a margin of 1.5)"
@@ -135,8 +141,9 @@ def longer_run_advice(
         advice = (
             f"learning is slow: {progress}; at that rate the tolerance needs about "
             f"{estimate['needed']:.3g} s more (sim.T = {estimate['T']:g} s, over "
-            f"{LONGER_RUN_LIMIT:g} times this run's); likely some direction of the weights is "
-            "barely informed by the samples (the cost R, the extrapolation box or the basis)"
+            f"{LONGER_RUN_LIMIT:g} times this run's and {LONGER_RUN_FLOOR:g} s); likely some "
+            "direction of the weights is barely informed by the samples (the cost R, the "
+            "extrapolation box or the basis)"
         )
     windows = reset_window_advice(result, estimate["t_mid"])
     return advice + ("; " + windows if windows else "")

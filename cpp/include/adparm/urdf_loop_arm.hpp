@@ -40,7 +40,8 @@ class UrdfLoopArm {
     if (arm_.dof() > kMaxDof)
       throw std::invalid_argument((field.empty() ? "" : field + ": ") + "the arm has " +
                                   std::to_string(arm_.dof()) + " joints; the core supports 1 to " +
-                                  std::to_string(kMaxDof));
+                                  std::to_string(kMaxDof) +
+                                  ": lock joints (plant.locked_joints) to move the others");
   }
 
   // The same arm with the inertias and friction of `estimate` (the online identifier's,
