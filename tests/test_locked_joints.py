@@ -244,6 +244,18 @@ def test_a_link_that_never_moves_is_not_checked(tmp_path) -> None:
     assert adparm.UrdfArm(mounted_on("link1"), locked_joints={"shoulder": 0.5}).dof == 2
 
 
+def test_an_arm_with_more_joints_than_the_core_supports_is_told_to_lock_some() -> None:
+    """TIAGo with its hand: 48 joints (the core supports 12); the message names the field that
+    makes it an arm the core can run."""
+    try:
+        urdf = adparm.example_robot_urdf("tiago_description/robots/tiago.urdf")
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    message = "has 48 joints; the core supports 1 to 12: lock joints (plant.locked_joints)"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        adparm.Config.from_dict({"plant": {"urdf": str(urdf)}})
+
+
 def test_the_shipped_arms_pass_the_physical_checks() -> None:
     for path in sorted(ARMS.glob("*.urdf")):
         assert adparm.UrdfArm(path).dof >= 2

@@ -52,7 +52,13 @@ def longer_run_estimate(
     t_end = float(t[-1])
     middle = half_time_index(t)
     e_mid, e_end = float(error[middle]), float(error[-1])
-    out = {"error_mid": e_mid, "error_end": e_end, "t_mid": float(t[middle]), "t_end": t_end}
+    out = {
+        "error_start": float(error[0]),
+        "error_mid": e_mid,
+        "error_end": e_end,
+        "t_mid": float(t[middle]),
+        "t_end": t_end,
+    }
     if not (e_end < (1.0 - SETTLED_FALL) * e_mid) or not math.isfinite(e_end) or t_end <= t[middle]:
         return {**out, "needed": math.inf, "T": math.inf}
     rate = math.log(e_mid / e_end) / (t_end - float(t[middle]))
@@ -101,6 +107,12 @@ LONGER_RUN_LIMIT = 20.0
 #: told to change critic.epsilon_T and extrapolation.points).
 LONGER_RUN_FLOOR = 120.0
 
+#: A run whose weights barely moved from their start (under SETTLED_FALL) may have ended before
+#: learning started: it is told this many times its horizon (up to LONGER_RUN_FLOOR), not that a
+#: longer run will not help. TIAGo's arm with its hand locked: 0.95 -> 0.94 over its first second
+#: (Gamma reset 21 times), 0.03 at 6 s, "ok" at 10 s.
+UNSTARTED_SCALE = 10.0
+
 
 def longer_run_advice(
     result: SimulationResult,
@@ -133,6 +145,13 @@ def longer_run_advice(
             "tolerance (an estimate with a margin of 1.5)"
         )
     if not math.isfinite(estimate["T"]):
+        start, horizon = estimate["error_start"], nice_ceil(UNSTARTED_SCALE * estimate["t_end"])
+        if estimate["error_end"] >= (1.0 - SETTLED_FALL) * start and horizon <= LONGER_RUN_FLOOR:
+            return (
+                f"run longer: learning had not started: the weights' error went from {start:.3g} "
+                f"at t = 0 to {estimate['error_end']:.3g} at {estimate['t_end']:.3g} s (a run "
+                f"this short can end before it starts); sim.T = {horizon:g} s shows whether it does"
+            )
         advice = (
             f"a longer run will not help: {progress} (under {100 * SETTLED_FALL:g} % progress "
             "over the second half of the run)"
