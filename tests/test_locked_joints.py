@@ -244,6 +244,28 @@ def test_a_link_that_never_moves_is_not_checked(tmp_path) -> None:
     assert adparm.UrdfArm(mounted_on("link1"), locked_joints={"shoulder": 0.5}).dof == 2
 
 
+@pytest.mark.parametrize("declared", [True, False])
+def test_a_xacro_file_is_told_to_be_expanded_first(tmp_path, declared) -> None:
+    """A ROS package's arm.urdf.xacro given as the URDF: its ${m} would read as text (urdfdom:
+    a massless link); the message names xacro, which expands it (checked by hand with PyPI's
+    xacro 2.1.1: the arm.urdf it writes runs)."""
+    namespace = ' xmlns:xacro="http://www.ros.org/wiki/xacro"' if declared else ""
+    text = PLANAR.read_text().replace('<mass value="2.0"/>', '<mass value="${m}"/>', 1)
+    text = text.replace("<robot ", f"<robot{namespace} ", 1)
+    text = text.replace(
+        '<link name="base_link"/>',
+        '<xacro:property name="m" value="2"/><link name="base_link"/>',
+        1,
+    )
+    path = tmp_path / "planar.urdf.xacro"
+    path.write_text(text)
+    message = f"URDF {path} is a xacro file"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        adparm.Config.from_dict({"plant": {"urdf": str(path)}})
+    with pytest.raises(ValueError, match=re.escape(f"xacro {path} > arm.urdf")):
+        adparm.UrdfArm(path)
+
+
 def test_an_arm_with_more_joints_than_the_core_supports_is_told_to_lock_some() -> None:
     """TIAGo with its hand: 48 joints (the core supports 12); the message names the field that
     makes it an arm the core can run."""

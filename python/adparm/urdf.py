@@ -108,6 +108,13 @@ _INERTIAL_NUMBERS = {
 }
 
 
+#: A xacro file: urdfdom would read its ${...} as text (a link without mass) or not at all.
+_XACRO = (
+    "URDF {path} is a xacro file (xacro: elements or ${{...}} expressions), not a URDF: expand it "
+    "first (`pip install xacro`, then `xacro {path} > arm.urdf`) and give the arm.urdf it writes"
+)
+
+
 def check_inertial_text(path: str | os.PathLike[str]) -> None:
     """Refuses (ValueError naming the file and the link) an <inertial> element whose numbers do
     not read as finite floats: urdfdom prints a warning (e.g. "mass [2,0] is not a float") and
@@ -116,7 +123,15 @@ def check_inertial_text(path: str | os.PathLike[str]) -> None:
     try:
         root = ElementTree.parse(path).getroot()
     except (OSError, ElementTree.ParseError):
+        if str(path).endswith(".xacro"):  # xacro:... without its namespace declared
+            raise ValueError(_XACRO.format(path=path)) from None
         return  # the core refuses what it cannot read or parse, with its own reason
+    if any(
+        element.tag.startswith("{http://www.ros.org/wiki/xacro}")
+        or any("${" in value for value in element.attrib.values())
+        for element in root.iter()
+    ):
+        raise ValueError(_XACRO.format(path=path))
     for link in root.iter("link"):
         for inertial in link.findall("inertial"):
             name = link.get("name", "?")
