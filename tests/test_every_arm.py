@@ -306,8 +306,7 @@ def test_a_run_that_ended_before_learning_started_is_told_a_longer_one() -> None
     """TIAGo's arm with its hand (every other joint locked, 43 of 50): over its first second Gamma
     is reset 21 times and the weights' error barely moves (0.95 -> 0.94: under SETTLED_FALL, as
     a settled run's), then falls (0.03 at 6 s). A 1 s run was told "a longer run will not help";
-    it is told that learning had not started and ten times the horizon, with which it ends
-    "ok"."""
+    it is told "no progress yet" and ten times the horizon, with which it ends "ok"."""
     pin = pytest.importorskip("pinocchio")
     try:
         urdf = adparm.example_robot_urdf("tiago_description/robots/tiago.urdf")
@@ -326,7 +325,7 @@ def test_a_run_that_ended_before_learning_started_is_told_a_longer_one() -> None
     assert config.dof == 7
     with pytest.warns(adparm.ApproximationWarning):
         advice = " ".join(adparm.simulate(config).diagnostics["advice"])
-    assert advice.startswith("run longer: learning had not started"), advice
+    assert advice.startswith("run longer: no progress yet"), advice
     horizon = float(re.search(r"sim\.T = ([0-9.]+) s shows", advice).group(1))
     assert horizon == 10.0
     longer = adparm.simulate(config.updated({"sim": {"T": horizon}}))

@@ -21,6 +21,7 @@ LAYERS = {
     "_examples": 0,
     "physical": 0,
     "urdf": 0,
+    "urdf_text": 0,
     "urdf_payload": 0,
     "joint_limits": 0,
     "term_checks": 0,

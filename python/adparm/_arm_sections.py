@@ -82,7 +82,7 @@ def _urdf_info(
     path: str, mtime_ns: int, size: int, locked: LockedPairs = ()
 ) -> tuple[int, tuple[str, ...]]:
     """(n, joint names) of a URDF read by the core (once per file version and locked joints),
-    after the checks of the text of its <inertial> elements (urdf.check_inertial_text)."""
+    after the checks of the text of its <inertial> elements (urdf_text.check_inertial_text)."""
     arm = shared_arm(path, locked_joints=dict(locked))
     return arm.dof, tuple(arm.joint_names)
 
