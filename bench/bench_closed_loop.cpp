@@ -1203,11 +1203,12 @@ int run_paper_port(double horizon, long pairs) {
   };
   std::printf(
       "bench=paper_port_median pairs=%ld adparm_ns_per_step=%.1f port_ns_per_step=%.1f "
-      "ratio=%.3f ratio_min=%.3f ratio_max=%.3f kernels=%s\n",
+      "ratio=%.3f ratio_min=%.3f ratio_max=%.3f kernels=%s evaluation=%s\n",
       pairs, median(adparm_ns), median(port_ns), median(ratios),
       *std::min_element(ratios.begin(), ratios.end()),
       *std::max_element(ratios.begin(), ratios.end()),
-      adparm::dense_kernels_name(adparm::select_dense_kernels()));
+      adparm::dense_kernels_name(adparm::select_dense_kernels()),
+      adparm::vector_loop_available() ? "avx512" : "portable");  // vector_loop.hpp
   return 0;
 }
 

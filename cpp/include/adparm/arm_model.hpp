@@ -104,9 +104,11 @@ class TwoLinkArm {
   static void init_terms(Terms&) {}
 
   void compute(const Vec2& q, const Vec2& dq, Terms& terms) const {
+    compute(dq, std::cos(q[0]), std::sin(q[0]), std::cos(q[1]), std::sin(q[1]), terms);
+  }
+  // The same from cos and sin of q1 and q2 (the vector loop's, vector_loop.hpp).
+  void compute(const Vec2& dq, double c1, double s1, double c2, double s2, Terms& terms) const {
     const Parameters& p = parameters_;
-    const double c2 = std::cos(q[1]);
-    const double s2 = std::sin(q[1]);
     terms.cos_q2 = c2;
     terms.sin_q2 = s2;
     const double m11 = p.p1 + 2.0 * p.p3 * c2;
@@ -118,7 +120,6 @@ class TwoLinkArm {
         m11 * inverse_det;
     const double h = p.p3 * s2;
     terms.coriolis << -h * dq[1], -h * (dq[0] + dq[1]), h * dq[0], 0.0;
-    const double c1 = std::cos(q[0]), s1 = std::sin(q[0]);
     const double c12 = c1 * c2 - s1 * s2;  // cos(q1 + q2): two sincos calls in all, not three
     terms.gravity << p.g1 * c1 + p.g2 * c12, p.g2 * c12;
     terms.friction = p.coulomb * sign(dq) + p.viscous * dq;

@@ -56,6 +56,7 @@
 #include "adparm/rk4.hpp"
 #include "adparm/settings.hpp"
 #include "adparm/trajectory.hpp"
+#include "adparm/vector_loop.hpp"
 
 // GCC's and Clang's flatten (ClosedLoop::flattened_derivative) in optimised builds, but not under
 // AddressSanitizer: instrumenting the flattened bodies had taken GCC 14 minutes and 7.8 GB for the
@@ -105,6 +106,9 @@ class ClosedLoop {
   static constexpr int kDof = Arm::kDof;
   static constexpr int kBasisSize = Basis::kSize;
   static constexpr bool kFixed = kDof != Dynamic && kBasisSize != Dynamic;
+  // The AVX-512 evaluation of vector_loop.hpp: the two-link arm with the augmented basis.
+  static constexpr bool kVectorLoop = ADPARM_VECTOR_LOOP && std::is_same_v<Arm, TwoLinkArm> &&
+                                      std::is_same_v<Basis, AugmentedBasis>;
   static_assert(Basis::kStateDim == twice(kDof), "the basis must act on x = [e1; e2]");
   // Offsets into the state vector (fixed sizes; the *_offset() functions hold them for any size).
   static constexpr int kQ = 0;
@@ -227,7 +231,8 @@ class ClosedLoop {
         identifies_(identifier_.enabled()),
         low_rank_(gathers_ && !extrapolation_.enabled() && controller_.learns()),
         lower_steps_(gathers_ && extrapolation_.enabled() && controller_.learns() &&
-                     critic_.kernels() != nullptr) {
+                     critic_.kernels() != nullptr),
+        vector_(kVectorLoop && vector_loop_available()) {
     const Eigen::Index n = dof_, k = basis_size_;
     check_size(settings.disturbance, n, 1, "plant.disturbance");
     check_finite(settings.disturbance, "plant.disturbance");
@@ -357,7 +362,15 @@ class ClosedLoop {
     return ConstCovarianceMap(x.data() + gamma_offset(), basis_size(), basis_size());
   }
 
+  // The time signals at t (the vector loop's sines on an AVX-512 CPU: every evaluation, the
+  // recorded rows' too, sees the same bits whether a run advances in one go or in chunks).
   void time_signals(double t, TimeSignals& signals) const {
+    if constexpr (kVectorLoop) {
+      if (vector_) return vector_time_signals(t, signals);
+    }
+    portable_time_signals(t, signals);
+  }
+  void portable_time_signals(double t, TimeSignals& signals) const {
     signals.disturbance = disturbance_(t);
     signals.probe = controller_.learns() ? probe_(t) : Joint::Zero(dof());
     signals.desired = trajectory_(t);
@@ -414,6 +427,9 @@ class ClosedLoop {
         return;
       }
     }
+    if constexpr (kVectorLoop) {
+      if (vector_) return vector_step(t_begin, t_end, x, x_next, w, outputs, data);
+    }
     rk4_step(*this, t_begin, t_end, x, x_next, w, outputs, data);
   }
 
@@ -422,6 +438,9 @@ class ClosedLoop {
   // same body, its calls left to the compiler.
   void derivative(const TimeSignals& signals, const State& state, State& rate, Outputs* outputs,
                   Data& data) const {
+    if constexpr (kVectorLoop) {
+      if (vector_) return vector_derivative(signals, state, rate, outputs, data);
+    }
     if constexpr (kFixed)
       flattened_derivative(signals, state, rate, outputs, data);
     else
@@ -449,8 +468,173 @@ class ClosedLoop {
                                            State& rate, Outputs* outputs, Data& data) const {
     evaluate_derivative(signals, state, rate, outputs, data);
   }
+  // The same built for AVX-512 + FMA (vector_loop.hpp), called only when vector_ (the CPU has
+  // them): the sample's basis Jacobian products, eqs. (20)-(26) and the arm's sines in vector
+  // registers, the rest of the body as above (compiled for that target: its sums may be fused).
+  ADPARM_FLATTEN ADPARM_AVX512 void vector_derivative(const TimeSignals& signals,
+                                                      const State& state, State& rate,
+                                                      Outputs* outputs, Data& data) const {
+    evaluate_derivative<true>(signals, state, rate, outputs, data);
+  }
+
+  // Critic::needs_reset, or its vector form (vector_loop.hpp: the same answer unless
+  // lambda_min(Gamma) is within round-off of epsilon_T)
+  bool needs_reset(const State& state, Data& data) const {
+    if constexpr (kVectorLoop) {
+      if (vector_) return vector_below(state);
+    }
+    return critic_.needs_reset(covariance(state), data.critic);
+  }
+
+  // x = [e1; e2] (errors.x()); in vector_derivative by one 32-byte store: GCC copies the
+  // x of two 16-byte stores with one 32-byte load there, which waits for the stores to reach
+  // the cache (no store forwarding), at the head of the evaluation's chain
+  template <bool kVector>
+  [[gnu::always_inline]] Error error_state(const Errors& errors) const {
+    if constexpr (kVector && kVectorLoop) return vector_error_state(errors);
+    return errors.x();
+  }
+
+#if ADPARM_VECTOR_LOOP
+  ADPARM_AVX512 Error vector_error_state(const Errors& errors) const {
+    Error x;
+    if constexpr (kVectorLoop)
+      _mm256_storeu_pd(x.data(),
+                       _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(errors.e1.data())),
+                                            _mm_loadu_pd(errors.e2.data()), 1));
+    return x;
+  }
+  ADPARM_AVX512 bool vector_below(const State& state) const {
+    return vector8::below(state.data() + gamma_offset(), critic_.settings().epsilon_T);
+  }
+  // rk4_step (rk4.hpp) with its sums in vector registers (the same bits) and vector_derivative.
+  ADPARM_AVX512 void vector_step(double t_begin, double t_end, const State& x, State& x_next,
+                                 Rk4Workspace<ClosedLoop>& w, Outputs* outputs, Data& data) const {
+    static_assert(kStateSize == vector8::kStateSize, "vector_loop.hpp's state layout");
+    const double h = t_end - t_begin;
+    if (!(w.begin_time == t_begin)) vector_time_signals(t_begin, w.begin);
+    vector_time_signals(t_begin + 0.5 * h, w.middle);
+    vector_time_signals(t_end, w.end);
+    vector_derivative(w.begin, x, w.k1, outputs, data);
+    vector8::stage_sum(x.data(), w.k1.data(), 0.5 * h, w.stage.data());
+    vector_derivative(w.middle, w.stage, w.k2, nullptr, data);
+    vector8::stage_sum(x.data(), w.k2.data(), 0.5 * h, w.stage.data());
+    vector_derivative(w.middle, w.stage, w.k3, nullptr, data);
+    vector8::stage_sum(x.data(), w.k3.data(), h, w.stage.data());
+    vector_derivative(w.end, w.stage, w.k4, nullptr, data);
+    vector8::rk4_sum(x.data(), w.k1.data(), w.k2.data(), w.k3.data(), w.k4.data(), h / 6.0,
+                     x_next.data());  // x_next may be x: entry by entry
+    std::swap(w.begin, w.end);
+    w.begin_time = t_end;
+  }
+  using VectorResult = std::conditional_t<kVectorLoop, vector8::Result8, NoTerms>;
+  // The plant's terms (and the believed model's, own_model) at (q, dq), q's sines in a vector.
+  ADPARM_AVX512 void compute_in_vectors(const Joint& q, const Joint& dq, const Arm& model,
+                                        bool own_model, Terms& plant_terms,
+                                        Terms& believed_terms) const {
+    if constexpr (kVectorLoop) {
+      vector8::V sine, cosine;
+      vector8::sincos(_mm512_castpd128_pd512(_mm_set_pd(q[1], q[0])), sine, cosine);
+      const double s1 = _mm512_cvtsd_f64(sine), c1 = _mm512_cvtsd_f64(cosine);
+      const double s2 = _mm512_cvtsd_f64(vector8::lane<1>(sine));
+      const double c2 = _mm512_cvtsd_f64(vector8::lane<1>(cosine));
+      plant_.compute(dq, c1, s1, c2, s2, plant_terms);
+      if (own_model) model.compute(dq, c1, s1, c2, s2, believed_terms);
+    }
+  }
+  // time_signals with the sines of the disturbance and of up to 7 probing frequencies in one
+  // vector sincos
+  ADPARM_AVX512 void vector_time_signals(double t, TimeSignals& signals) const {
+    if constexpr (kVectorLoop) {
+      const Eigen::VectorXd& frequencies = probe_.frequencies();
+      const Eigen::Index count = frequencies.size();
+      if (count > 7) return portable_time_signals(t, signals);
+      alignas(64) double sine[8], cosine[8];
+      const __mmask8 lanes = static_cast<__mmask8>((1u << count) - 1u);
+      const vector8::V time = _mm512_set1_pd(t);  // frequency k times t, then t (disturbance)
+      const vector8::V angle = _mm512_mask_blend_pd(
+          static_cast<__mmask8>(1u << count),
+          _mm512_mul_pd(_mm512_maskz_loadu_pd(lanes, frequencies.data()), time), time);
+      vector8::V s, c;
+      vector8::sincos(angle, s, c);
+      _mm512_store_pd(sine, s);
+      _mm512_store_pd(cosine, c);
+      for (Eigen::Index j = 0; j < dof(); ++j)  // SinusoidalDisturbanceT's
+        signals.disturbance[j] =
+            disturbance_.amplitude[j] * (j % 2 == 0 ? sine[count] : cosine[count]);
+      signals.probe =
+          controller_.learns() ? probe_.from_sines(t, sine, cosine) : Joint::Zero(dof());
+      signals.desired = trajectory_(t);
+    }
+  }
+  // eqs. (19)-(21) in vector registers (vector_loop.hpp), from the arm's terms at q
+  ADPARM_AVX512 void evaluate_in_vectors(const Error& x, const Desired& desired, const Error& drift,
+                                         const Terms& terms, double state_cost,
+                                         const Weights& critic_weights,
+                                         const Weights& actor_weights, Evaluation& hjb,
+                                         VectorResult& result) const {
+    if constexpr (kVectorLoop) {
+      vector8::evaluate(x.data(), terms.cos_q2, terms.sin_q2, terms.mass_inverse.data(),
+                        drift.data(), desired.dq[1], state_cost, critic_weights.data(),
+                        actor_weights.data(), cost_.R().data(), cost_.R_inverse().data(), result);
+      hjb.u_hat << result.u_hat[0], result.u_hat[1];
+      _mm512_storeu_pd(hjb.omega.data(), result.omega);
+      hjb.error = result.error;
+      hjb.input_cost = result.input_cost;
+    }
+  }
+  // dWc and dWa into `rate` in vector registers (vector_loop.hpp) when no e2 block is near its
+  // margin (positive_block.hpp's common case: no projection); false (nothing written) otherwise.
+  ADPARM_AVX512 bool rates_in_vectors(const Weights& critic_weights, const Weights& actor_weights,
+                                      const Weights& critic_rate, const Weights& actor_gradient,
+                                      const VectorResult& result, State& rate) const {
+    if constexpr (kVectorLoop) {
+      const ActorSettings& settings = actor_.settings();
+      const double margin = settings.e2_margin;
+      if (settings.positive_e2 && !(e2_block_above(critic_weights, 1.0, margin) &&
+                                    e2_block_above(critic_weights, -1.0, margin) &&
+                                    e2_block_above(actor_weights, 1.0, margin) &&
+                                    e2_block_above(actor_weights, -1.0, margin)))
+        return false;
+      vector8::weight_rates(actor_weights.data(), critic_rate.data(), actor_gradient.data(),
+                            result.difference, settings.eta_a2, settings.weight_bound,
+                            rate.data() + critic_offset(), rate.data() + actor_offset());
+      return true;
+    }
+    return false;
+  }
+  // eqs. (23)-(26)'s shares of this sample in vector registers (vector_loop.hpp)
+  template <class Gamma, class GammaRate>
+  ADPARM_AVX512 void learn_in_vectors(const VectorResult& result, const Gamma& gamma,
+                                      Weights& critic_rate, GammaRate& gamma_rate,
+                                      Weights& actor_gradient) const {
+    if constexpr (kVectorLoop)
+      vector8::learn(result, gamma.data(), 1.0, critic_.settings().eta_c, critic_.settings().nu,
+                     actor_.settings().eta_a1, critic_rate.data(), gamma_rate.data(),
+                     actor_gradient.data());
+  }
+#else  // no vector loop: never called (kVectorLoop false)
+  Error vector_error_state(const Errors& errors) const { return errors.x(); }
+  template <class... A>
+  void compute_in_vectors(A&&...) const {}
+  template <class... A>
+  void vector_time_signals(A&&...) const {}
+  template <class... A>
+  bool rates_in_vectors(A&&...) const {
+    return false;
+  }
+  bool vector_below(const State&) const { return false; }
+  template <class... A>
+  void vector_step(A&&...) const {}
+  using VectorResult = NoTerms;
+  template <class... A>
+  void evaluate_in_vectors(A&&...) const {}
+  template <class... A>
+  void learn_in_vectors(A&&...) const {}
+#endif
 
   // (always inlined: the dynamic sizes' derivative() is this body, as before the flattening)
+  template <bool kVector = false>
   [[gnu::always_inline]] inline void evaluate_derivative(const TimeSignals& signals,
                                                          const State& state, State& rate,
                                                          Outputs* outputs, Data& data) const {
@@ -464,20 +648,28 @@ class ClosedLoop {
     const ErrorSystem<Arm>& system = believed_system(data);  // error_system_ without identification
 
     const Errors errors = tracking_errors<kDof>(q, dq, desired, error_system_.alpha1());
-    const Error x = errors.x();
+    const Error x = error_state<kVector>(errors);
 
     // fixed sizes: the terms on the stack; dynamic: in the buffers sized once
     [[maybe_unused]] std::conditional_t<kFixed, Terms, NoTerms> local_plant_terms,
         local_believed_terms;
     Terms& plant_terms = pick_terms(local_plant_terms, data.plant_terms);
     Terms& believed_terms = pick_terms(local_believed_terms, data.believed_terms);
-    plant_.compute(q, dq, plant_terms);
     const bool own_model = !model_is_plant_ || identifies_;
-    if (own_model) system.model().compute(q, dq, believed_terms);
+    if constexpr (kVector && kVectorLoop) {  // sin and cos of q1, q2 in one vector sincos
+      compute_in_vectors(q, dq, system.model(), own_model, plant_terms, believed_terms);
+    } else {
+      plant_.compute(q, dq, plant_terms);
+      if (own_model) system.model().compute(q, dq, believed_terms);
+    }
     const Terms& model_terms = own_model ? believed_terms : plant_terms;
 
     Point point;
     Evaluation hjb;
+    // vector_derivative without an input bound: eqs. (20)-(26) of this sample in vector_loop.hpp
+    constexpr bool kVectorPath = kVector && kVectorLoop;
+    const bool vector_sample = kVectorPath && !cost_.bounded();
+    [[maybe_unused]] VectorResult vector_result;
     // With the dispatched kernels (dynamic sizes): B^T [Wa, Wa - Wc] in one pass over B, then
     // eqs. (20)-(21) from B^T Wa and the actor's share (26) from B^T (Wa - Wc), as for the points.
     const DenseKernels* kernels = kBasisSize == Dynamic ? critic_.kernels() : nullptr;
@@ -489,6 +681,10 @@ class ClosedLoop {
     const Error drift = system.drift(x, model_terms);
     if (through_pairs) {
       point.state_cost = cost_.state_cost(x);
+    } else if (vector_sample) {  // eqs. (19)-(21) in vector registers, the basis' products too
+      point.state_cost = cost_.state_cost(x);
+      evaluate_in_vectors(x, desired, drift, model_terms, point.state_cost, critic_weights,
+                          actor_weights, hjb, vector_result);
     } else {
       prepare_hjb_point<Basis, kDof>(basis_, x, desired, drift, model_terms, cost_, point,
                                      data.basis, critic_.kernels());
@@ -509,11 +705,14 @@ class ClosedLoop {
       critic_.leave_rate_to_flush(data.critic);
     else if (!low_rank)
       gamma_rate.setZero();
+    bool rates_written = false;  // dWc and dWa written by rates_in_vectors
     if (controller_.learns()) {
       const ConstCovarianceMap gamma = covariance(state);
       Weights actor_gradient = Weights::Zero(k);
+      // clang-format off
       const auto learn = [&](const Point& p, const Evaluation& e, double weight,
-                             const Joint* product = nullptr) {  // B^T (Wa - Wc), kernels
+                             const Joint* product = nullptr)  // B^T (Wa - Wc), kernels
+                             __attribute__((always_inline)) {  // (flatten left it a call)
         if constexpr (kBasisSize == Dynamic) {  // (23)-(24), gathered in blocks (critic.hpp)
           if (low_rank)
             low_rank_stage(e.omega, e.error, weight, critic_rate, data);
@@ -531,6 +730,7 @@ class ClosedLoop {
                               e.error, difference, weight, actor_gradient);  // (26)
         }
       };
+      // clang-format on
       bool stacked = false;
       if constexpr (kBasisSize == Dynamic) {
         stacked = gathers_ && extrapolation_.stacked();
@@ -549,6 +749,8 @@ class ClosedLoop {
             learn_from_stacked_points(critic_weights, actor_weights, difference, gamma, critic_rate,
                                       gamma_rate, actor_gradient, data);
         }
+      } else if (vector_sample) {
+        learn_in_vectors(vector_result, gamma, critic_rate, gamma_rate, actor_gradient);
       } else {
         learn(point, hjb, 1.0, nullptr);
       }
@@ -557,7 +759,13 @@ class ClosedLoop {
                                 data.point_terms, data.basis, moving_points(data), learn);
       if constexpr (kBasisSize == Dynamic)
         if (!low_rank) critic_.flush(gamma, critic_rate, gamma_rate, data.critic);
-      if (actor_.settings().positive_e2) {  // not in the paper: positive_block.hpp
+      if constexpr (kVectorPath) {  // no projection due: the rates in vector registers
+        if (vector_sample)
+          rates_written = rates_in_vectors(critic_weights, actor_weights, critic_rate,
+                                           actor_gradient, vector_result, rate);
+      }
+      if (rates_written) {
+      } else if (actor_.settings().positive_e2) {  // not in the paper: positive_block.hpp
         if constexpr (kBasisSize == Dynamic) {
           if (low_rank) {
             const ConstCovarianceMap step_gamma(data.step_covariance, k, k);
@@ -575,12 +783,13 @@ class ClosedLoop {
           critic_rate = keep_e2_block_positive(basis_, critic_weights, critic_rate,
                                                actor_.settings().e2_margin, gamma);
       }
-      rate.template segment<kBasisSize>(actor_offset(), k) =
-          actor_.weight_rate(basis_, actor_gradient, difference, actor_weights);  // eq. (26)
+      if (!rates_written)
+        rate.template segment<kBasisSize>(actor_offset(), k) =
+            actor_.weight_rate(basis_, actor_gradient, difference, actor_weights);  // eq. (26)
     } else {
       rate.template segment<kBasisSize>(actor_offset(), k).setZero();
     }
-    rate.template segment<kBasisSize>(critic_offset(), k) = critic_rate;
+    if (!rates_written) rate.template segment<kBasisSize>(critic_offset(), k) = critic_rate;
 
     Joint mu = Joint::Zero(n);
     rate.template segment<kDof>(nu_offset(), n).setZero();
@@ -630,7 +839,7 @@ class ClosedLoop {
  public:
   // Resets Gamma to gamma0 I when lambda_min(Gamma) < epsilon_T; returns whether it did.
   bool reset_covariance_if_needed(State& state, Data& data) const {
-    if (!critic_.needs_reset(covariance(state), data.critic)) return false;
+    if (!needs_reset(state, data)) return false;
     critic_.reset(covariance(state));
     return true;
   }
@@ -1112,6 +1321,7 @@ class ClosedLoop {
   bool identifies_;
   bool low_rank_;     // step() takes low-rank steps (low_rank_steps())
   bool lower_steps_;  // step() sums Gamma's lower triangle alone (lower_step)
+  bool vector_;       // derivative() runs vector_derivative (kVectorLoop on an AVX-512 CPU)
   State initial_state_;
 };
 

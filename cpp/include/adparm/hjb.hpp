@@ -42,12 +42,13 @@ struct HjbEvaluation {
 // basis' workspace (basis.hpp; the caller's). With `kernels` (dense_kernels.hpp; dynamic sizes)
 // the two products with the basis' Jacobian J (K x 2n) run in them:
 //   drift_rate += J f as drift_rate -= J (-f) (the same sum, negated),  B = J_e2 M^-1.
+// Always inlined: the fixed-size loop's flattened evaluation had kept it a call (GCC's limits).
 template <class Basis, int Dof, class Terms>
-void prepare_hjb_point(const Basis& basis, const ErrorVector<Dof>& x,
-                       const DesiredStateT<Dof>& desired, const ErrorVector<Dof>& drift,
-                       const Terms& terms, const QuadraticCostT<Dof>& cost,
-                       HjbPoint<Basis, Dof>& point, BasisWorkspace<Basis>& workspace,
-                       const DenseKernels* kernels = nullptr) {
+[[gnu::always_inline]] inline void prepare_hjb_point(
+    const Basis& basis, const ErrorVector<Dof>& x, const DesiredStateT<Dof>& desired,
+    const ErrorVector<Dof>& drift, const Terms& terms, const QuadraticCostT<Dof>& cost,
+    HjbPoint<Basis, Dof>& point, BasisWorkspace<Basis>& workspace,
+    const DenseKernels* kernels = nullptr) {
   const Eigen::Index n = desired.q.size();
   typename Basis::Vector phi;
   typename Basis::Jacobian jacobian;

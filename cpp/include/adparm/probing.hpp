@@ -37,6 +37,19 @@ class ProbingSignalT {
     cos_weight_ = settings.amplitude.cwiseProduct(settings.phases.array().sin().matrix());
   }
 
+  // The sinusoids' count and frequencies (rad/s), and the signal at t given sin and cos of
+  // frequency k times t (sine[k], cosine[k]; the vector loop's, vector_loop.hpp): operator()'s
+  // sums.
+  const Eigen::VectorXd& frequencies() const { return settings_.frequencies; }
+  Joint from_sines(double t, const double* sine, const double* cosine) const {
+    Joint value = Joint::Zero(dof_);
+    if (t >= settings_.until) return value;
+    for (Eigen::Index k = 0; k < settings_.frequencies.size(); ++k)
+      value += sine[k] * sin_weight_.col(k) + cosine[k] * cos_weight_.col(k);
+    if (t < settings_.ramp) value *= t / settings_.ramp;
+    return value;
+  }
+
   Joint operator()(double t) const {
     Joint value = Joint::Zero(dof_);
     if (t >= settings_.until) return value;
