@@ -11,7 +11,7 @@ from .config import Config
 from .dynamics import task_torque
 from .result import SimulationResult
 from .transient import ADVISED_LIMITS_RULE, advised_torque_limits, clipped, limits_text
-from .units import effort_units
+from .units import effort_units, position_units
 from .urdf import config_arm
 
 __all__ = ["limits_below_task", "position_limits_text", "saturation_text"]
@@ -135,7 +135,7 @@ def position_limits_text(result: SimulationResult) -> str | None:
     if went_past.size == 0:
         return None
     rows = float(result.t[1] - result.t[0]) if result.t.size > 1 else config.sim.dt
-    units = ["m" if kind == "prismatic" else "rad" for kind in arm.joint_types]
+    units = position_units(config)
     names = arm.joint_names
     joints = []
     for i in went_past:

@@ -12,16 +12,20 @@ __all__ = ["effort_units", "norm_unit", "position_units", "unit_label"]
 
 def position_units(config: Any) -> list[str]:
     """Per joint, the unit of its position: "rad", or "m" on a prismatic joint."""
-    if config.plant.urdf is None:
-        return ["rad"] * config.dof
-    return ["m" if kind == "prismatic" else "rad" for kind in config_arm(config).joint_types]
+    return _joint_units(config, "rad", "m")
 
 
 def effort_units(config: Any) -> list[str]:
     """Per joint, the unit of its torque: "N m", or "N" (a force) on a prismatic joint."""
+    return _joint_units(config, "N m", "N")
+
+
+def _joint_units(config: Any, rotation: str, translation: str) -> list[str]:
+    """Per joint, `translation` on a prismatic joint of a URDF arm, else `rotation`."""
     if config.plant.urdf is None:
-        return ["N m"] * config.dof
-    return ["N" if kind == "prismatic" else "N m" for kind in config_arm(config).joint_types]
+        return [rotation] * config.dof
+    kinds = config_arm(config).joint_types
+    return [translation if kind == "prismatic" else rotation for kind in kinds]
 
 
 def unit_label(units: list[str], suffix: str = "") -> str:

@@ -28,7 +28,9 @@ def check_inertial_text(path: str | os.PathLike[str]) -> None:
     """Refuses (ValueError naming the file and the link) an <inertial> element whose numbers do
     not read as finite floats: urdfdom prints a warning (e.g. "mass [2,0] is not a float") and
     goes on with a massless link. Only the text of <mass value> and <inertia ixx ...> and of the
-    inertial <origin xyz rpy> is read here; the core checks the values (mass, inertia)."""
+    inertial <origin xyz rpy> is read here; the core checks the values (mass, inertia). A xacro
+    file (xacro: elements, ${...} expressions, or a .xacro that does not parse) is refused first,
+    saying to expand it."""
     try:
         root = ElementTree.parse(path).getroot()
     except (OSError, ElementTree.ParseError):

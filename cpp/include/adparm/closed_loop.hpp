@@ -764,8 +764,8 @@ class ClosedLoop {
           rates_written = rates_in_vectors(critic_weights, actor_weights, critic_rate,
                                            actor_gradient, vector_result, rate);
       }
-      if (rates_written) {
-      } else if (actor_.settings().positive_e2) {  // not in the paper: positive_block.hpp
+      if (!rates_written &&
+          actor_.settings().positive_e2) {  // not in the paper: positive_block.hpp
         if constexpr (kBasisSize == Dynamic) {
           if (low_rank) {
             const ConstCovarianceMap step_gamma(data.step_covariance, k, k);
