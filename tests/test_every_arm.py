@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -277,29 +278,41 @@ def test_learning_that_crawls_while_gamma_is_reset_often_is_told_a_lower_epsilon
     assert lower.diagnostics["verdict"] == "ok", lower.diagnostics["verdict"]
 
 
+def _tiago(file: str, locked: Callable[[Path], dict[str, float]]) -> adparm.Config:
+    """TIAGo's arm from example-robot-data's `file`, the joints locked(urdf) held, run for 1 s."""
+    try:
+        urdf = adparm.example_robot_urdf(f"tiago_description/robots/{file}")
+    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
+        pytest.skip("example-robot-data is not installed")
+    config = adparm.Config.from_dict(
+        {"plant": {"urdf": str(urdf), "locked_joints": locked(urdf)}, "sim": {"T": 1.0}}
+    )
+    assert config.dof == 7
+    return config
+
+
+def _told_horizon(config: adparm.Config, start: str, pattern: str) -> float:
+    """The sim.T the advice of `config`'s run names (its advice starts with `start`, the
+    horizon is pattern's group); that horizon's run must end "ok"."""
+    with pytest.warns(adparm.ApproximationWarning):
+        advice = " ".join(adparm.simulate(config).diagnostics["advice"])
+    assert advice.startswith(start), advice
+    horizon = float(re.search(pattern, advice).group(1))
+    longer = adparm.simulate(config.updated({"sim": {"T": horizon}}))
+    assert longer.diagnostics["verdict"] == "ok", longer.diagnostics["verdict"]
+    return horizon
+
+
 def test_a_short_run_is_told_the_horizon_it_needs_not_a_change_of_learning() -> None:
     """TIAGo's arm (its base, torso and head locked) from its defaults, run for 1 s: its weights'
     error falls 0.88 -> 0.77 over the second half, so the tolerance needs sim.T = 50 s, more than
     20 times the run's. That is no sign of slow learning in a 1 s run (its 4 s and 10 s runs are
     told the same 50 s): it was told to change critic.epsilon_T and extrapolation.points; it is
     told to run longer (progress.LONGER_RUN_FLOOR), and with that horizon it ends "ok"."""
-    try:
-        urdf = adparm.example_robot_urdf("tiago_description/robots/tiago_no_hand.urdf")
-    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
-        pytest.skip("example-robot-data is not installed")
-    locked = {name: 0.0 for name in ("torso_lift_joint", "head_1_joint", "head_2_joint")}
-    locked |= {"wheel_left_joint": 0.0, "wheel_right_joint": 0.0}
-    config = adparm.Config.from_dict(
-        {"plant": {"urdf": str(urdf), "locked_joints": locked}, "sim": {"T": 1.0}}
-    )
-    assert config.dof == 7
-    with pytest.warns(adparm.ApproximationWarning):
-        advice = " ".join(adparm.simulate(config).diagnostics["advice"])
-    assert advice.startswith("run longer:"), advice
-    horizon = float(re.search(r"sim\.T = ([0-9.]+) s reaches", advice).group(1))
-    assert horizon == 50.0
-    longer = adparm.simulate(config.updated({"sim": {"T": horizon}}))
-    assert longer.diagnostics["verdict"] == "ok", longer.diagnostics["verdict"]
+    joints = ("torso_lift_joint", "head_1_joint", "head_2_joint", "wheel_left_joint")
+    locked = dict.fromkeys((*joints, "wheel_right_joint"), 0.0)
+    config = _tiago("tiago_no_hand.urdf", lambda urdf: locked)
+    assert _told_horizon(config, "run longer:", r"sim\.T = ([0-9.]+) s reaches") == 50.0
 
 
 def test_a_run_that_ended_before_learning_started_is_told_a_longer_one() -> None:
@@ -308,25 +321,17 @@ def test_a_run_that_ended_before_learning_started_is_told_a_longer_one() -> None
     a settled run's), then falls (0.03 at 6 s). A 1 s run was told "a longer run will not help";
     it is told "no progress yet" and ten times the horizon, with which it ends "ok"."""
     pin = pytest.importorskip("pinocchio")
-    try:
-        urdf = adparm.example_robot_urdf("tiago_description/robots/tiago.urdf")
-    except ModuleNotFoundError:  # pragma: no cover - example-robot-data is in the test extra
-        pytest.skip("example-robot-data is not installed")
-    model = pin.buildModelFromUrdf(str(urdf))
-    locked = {}
-    for joint in range(1, model.njoints):
-        name, iq = model.names[joint], model.idx_qs[joint]
-        if not name.startswith("arm_"):  # 0, or the limit nearest to it
-            low, high = model.lowerPositionLimit[iq], model.upperPositionLimit[iq]
-            locked[name] = float(min(max(0.0, low), high)) if model.nqs[joint] == 1 else 0.0
-    config = adparm.Config.from_dict(
-        {"plant": {"urdf": str(urdf), "locked_joints": locked}, "sim": {"T": 1.0}}
-    )
-    assert config.dof == 7
-    with pytest.warns(adparm.ApproximationWarning):
-        advice = " ".join(adparm.simulate(config).diagnostics["advice"])
-    assert advice.startswith("run longer: no progress yet"), advice
-    horizon = float(re.search(r"sim\.T = ([0-9.]+) s shows", advice).group(1))
-    assert horizon == 10.0
-    longer = adparm.simulate(config.updated({"sim": {"T": horizon}}))
-    assert longer.diagnostics["verdict"] == "ok", longer.diagnostics["verdict"]
+
+    def all_but_the_arm(urdf: Path) -> dict[str, float]:  # at 0, or the limit nearest to it
+        model = pin.buildModelFromUrdf(str(urdf))
+        locked = {}
+        for joint in range(1, model.njoints):
+            name, iq = model.names[joint], model.idx_qs[joint]
+            if not name.startswith("arm_"):
+                low, high = model.lowerPositionLimit[iq], model.upperPositionLimit[iq]
+                locked[name] = float(min(max(0.0, low), high)) if model.nqs[joint] == 1 else 0.0
+        return locked
+
+    config = _tiago("tiago.urdf", all_but_the_arm)
+    start, pattern = "run longer: no progress yet", r"sim\.T = ([0-9.]+) s shows"
+    assert _told_horizon(config, start, pattern) == 10.0
